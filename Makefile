@@ -1,0 +1,26 @@
+# Every target works on a fresh machine: the first one that needs the
+# virtual environment makes it from the project's own files.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/identify-layers predict
+
+test: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/pytest
+
+bench: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m benchmarks
+
+clean:
+	rm -rf $(VENV) build *.egg-info

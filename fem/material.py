@@ -1,0 +1,64 @@
+"""Orthotropic ply materials in plane stress (SI units inside: Pa, kg/m^3)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from .errors import SpecError
+
+#: The in-plane elastic constants an identification can update.
+ELASTIC_CONSTANTS = ("E1", "E2", "G12", "nu12")
+#: Material parameters with exact sensitivities (elastic constants plus density).
+MATERIAL_PARAMETERS = ELASTIC_CONSTANTS + ("density",)
+
+
+@dataclass(frozen=True)
+class Material:
+    """An orthotropic layer material.
+
+    E1, E2, G12 [Pa]: in-plane moduli along and across material axis 1.
+    nu12 [-]: major Poisson ratio.  density [kg/m^3].
+    G13, G23 [Pa]: transverse shear moduli (None = not given; used only by the
+    transverse-shear effect, which then states its default).
+    """
+
+    name: str
+    E1: float
+    E2: float
+    G12: float
+    nu12: float
+    density: float
+    G13: float | None = None
+    G23: float | None = None
+    identify: bool = False
+
+    def __post_init__(self):
+        for field in ("E1", "E2", "G12", "density"):
+            value = getattr(self, field)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise SpecError(
+                    f"material '{self.name}': {field} = {value!r} must be a positive finite number"
+                )
+        for field in ("G13", "G23"):
+            value = getattr(self, field)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise SpecError(f"material '{self.name}': {field} = {value!r} must be positive")
+        limit = self.E1 / self.E2
+        if not (math.isfinite(self.nu12) and self.nu12**2 < limit):
+            raise SpecError(
+                f"material '{self.name}': nu12 = {self.nu12!r} makes the ply stiffness not positive "
+                f"definite: need nu12^2 < E1/E2 = {limit:.4g} (|nu12| < {math.sqrt(limit):.4g})"
+            )
+
+    @property
+    def nu21(self) -> float:
+        """Minor Poisson ratio nu21 = nu12 E2 / E1."""
+        return self.nu12 * self.E2 / self.E1
+
+    def value(self, parameter: str) -> float:
+        """The value of a named material parameter (SI units)."""
+        return getattr(self, parameter)
+
+    def with_values(self, **values: float) -> "Material":
+        """A copy with some parameters replaced (validated again)."""
+        return replace(self, **values)

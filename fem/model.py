@@ -1,0 +1,107 @@
+"""Solving configurations: frequencies, modes and exact sensitivities, cached by content."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+
+from .assembly import UnitMatrices, unit_matrices
+from .laminate import Laminate
+from .mesh import PlateMesh
+from .modal import Modes, _first_bending_estimate, solve_modes
+from .sensitivity import ModalEnergies, eigenvalue_derivatives, frequency_derivatives, normalised
+from .specimen import Parameter, Specimen
+
+#: Elements along the longer side of the plate.  Chosen by benchmarks/mesh_accuracy:
+#: see the README's benchmark section.
+DEFAULT_DIVISIONS = 12
+#: Inertia terms (I0, I1, I2) kept by the classical (Kirchhoff) baseline: translational
+#: inertia only, as in the paper's eqs. 6-8; the rotary_inertia effect adds I1 and I2.
+KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """How configurations are modelled: elastic modes kept and mesh density."""
+
+    modes: int = 5
+    divisions: int = DEFAULT_DIVISIONS
+
+    def mesh(self, specimen: Specimen) -> PlateMesh:
+        return PlateMesh.with_element_size(specimen.length, specimen.width, self.divisions)
+
+
+@dataclass(frozen=True)
+class LaminateSolution:
+    """Elastic modes of one laminate on one mesh, with modal energies for sensitivities."""
+
+    laminate: Laminate
+    units: UnitMatrices
+    modes: Modes
+    inertia_terms: tuple[float, float, float] = KIRCHHOFF_INERTIA
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        return self.modes.frequencies_hz
+
+    @cached_property
+    def energies(self) -> ModalEnergies:
+        return ModalEnergies.of(self.units, self.modes)
+
+    def derivatives(self, parameters: list[Parameter]) -> np.ndarray:
+        """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""
+        if not parameters:
+            return np.zeros((len(self.modes.eigenvalues), 0))
+        dx, di = zip(*(self.laminate.derivative(p.kind, p.target) for p in parameters))
+        di = np.array(di) * self.inertia_terms
+        d_lambda = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx), di)
+        return frequency_derivatives(self.modes.eigenvalues, d_lambda)
+
+
+@lru_cache(maxsize=512)
+def solve_laminate(laminate: Laminate, mesh: PlateMesh, n_modes: int) -> LaminateSolution:
+    """Solve (and cache by content) the free-free modes of a laminate on a mesh."""
+    units = unit_matrices(mesh)
+    inertia = laminate.inertia * np.array(KIRCHHOFF_INERTIA)
+    shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
+    modes = solve_modes(
+        units, laminate.stiffness @ units.stiffness_data, inertia @ units.mass_data, n_modes, shift
+    )
+    return LaminateSolution(laminate, units, modes)
+
+
+@dataclass(frozen=True)
+class SpecimenModel:
+    """Every configuration of a specimen, solved with the same options."""
+
+    specimen: Specimen
+    options: ModelOptions = ModelOptions()
+
+    @cached_property
+    def mesh(self) -> PlateMesh:
+        return self.options.mesh(self.specimen)
+
+    def solve(self, configuration: str) -> LaminateSolution:
+        return solve_laminate(self.specimen.laminate(configuration), self.mesh, self.options.modes)
+
+    def frequencies(self) -> dict[str, np.ndarray]:
+        """Elastic frequencies [Hz] of every configuration."""
+        return {c.name: self.solve(c.name).frequencies_hz for c in self.specimen.configurations}
+
+    def sensitivity_matrix(self, parameters: list[Parameter], relative: bool = True) -> np.ndarray:
+        """Stacked sensitivities of all configurations (paper eq. 14), rows configuration
+        by configuration, mode by mode.  Relative: (p/f) df/dp."""
+        values = np.array([self.specimen.value(p) for p in parameters])
+        blocks = []
+        for c in self.specimen.configurations:
+            solution = self.solve(c.name)
+            d = solution.derivatives(parameters)
+            blocks.append(normalised(solution.frequencies_hz, d, values) if relative else d)
+        return np.vstack(blocks)
+
+
+def plate_frequency_parameter(frequency_hz: np.ndarray, length: float, mass_per_area: float, D: float) -> np.ndarray:
+    """lambda = omega a^2 sqrt(rho h / D), the usual non-dimensional plate frequency."""
+    return 2 * math.pi * np.asarray(frequency_hz) * length**2 * math.sqrt(mass_per_area / D)

@@ -1,0 +1,129 @@
+"""Specimens, bonded test configurations and the parameters that describe them."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from .errors import SpecError
+from .laminate import Laminate, Layer
+from .material import MATERIAL_PARAMETERS, Material
+
+LAYER_PARAMETERS = ("thickness", "angle")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A model parameter: a material property (target = material name) or a layer
+    property (``thickness`` [m] or ``angle`` [rad]; target = layer label)."""
+
+    kind: str
+    target: str
+
+    def __post_init__(self):
+        if self.kind not in MATERIAL_PARAMETERS + LAYER_PARAMETERS:
+            allowed = ", ".join(MATERIAL_PARAMETERS + LAYER_PARAMETERS)
+            raise SpecError(f"parameter kind {self.kind!r} is unknown; allowed: {allowed}")
+
+    @property
+    def name(self) -> str:
+        return f"{self.target}.{self.kind}"
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """A test plate: the specimen with known plates bonded under and/or over it.
+
+    bottom, top: added layers listed from the specimen outward.
+    """
+
+    name: str
+    bottom: tuple[Layer, ...] = ()
+    top: tuple[Layer, ...] = ()
+
+    @property
+    def is_original(self) -> bool:
+        return not self.bottom and not self.top
+
+
+@dataclass(frozen=True)
+class Specimen:
+    """A rectangular laminated plate [m] and its test configurations."""
+
+    name: str
+    length: float
+    width: float
+    layers: tuple[Layer, ...]
+    configurations: tuple[Configuration, ...] = field(default=(Configuration("original"),))
+
+    @property
+    def materials(self) -> dict[str, Material]:
+        """Every material used, by name (specimen layers and additions)."""
+        out = {}
+        for layer in self.all_layers():
+            out.setdefault(layer.material.name, layer.material)
+        return out
+
+    @property
+    def identified_materials(self) -> list[Material]:
+        return [m for m in self.materials.values() if m.identify]
+
+    def all_layers(self):
+        yield from self.layers
+        for c in self.configurations:
+            yield from c.bottom
+            yield from c.top
+
+    def configuration(self, name: str) -> Configuration:
+        for c in self.configurations:
+            if c.name == name:
+                return c
+        known = ", ".join(c.name for c in self.configurations)
+        raise SpecError(f"configuration {name!r} is not in the spec; known: {known}")
+
+    def laminate(self, configuration: Configuration | str) -> Laminate:
+        """The full stack of a configuration, bottom to top."""
+        if isinstance(configuration, str):
+            configuration = self.configuration(configuration)
+        return Laminate(tuple(reversed(configuration.bottom)) + self.layers + configuration.top)
+
+    def value(self, parameter: Parameter) -> float:
+        """The current value of a parameter (SI units)."""
+        if parameter.kind in MATERIAL_PARAMETERS:
+            try:
+                return self.materials[parameter.target].value(parameter.kind)
+            except KeyError:
+                raise SpecError(f"parameter {parameter.name}: no material {parameter.target!r}") from None
+        for layer in self.all_layers():
+            if layer.label == parameter.target:
+                return getattr(layer, parameter.kind)
+        raise SpecError(f"parameter {parameter.name}: no layer labelled {parameter.target!r}")
+
+    def with_values(self, values: dict[Parameter, float]) -> "Specimen":
+        """A copy with parameter values replaced (materials validated again)."""
+        materials = dict(self.materials)
+        changes: dict[str, dict[str, float]] = {}
+        layer_changes: dict[str, dict[str, float]] = {}
+        for p, v in values.items():
+            target = changes if p.kind in MATERIAL_PARAMETERS else layer_changes
+            target.setdefault(p.target, {})[p.kind] = float(v)
+        for name, change in changes.items():
+            if name not in materials:
+                raise SpecError(f"no material {name!r} in this specimen")
+            materials[name] = materials[name].with_values(**change)
+
+        def rebuilt(layer: Layer) -> Layer:
+            return replace(layer, material=materials[layer.material.name], **layer_changes.get(layer.label, {}))
+
+        def stack(layers):
+            return tuple(rebuilt(layer) for layer in layers)
+
+        configurations = tuple(
+            replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations
+        )
+        return replace(self, layers=stack(self.layers), configurations=configurations)
+
+    def with_configurations(self, configurations) -> "Specimen":
+        return replace(self, configurations=tuple(configurations))
+
+    def material_parameters(self, kinds=("E1", "E2", "G12", "nu12")) -> list[Parameter]:
+        """The parameters of every identified material, material by material."""
+        return [Parameter(kind, m.name) for m in self.identified_materials for kind in kinds]
