@@ -30,7 +30,7 @@ class PlateMesh:
         """``divisions`` elements along the longer side, a matching count along the other."""
         long_side = max(length, width)
         n_long = divisions
-        n_short = max(2, int(round(divisions * min(length, width) / long_side)))
+        n_short = max(4, int(round(divisions * min(length, width) / long_side)))
         nx, ny = (n_long, n_short) if length >= width else (n_short, n_long)
         return cls(length, width, nx, ny)
 

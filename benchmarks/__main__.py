@@ -1,0 +1,4 @@
+"""Run every benchmark: ``python -m benchmarks``."""
+from . import core
+
+core.main()
