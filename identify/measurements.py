@@ -1,0 +1,140 @@
+"""Measured resonance frequencies (CSV), validated against the spec they belong to.
+
+Format (DESIGN.md): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
+rank among the elastic modes) and ``std_hz`` optional.  An optional ``label`` column
+names a mode's nodal-line pattern as the model prints it, e.g. ``(1,2)``; when given it
+fixes which model mode a measured one is paired with at the start.
+"""
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fem.errors import MeasurementError
+from fem.specimen import Specimen
+
+REQUIRED = ("configuration", "frequency_hz")
+OPTIONAL = ("mode", "std_hz", "label")
+MAX_MODE = 60
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """A validated table: one row per measured frequency, sorted by configuration
+    (spec order) and mode.  Columns: configuration, mode, frequency_hz, std_hz (NaN when
+    not given), label (empty when not given)."""
+
+    table: pd.DataFrame
+    source: str = "<measurements>"
+
+    @property
+    def has_std(self) -> bool:
+        return bool(self.table["std_hz"].notna().all())
+
+    @property
+    def configurations(self) -> list[str]:
+        return list(dict.fromkeys(self.table["configuration"]))
+
+    def of(self, configuration: str) -> pd.DataFrame:
+        return self.table[self.table["configuration"] == configuration]
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    def with_frequencies(self, frequencies_hz: np.ndarray) -> "Measurements":
+        """The same rows with other frequencies (e.g. a noise draw)."""
+        table = self.table.copy()
+        table["frequency_hz"] = np.asarray(frequencies_hz, dtype=float)
+        return Measurements(table, self.source)
+
+
+def _fail(source: str, message: str) -> MeasurementError:
+    return MeasurementError(f"{source}: {message}")
+
+
+def parse_measurements(frame: pd.DataFrame, specimen: Specimen, source: str = "<measurements>") -> Measurements:
+    """Validate a raw table against a specimen; rows are reported by CSV line number."""
+    frame = frame.copy()
+    frame.columns = [str(c).strip() for c in frame.columns]
+    for column in frame.columns:
+        if column not in REQUIRED + OPTIONAL:
+            close = difflib.get_close_matches(column, REQUIRED + OPTIONAL, n=1)
+            hint = f"did you mean '{close[0]}'?" if close else f"allowed: {', '.join(REQUIRED + OPTIONAL)}"
+            raise _fail(source, f"unknown column '{column}'; {hint}")
+    for column in REQUIRED:
+        if column not in frame.columns:
+            raise _fail(source, f"missing column '{column}' (need {', '.join(REQUIRED)})")
+    if frame.empty:
+        raise _fail(source, "no rows: give at least one measured frequency")
+    line = frame.index.to_numpy() + 2  # header is line 1
+
+    known = [c.name for c in specimen.configurations]
+    for i, name in enumerate(frame["configuration"]):
+        if pd.isna(name) or str(name).strip() not in known:
+            close = difflib.get_close_matches(str(name), known, n=1)
+            hint = f"did you mean '{close[0]}'?" if close else f"the spec has: {', '.join(known)}"
+            raise _fail(source, f"line {line[i]}: configuration = {name!r} is not in the spec; {hint}")
+    frame["configuration"] = frame["configuration"].map(lambda s: str(s).strip())
+
+    frequency = pd.to_numeric(frame["frequency_hz"], errors="coerce")
+    for i, (raw, f) in enumerate(zip(frame["frequency_hz"], frequency)):
+        if not np.isfinite(f):
+            raise _fail(source, f"line {line[i]}: frequency_hz = {raw!r} is not a number; give the frequency in Hz")
+        if f <= 0:
+            raise _fail(source, f"line {line[i]}: frequency_hz = {f:g} must be positive")
+    frame["frequency_hz"] = frequency.astype(float)
+
+    if "std_hz" in frame.columns:
+        std = pd.to_numeric(frame["std_hz"], errors="coerce")
+        given = std.notna()
+        if given.any() and not given.all():
+            i = int(np.flatnonzero(~given.to_numpy())[0])
+            raise _fail(source, f"line {line[i]}: std_hz is missing; give it for every row or for none")
+        for i, s in enumerate(std):
+            if given.all() and not (np.isfinite(s) and s > 0):
+                raise _fail(source, f"line {line[i]}: std_hz = {s!r} must be a positive number of Hz")
+        frame["std_hz"] = std.astype(float)
+    else:
+        frame["std_hz"] = np.nan
+
+    if "mode" in frame.columns:
+        mode = pd.to_numeric(frame["mode"], errors="coerce")
+        for i, (raw, m) in enumerate(zip(frame["mode"], mode)):
+            if not (np.isfinite(m) and m == int(m) and 1 <= m <= MAX_MODE):
+                raise _fail(source, f"line {line[i]}: mode = {raw!r}: need the elastic mode's rank, 1 to {MAX_MODE}")
+        frame["mode"] = mode.astype(int)
+    else:
+        frame["mode"] = frame.groupby("configuration")["frequency_hz"].rank(method="first").astype(int)
+    frame["label"] = frame["label"].fillna("").astype(str).str.strip() if "label" in frame.columns else ""
+
+    duplicated = frame.duplicated(["configuration", "mode"], keep=False)
+    if duplicated.any():
+        rows = frame[duplicated]
+        raise _fail(source, f"lines {', '.join(map(str, line[duplicated.to_numpy()]))}: configuration "
+                    f"{rows['configuration'].iloc[0]!r} mode {rows['mode'].iloc[0]} is given more than once")
+    frame["_order"] = frame["configuration"].map({name: i for i, name in enumerate(known)})
+    frame = frame.sort_values(["_order", "mode"]).drop(columns="_order").reset_index(drop=True)
+    for name, group in frame.groupby("configuration", sort=False):
+        f = group["frequency_hz"].to_numpy()
+        bad = np.flatnonzero(np.diff(f) < 0)
+        if bad.size:
+            a, b = group.iloc[bad[0]], group.iloc[bad[0] + 1]
+            raise _fail(source, f"configuration {name!r}: mode {b['mode']} ({b['frequency_hz']:g} Hz) is below mode "
+                        f"{a['mode']} ({a['frequency_hz']:g} Hz); mode numbers are ranks, so frequencies must rise")
+    return Measurements(frame[["configuration", "mode", "frequency_hz", "std_hz", "label"]], source)
+
+
+def load_measurements(path: str | Path, specimen: Specimen) -> Measurements:
+    """Read and validate a measurement CSV."""
+    path = Path(path)
+    try:
+        frame = pd.read_csv(path, skipinitialspace=True, comment="#")
+    except FileNotFoundError:
+        raise MeasurementError(f"measurement file {str(path)!r} does not exist") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise MeasurementError(f"measurement file {str(path)!r} is not a readable CSV: {exc}") from None
+    return parse_measurements(frame, specimen, str(path))

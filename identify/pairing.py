@@ -1,0 +1,75 @@
+"""Pairing measured modes with model modes, and tracking them through the updating.
+
+At the start a measured mode is paired with the model mode of the same rank, or of the
+same nodal-line label when the measurements give one.  After every update the paired
+model modes are followed by their shapes: the new model modes are assigned to the
+previous ones by the modal assurance criterion (MAC, mass-weighted), with an optimal
+one-to-one assignment, so two close modes that swap order keep their measured partners.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linear_sum_assignment
+
+from fem.errors import MeasurementError
+from fem.modal import Modes
+
+#: Below this MAC a tracked mode is reported as lost (its shape changed too much).
+MAC_LOST = 0.8
+
+
+def mac_matrix(a: np.ndarray, b: np.ndarray, weight: sp.spmatrix) -> np.ndarray:
+    """MAC(i, j) = (a_i^T W b_j)^2 / ((a_i^T W a_i)(b_j^T W b_j)) for shapes as columns."""
+    wb = weight @ b
+    cross = a.T @ wb
+    return cross**2 / np.outer(np.einsum("ij,ij->j", a, weight @ a), np.einsum("ij,ij->j", b, wb))
+
+
+@dataclass
+class ModePairing:
+    """For one configuration: which model mode (0-based index) each measured mode is
+    paired with, and the paired shapes of the last iteration."""
+
+    configuration: str
+    indices: np.ndarray
+    shapes: np.ndarray | None = None
+    lowest_mac: float = 1.0
+
+    @classmethod
+    def initial(cls, configuration: str, modes: Modes, measured_modes, labels) -> "ModePairing":
+        """By rank (``mode`` numbers), or by nodal-line label where one is given."""
+        n_model = len(modes.eigenvalues)
+        indices = np.asarray(measured_modes, dtype=int) - 1
+        if np.any(indices >= n_model):
+            raise MeasurementError(f"configuration {configuration!r}: mode {indices.max() + 1} is beyond the "
+                                   f"{n_model} model modes computed")
+        used = set()
+        for k, label in enumerate(labels):
+            if not label:
+                continue
+            # the model mode with this label closest in rank to the measured one
+            candidates = [i for i, l in enumerate(modes.labels) if l == label and i not in used]
+            if not candidates:
+                raise MeasurementError(
+                    f"configuration {configuration!r}: measured mode {measured_modes[k]} has label {label!r}, "
+                    f"but no unpaired model mode has it (model labels: {', '.join(modes.labels)})"
+                )
+            indices[k] = min(candidates, key=lambda i: abs(i - indices[k]))
+            used.add(indices[k])
+        if len(set(indices.tolist())) != len(indices):
+            raise MeasurementError(f"configuration {configuration!r}: two measured modes pair with one model mode")
+        return cls(configuration, indices, modes.shapes[:, indices])
+
+    def track(self, modes: Modes, weight: sp.spmatrix) -> "ModePairing":
+        """The pairing for new model modes, following the previous paired shapes by MAC."""
+        mac = mac_matrix(self.shapes, modes.shapes, weight)
+        rows, cols = linear_sum_assignment(-mac)
+        indices = cols[np.argsort(rows)]
+        return ModePairing(self.configuration, indices, modes.shapes[:, indices], float(mac[rows, cols].min()))
+
+    @property
+    def lost(self) -> bool:
+        return self.lowest_mac < MAC_LOST

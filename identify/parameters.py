@@ -1,0 +1,61 @@
+"""The unknowns of an identification and how the updating moves them.
+
+Moduli, densities and thicknesses are positive: they are updated in log space, so a
+step is a relative change (the paper's Delta P / P) and can never make them negative.
+Poisson ratios and angles are updated linearly.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fem.errors import SpecError
+from fem.specimen import Parameter, Specimen
+
+LOG_KINDS = frozenset({"E1", "E2", "G12", "density", "thickness"})
+#: Display units per kind: (unit name, factor from SI).
+UNITS = {"E1": ("GPa", 1e-9), "E2": ("GPa", 1e-9), "G12": ("GPa", 1e-9), "nu12": ("", 1.0),
+         "density": ("kg/m^3", 1.0), "thickness": ("mm", 1e3), "angle": ("deg", 180 / np.pi)}
+
+
+def display(parameter: Parameter, value: float) -> float:
+    """A parameter value in its display unit (GPa, mm, deg...)."""
+    return value * UNITS[parameter.kind][1]
+
+
+def json_key(parameter: Parameter) -> str:
+    """The DESIGN.md key of a parameter's kind, e.g. ``E1_GPa`` or ``nu12``."""
+    unit = UNITS[parameter.kind][0].replace("/", "_").replace("^", "")
+    return f"{parameter.kind}_{unit}" if unit else parameter.kind
+
+
+@dataclass(frozen=True)
+class ParameterSpace:
+    """Parameters with their transform z = log(p) or z = p."""
+
+    parameters: tuple[Parameter, ...]
+
+    @property
+    def is_log(self) -> np.ndarray:
+        return np.array([p.kind in LOG_KINDS for p in self.parameters])
+
+    def to_z(self, values: np.ndarray) -> np.ndarray:
+        return np.where(self.is_log, np.log(np.abs(values)), values)
+
+    def to_values(self, z: np.ndarray) -> np.ndarray:
+        return np.where(self.is_log, np.exp(z), z)
+
+    def dvalue_dz(self, values: np.ndarray) -> np.ndarray:
+        return np.where(self.is_log, values, 1.0)
+
+    def apply(self, specimen: Specimen, values: np.ndarray) -> Specimen:
+        """The specimen with these values; raises ``SpecError`` for an inadmissible material."""
+        return specimen.with_values(dict(zip(self.parameters, values)))
+
+    def admissible(self, specimen: Specimen, values: np.ndarray) -> bool:
+        try:
+            self.apply(specimen, values)
+        except SpecError:
+            return False
+        return True

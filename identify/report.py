@@ -1,0 +1,178 @@
+"""Reading an identification: text report, JSON (DESIGN.md shape), CSV tables and plots."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fem.io import atomic_path, to_json, write_text
+
+from .parameters import UNITS, display, json_key
+from .updating import FitResult
+
+
+def residual_table(result: FitResult) -> pd.DataFrame:
+    """Per measured mode: measured and model frequency, relative error, error / std."""
+    table = result.measurements.table
+    out = pd.DataFrame({
+        "configuration": table["configuration"], "mode": table["mode"],
+        "measured_hz": table["frequency_hz"], "model_hz": result.model_hz, "rel_error": result.rel_error,
+    })
+    if result.measurements.has_std:
+        out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
+    return out
+
+
+def history_table(result: FitResult) -> pd.DataFrame:
+    """One row per iteration: parameter values (display units), RMS error, step, damping."""
+    rows = []
+    for it in result.history:
+        row = {"iteration": it.number, "rms_rel_error": it.rms_rel_error, "step": it.step, "damping": it.damping}
+        row.update({f"{p.name}_{UNITS[p.kind][0] or '-'}": display(p, v) for p, v in zip(result.parameters, it.values)})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _finite(x: float):
+    return float(x) if math.isfinite(x) else None
+
+
+def to_dict(result: FitResult) -> dict:
+    """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
+    materials: dict[str, dict] = {}
+    for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
+        if p.kind in UNITS and p.target in result.specimen.materials:
+            entry = materials.setdefault(p.target, {"std": {}, "flags": {}})
+            key = json_key(p)
+            entry[key] = display(p, value)
+            entry["std"][key] = _finite(display(p, sd))
+            if flags:
+                entry["flags"][key] = list(flags)
+    u = result.uncertainty
+    return {
+        "converged": result.converged,
+        "status": result.status,
+        "iterations": result.iterations,
+        "materials": materials,
+        "effects": {},
+        "residuals": residual_table(result)[["configuration", "mode", "measured_hz", "model_hz", "rel_error"]]
+        .to_dict(orient="records"),
+        "rms_rel_error": result.rms_rel_error,
+        "condition_number": _finite(u.condition_number),
+        "verdict": u.verdict,
+        "reduced_chi2": _finite(u.reduced_chi2),
+        "noise_source": u.noise_source,
+        "weak_combinations": list(u.weak_combinations),
+        "correlation": {"parameters": [p.name for p in result.parameters],
+                        "matrix": [[_finite(x) for x in row] for row in u.correlation]},
+        "warnings": list(result.warnings),
+        "history": history_table(result).to_dict(orient="records"),
+    }
+
+
+def report_text(result: FitResult) -> str:
+    """Fixed sections: statistics, parameters +- std with flags, correlations, residuals, warnings."""
+    u = result.uncertainty
+    lines = [f"== identification: {result.status} =="]
+    lines += ["", "statistics",
+              f"  measured frequencies   {len(result.measurements)} in {len(result.measurements.configurations)} "
+              f"configurations",
+              f"  unknown parameters     {len(result.parameters)}",
+              f"  iterations             {result.iterations}",
+              f"  RMS relative error     {100 * result.rms_rel_error:.4f} %",
+              f"  reduced chi^2          {u.reduced_chi2:.3g}",
+              f"  scatter from           {u.noise_source}",
+              f"  condition number       {u.condition_number:.3g} ({u.verdict}; paper: good < 1e3, singular > 1e7)"]
+    lines += ["", "parameters (value +- 1 std)"]
+    for p, value, sd, flags in zip(result.parameters, result.values, u.std, u.flags):
+        unit = UNITS[p.kind][0]
+        shown = display(p, value)
+        sd_text = f"{display(p, sd):.4g}" if math.isfinite(sd) else "n/a"
+        rel = f"({100 * sd / abs(value):.2g} %)" if math.isfinite(sd) and value else ""
+        lines.append(f"  {p.name:28s} {shown:12.5g} +- {sd_text:>9s} {unit:7s} {rel:10s} {'; '.join(flags)}")
+    strong = [(i, j) for i in range(len(result.parameters)) for j in range(i)
+              if np.isfinite(u.correlation[i, j]) and abs(u.correlation[i, j]) > 0.9]
+    lines += ["", "correlations above 0.9"]
+    lines += [f"  {result.parameters[i].name} ~ {result.parameters[j].name}: {u.correlation[i, j]:+.3f}"
+              for i, j in strong] or ["  none"]
+    lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
+    lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
+    lines += ["", "residuals", residual_table(result).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+    lines += ["", "warnings"] + ([f"  - {w}" for w in result.warnings] or ["  none"])
+    return "\n".join(lines) + "\n"
+
+
+def plot_convergence(result: FitResult, path: Path) -> None:
+    """Parameters per material against iteration (paper Fig. 9) and RMS error (Fig. 3a)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    history = np.array([it.values for it in result.history])
+    targets = list(dict.fromkeys(p.target for p in result.parameters))
+    fig, axes = plt.subplots(1, len(targets) + 1, figsize=(4 * (len(targets) + 1), 3.6), squeeze=False)
+    for ax, target in zip(axes[0], targets):
+        for j, p in enumerate(result.parameters):
+            if p.target == target:
+                ax.plot(history[:, j] / result.values[j], marker="o", label=p.kind)
+        ax.set_title(target)
+        ax.set_xlabel("iteration")
+        ax.set_ylabel("value / identified value")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    ax = axes[0, -1]
+    ax.semilogy([max(it.rms_rel_error, 1e-16) for it in result.history], marker="o")
+    ax.set_title("frequency misfit")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("RMS relative error")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+
+
+def plot_residuals(result: FitResult, path: Path) -> None:
+    """Relative error per mode, grouped by configuration; error bars = 1 std when given."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    table = residual_table(result)
+    configurations = list(dict.fromkeys(table["configuration"]))
+    fig, ax = plt.subplots(figsize=(max(6, 0.5 * len(table) + 2), 3.6))
+    width = 0.8 / len(configurations)
+    for k, name in enumerate(configurations):
+        rows = table[table["configuration"] == name]
+        x = rows["mode"].to_numpy() + (k - (len(configurations) - 1) / 2) * width
+        err = None
+        if result.measurements.has_std:
+            err = 100 * result.measurements.of(name)["std_hz"].to_numpy() / rows["measured_hz"].to_numpy()
+        ax.bar(x, 100 * rows["rel_error"], width, yerr=err, label=name, capsize=2)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xlabel("mode")
+    ax.set_ylabel("(model - measured) / measured [%]")
+    ax.set_title(f"residuals (RMS {100 * result.rms_rel_error:.3g} %)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+
+
+def write_report(result: FitResult, folder: str | Path) -> Path:
+    """A report folder: report.txt, fit.json, residuals.csv, history.csv and plots."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text(folder / "report.txt", report_text(result))
+    write_text(folder / "fit.json", to_json(to_dict(result)))
+    write_text(folder / "residuals.csv", residual_table(result).to_csv(index=False))
+    write_text(folder / "history.csv", history_table(result).to_csv(index=False))
+    plot_convergence(result, folder / "convergence.png")
+    plot_residuals(result, folder / "residuals.png")
+    return folder
