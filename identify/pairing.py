@@ -42,25 +42,29 @@ class ModePairing:
     def initial(cls, configuration: str, modes: Modes, measured_modes, labels) -> "ModePairing":
         """By rank (``mode`` numbers), or by nodal-line label where one is given."""
         n_model = len(modes.eigenvalues)
-        indices = np.asarray(measured_modes, dtype=int) - 1
-        if np.any(indices >= n_model):
-            raise MeasurementError(f"configuration {configuration!r}: mode {indices.max() + 1} is beyond the "
+        ranks = np.asarray(measured_modes, dtype=int) - 1
+        if np.any(ranks >= n_model):
+            raise MeasurementError(f"configuration {configuration!r}: mode {ranks.max() + 1} is beyond the "
                                    f"{n_model} model modes computed")
-        used = set()
+        indices = np.full(len(ranks), -1)
+        used: set[int] = set()
         for k, label in enumerate(labels):
             if not label:
                 continue
-            # the model mode with this label closest in rank to the measured one
+            # the unused model mode with this label, closest in rank to the measured one
             candidates = [i for i, l in enumerate(modes.labels) if l == label and i not in used]
             if not candidates:
                 raise MeasurementError(
                     f"configuration {configuration!r}: measured mode {measured_modes[k]} has label {label!r}, "
                     f"but no unpaired model mode has it (model labels: {', '.join(modes.labels)})"
                 )
-            indices[k] = min(candidates, key=lambda i: abs(i - indices[k]))
-            used.add(indices[k])
-        if len(set(indices.tolist())) != len(indices):
-            raise MeasurementError(f"configuration {configuration!r}: two measured modes pair with one model mode")
+            indices[k] = min(candidates, key=lambda i: abs(i - ranks[k]))
+            used.add(int(indices[k]))
+        # Unlabelled modes take the remaining model modes in rank order.
+        free = iter(i for i in range(n_model) if i not in used)
+        for k in np.argsort(ranks, kind="stable"):
+            if indices[k] < 0:
+                indices[k] = next(free)
         return cls(configuration, indices, modes.shapes[:, indices])
 
     def track(self, modes: Modes, weight: sp.spmatrix) -> "ModePairing":
