@@ -15,6 +15,7 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	$(BIN)/identify-layers predict
+	$(BIN)/identify-layers fit --report reports/demo
 
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/pytest

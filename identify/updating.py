@@ -303,6 +303,12 @@ def _iterate(updater: Updater, current: Evaluation, history: list, options: FitO
         keep = s > 1e-12 * s[0]  # the pseudo-inverse of eq. 15 drops null directions
         ur = u.T @ r
         z = space.to_z(current.values)
+        # Converged already?  Judge by the Gauss-Newton prediction before paying for solves.
+        reducible = 0.5 * float(np.sum(ur[keep] ** 2))  # misfit a Gauss-Newton step could remove
+        gauss_newton = vt.T @ np.where(keep, ur / np.where(keep, s, 1.0), 0.0)
+        if reducible <= options.cost_tolerance * updater.cost(current) or \
+                float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance:
+            return current, True, "converged: the Gauss-Newton step is below the tolerances", warnings
         accepted = None
         for _ in range(options.max_damping_tries):
             gain = np.where(keep, s / (s**2 + damping), 0.0)
@@ -321,9 +327,6 @@ def _iterate(updater: Updater, current: Evaluation, history: list, options: FitO
                 break
             damping = max(10 * damping, 1e-6 * s[0] ** 2)
         if accepted is None:
-            reducible = 0.5 * float(np.sum(ur[keep] ** 2))  # misfit a Gauss-Newton step could remove
-            if reducible <= options.cost_tolerance * max(updater.cost(current), 1e-300):
-                return current, True, "converged: no step lowers the misfit further", warnings
             return current, False, (f"stopped: no step lowered the misfit after {options.max_damping_tries} "
                                     "damping increases"), warnings
         previous_cost = updater.cost(current)
