@@ -1,9 +1,11 @@
 """Unit stiffness and mass matrices of a mesh, assembled once.
 
 Every element of a structured mesh is the same rectangle, so one set of element
-unit matrices serves them all.  Assembly maps the 48 x 48 local entries onto one
+unit matrices serves them all.  Assembly maps the n x n local entries onto one
 global CSR pattern through a sparse aggregation matrix; a global matrix for any
-laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``.
+laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
+cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
+element matrices (``combined_data``).
 """
 from __future__ import annotations
 
@@ -17,68 +19,80 @@ from .elements import HermitePlate
 from .laminate import VOIGT_PAIRS
 from .mesh import PlateMesh
 
-DOFS_PER_NODE = len(HermitePlate.NODE_DOFS)
-
 
 @dataclass(frozen=True)
 class UnitMatrices:
-    """Assembled unit matrices of one mesh (shared by every configuration on it)."""
+    """Assembled unit matrices of one mesh and element type (shared by every
+    configuration on it)."""
 
     mesh: PlateMesh
+    element_type: type = HermitePlate
 
     @cached_property
     def element(self) -> HermitePlate:
-        return HermitePlate(*self.mesh.element_size)
+        return self.element_type(*self.mesh.element_size)
+
+    @property
+    def dofs_per_node(self) -> int:
+        return len(self.element_type.NODE_DOFS)
 
     @cached_property
     def element_dofs(self) -> np.ndarray:
-        """Global DOF numbers per element (n_elements, 48)."""
+        """Global DOF numbers per element (n_elements, n_local)."""
         nodes = self.mesh.element_nodes
-        return (nodes[:, :, None] * DOFS_PER_NODE + np.arange(DOFS_PER_NODE)).reshape(len(nodes), -1)
+        per_node = self.dofs_per_node
+        return (nodes[:, :, None] * per_node + np.arange(per_node)).reshape(len(nodes), -1)
 
     @property
     def n_dofs(self) -> int:
-        return self.mesh.n_nodes * DOFS_PER_NODE
+        return self.mesh.n_nodes * self.dofs_per_node
 
     @cached_property
     def element_stiffness(self) -> np.ndarray:
-        """(18, 48, 48) element unit stiffness matrices."""
+        """(n_c, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
+        then any the element adds, e.g. transverse shear)."""
         return self.element.unit_stiffness(VOIGT_PAIRS)
 
     @cached_property
     def element_mass(self) -> np.ndarray:
-        """(3, 48, 48) element unit mass matrices (I0, I1, I2)."""
+        """(3, n_local, n_local) element unit mass matrices (I0, I1, I2)."""
         return self.element.unit_mass()
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
         """CSR indices/indptr of the global pattern and the aggregation matrix
-        (nnz x 2304) summing local entries into global ones."""
+        (nnz x n_local^2) summing local entries into global ones."""
         dofs = self.element_dofs
-        rows = np.repeat(dofs, 48, axis=1).ravel()
-        cols = np.tile(dofs, (1, 48)).ravel()
-        local = np.tile(np.arange(48 * 48), len(dofs))
+        n_local = dofs.shape[1]
+        rows = np.repeat(dofs, n_local, axis=1).ravel()
+        cols = np.tile(dofs, (1, n_local)).ravel()
+        local = np.tile(np.arange(n_local * n_local), len(dofs))
         # Number the distinct (row, col) pairs in CSR order.
         key = rows.astype(np.int64) * self.n_dofs + cols
         unique, slot = np.unique(key, return_inverse=True)
         g_rows, g_cols = np.divmod(unique, self.n_dofs)
         indptr = np.searchsorted(g_rows, np.arange(self.n_dofs + 1))
         aggregate = sp.csr_matrix(
-            (np.ones(slot.size), (slot, local)), shape=(unique.size, 48 * 48)
+            (np.ones(slot.size), (slot, local)), shape=(unique.size, n_local * n_local)
         )
         return g_cols.astype(np.int32), indptr.astype(np.int32), aggregate
 
     @cached_property
     def stiffness_data(self) -> np.ndarray:
-        """(18, nnz) CSR data of the global unit stiffness matrices."""
+        """(n_c, nnz) CSR data of the global unit stiffness matrices."""
         aggregate = self._pattern[2]
-        return (aggregate @ self.element_stiffness.reshape(18, -1).T).T
+        return (aggregate @ self.element_stiffness.reshape(len(self.element_stiffness), -1).T).T
 
     @cached_property
     def mass_data(self) -> np.ndarray:
         """(3, nnz) CSR data of the global unit mass matrices."""
         aggregate = self._pattern[2]
         return (aggregate @ self.element_mass.reshape(3, -1).T).T
+
+    def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray) -> np.ndarray:
+        """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
+        first: one aggregation instead of n_c unit data arrays in memory."""
+        return self._pattern[2] @ (weights @ element_matrices.reshape(len(element_matrices), -1))
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """A global CSR matrix on the shared pattern from its data array."""
@@ -96,7 +110,7 @@ class UnitMatrices:
     @cached_property
     def bandwidth(self) -> int:
         """Upper semi-bandwidth of the global pattern (row-by-row node numbering keeps it
-        at about 12 (nx + 2))."""
+        at about dofs_per_node (nx + 2))."""
         indices, indptr, _ = self._pattern
         rows = np.repeat(np.arange(self.n_dofs), np.diff(indptr))
         return int(np.max(indices - rows))
@@ -120,35 +134,25 @@ class UnitMatrices:
     def element_quadratic_forms(self, modes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
         """phi_i^T K_c phi_i summed over elements, for every unit matrix c and mode i.
 
-        modes: (n_dofs, m); matrices: (n_c, 48, 48) element matrices.  Returns (n_c, m).
-        Works per element, so it costs O(n_elements * 48^2 * m), not a sparse product per c.
+        modes: (n_dofs, m); matrices: (n_c, n_local, n_local) element matrices.  Returns
+        (n_c, m).  Works per element, so it costs O(n_elements * n_local^2 * m), not a
+        sparse product per c.
         """
-        local = modes[self.element_dofs]  # (ne, 48, m)
+        local = modes[self.element_dofs]  # (ne, n_local, m)
         second_moment = np.einsum("eam,ebm->mab", local, local).reshape(modes.shape[1], -1)
         return matrices.reshape(len(matrices), -1) @ second_moment.T
 
     @cached_property
     def rigid_body_modes(self) -> np.ndarray:
-        """The six rigid-body displacement fields (n_dofs, 6): u, v, w translations,
-        rotations w = y and w = x, and the in-plane rotation u = -y, v = x."""
-        x, y = self.mesh.node_xy.T
-        r = np.zeros((self.mesh.n_nodes, DOFS_PER_NODE, 6))
-        names = HermitePlate.NODE_DOFS
-        r[:, names.index("u"), 0] = 1
-        r[:, names.index("v"), 1] = 1
-        r[:, names.index("w"), 2] = 1
-        r[:, names.index("w"), 3] = y
-        r[:, names.index("w_y"), 3] = 1
-        r[:, names.index("w"), 4] = x
-        r[:, names.index("w_x"), 4] = 1
-        r[:, names.index("u"), 5] = -y
-        r[:, names.index("u_y"), 5] = -1
-        r[:, names.index("v"), 5] = x
-        r[:, names.index("v_x"), 5] = 1
-        return r.reshape(-1, 6)
+        """The element type's six rigid-body displacement fields on this mesh (n_dofs, 6)."""
+        return self.element_type.rigid_body_modes(self.mesh.node_xy)
+
+
+def unit_matrices(mesh: PlateMesh, element_type: type = HermitePlate) -> UnitMatrices:
+    """The (cached) unit matrices of a mesh for an element type (default: Kirchhoff)."""
+    return _cached_unit_matrices(mesh, element_type)
 
 
 @lru_cache(maxsize=16)
-def unit_matrices(mesh: PlateMesh) -> UnitMatrices:
-    """The (cached) unit matrices of a mesh."""
-    return UnitMatrices(mesh)
+def _cached_unit_matrices(mesh: PlateMesh, element_type: type) -> UnitMatrices:
+    return UnitMatrices(mesh, element_type)

@@ -14,7 +14,8 @@ from functools import cached_property
 import numpy as np
 
 from .errors import SpecError
-from .material import ELASTIC_CONSTANTS, Material
+from .laminate_shear import rotated_shear_moduli, shear_correction_factors, shear_stiffness, shear_stiffness_derivative
+from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
 
 #: Index pairs (in Voigt 1, 2, 6 notation mapped to 0, 1, 2) of the six coefficients per matrix.
 VOIGT_PAIRS = ((0, 0), (0, 1), (1, 1), (2, 2), (0, 2), (1, 2))
@@ -93,6 +94,12 @@ class Layer:
         """Qbar [Q11, Q12, Q22, Q66, Q16, Q26] in the plate axes [Pa]."""
         q, _ = reduced_stiffness(self.material)
         return transformation(self.angle) @ q
+
+    @cached_property
+    def shear_moduli(self) -> np.ndarray:
+        """Transverse shear stiffness [Qb44, Qb55, Qb45] in the plate axes [Pa] (G13, G23
+        defaulted to G12 when not given: ``Material.transverse_shear_moduli``)."""
+        return rotated_shear_moduli(*self.material.transverse_shear_moduli, self.angle)
 
 
 @dataclass(frozen=True)
@@ -174,10 +181,68 @@ class Laminate:
                 d_moments = np.stack(
                     [np.diff(dz), np.diff(z * dz), np.diff(z**2 * dz)], axis=1
                 )
-        elif kind not in ELASTIC_CONSTANTS + ("density", "angle"):
+        elif kind not in ELASTIC_CONSTANTS + SHEAR_MODULI + ("density", "angle"):
             raise ValueError(f"unknown parameter kind {kind!r}")
         qbar = np.array([layer.off_axis_stiffness for layer in self.layers])
         rho = np.array([layer.material.density for layer in self.layers])
         dX = np.einsum("kq,km->mq", d_qbar, self._moments) + np.einsum("kq,km->mq", qbar, d_moments)
         dI = d_rho @ self._moments + rho @ d_moments
         return dX.ravel(), dI
+
+    @property
+    def _shear_inputs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per-layer thickness, Qb11, Qb22 and [Qb44, Qb55, Qb45]: the arguments of
+        ``laminate_shear.shear_stiffness``."""
+        qbar = np.array([layer.off_axis_stiffness for layer in self.layers])
+        t = np.array([layer.thickness for layer in self.layers])
+        return t, qbar[:, 0], qbar[:, 2], np.array([layer.shear_moduli for layer in self.layers])
+
+    @cached_property
+    def shear_stiffness(self) -> np.ndarray:
+        """Transverse shear coefficients [A44, A55, A45] [N/m] with the laminate shear
+        correction (``laminate_shear``), in ``SHEAR_COEFFICIENTS`` order."""
+        return shear_stiffness(*self._shear_inputs)
+
+    @property
+    def shear_correction(self) -> tuple[float, float]:
+        """The laminate's shear correction factors (k44, k55) [-]; 5/6 when homogeneous."""
+        return shear_correction_factors(*self._shear_inputs)
+
+    @property
+    def defaulted_shear_moduli(self) -> dict[str, tuple[str, ...]]:
+        """Material name -> the transverse shear moduli it lacks, set to its G12, for
+        every material of the stack that lacks any (for reports)."""
+        out = {}
+        for layer in self.layers:
+            if layer.material.defaulted_shear_moduli:
+                out[layer.material.name] = layer.material.defaulted_shear_moduli
+        return out
+
+    def shear_derivative(self, kind: str, target: str) -> np.ndarray:
+        """Exact d[A44, A55, A45]/dp for the parameter kinds of ``derivative`` plus G13, G23.
+
+        A defaulted G13 or G23 follows G12, so it enters the G12 derivative.  Zeros when
+        the target is not in this stack or the kind does not act on transverse shear.
+        """
+        if kind not in ELASTIC_CONSTANTS + SHEAR_MODULI + ("density", "angle", "thickness"):
+            raise ValueError(f"unknown parameter kind {kind!r}")
+        inputs = self._shear_inputs
+        d_t, d_q11, d_q22, d_shear = (np.zeros_like(x) for x in inputs)
+        for k, layer in enumerate(self.layers):
+            material = layer.material
+            if kind in ELASTIC_CONSTANTS + SHEAR_MODULI and material.name == target:
+                if kind in ELASTIC_CONSTANTS:
+                    _, dq = reduced_stiffness(material)
+                    d_qbar = transformation(layer.angle) @ dq[kind]
+                    d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
+                follows = [kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
+                           for name in SHEAR_MODULI]
+                d_shear[k] = rotated_shear_moduli(*map(float, follows), layer.angle)
+            elif kind == "angle" and layer.label == target:
+                q, _ = reduced_stiffness(material)
+                d_qbar = transformation(layer.angle, derivative=True) @ q
+                d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
+                d_shear[k] = rotated_shear_moduli(*material.transverse_shear_moduli, layer.angle, derivative=True)
+            elif kind == "thickness" and layer.label == target:
+                d_t[k] = 1.0
+        return shear_stiffness_derivative(inputs, (d_t, d_q11, d_q22, d_shear))

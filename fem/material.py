@@ -8,8 +8,10 @@ from .errors import SpecError
 
 #: The in-plane elastic constants an identification can update.
 ELASTIC_CONSTANTS = ("E1", "E2", "G12", "nu12")
-#: Material parameters with exact sensitivities (elastic constants plus density).
-MATERIAL_PARAMETERS = ELASTIC_CONSTANTS + ("density",)
+#: Transverse shear moduli; they matter only with the transverse-shear effect.
+SHEAR_MODULI = ("G13", "G23")
+#: Material parameters with exact sensitivities (elastic constants, density, shear moduli).
+MATERIAL_PARAMETERS = ELASTIC_CONSTANTS + ("density",) + SHEAR_MODULI
 
 
 @dataclass(frozen=True)
@@ -55,8 +57,22 @@ class Material:
         """Minor Poisson ratio nu21 = nu12 E2 / E1."""
         return self.nu12 * self.E2 / self.E1
 
+    @property
+    def transverse_shear_moduli(self) -> tuple[float, float]:
+        """(G13, G23) [Pa] as used by the transverse-shear effect.  A modulus not given
+        defaults to G12: exact for an isotropic material and for G13 of a transversely
+        isotropic (unidirectional) ply; for G23 of such a ply it is an upper estimate."""
+        return (self.G12 if self.G13 is None else self.G13, self.G12 if self.G23 is None else self.G23)
+
+    @property
+    def defaulted_shear_moduli(self) -> tuple[str, ...]:
+        """Names of the transverse shear moduli not given, hence set to G12."""
+        return tuple(name for name in SHEAR_MODULI if getattr(self, name) is None)
+
     def value(self, parameter: str) -> float:
-        """The value of a named material parameter (SI units)."""
+        """The value of a named material parameter (SI units; G13, G23 with their default)."""
+        if parameter in SHEAR_MODULI:
+            return self.transverse_shear_moduli[SHEAR_MODULI.index(parameter)]
         return getattr(self, parameter)
 
     def with_values(self, **values: float) -> "Material":

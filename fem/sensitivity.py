@@ -19,7 +19,8 @@ from .modal import Modes
 
 @dataclass(frozen=True)
 class ModalEnergies:
-    """stiffness: (18, m) phi^T K_c phi; inertia: (3, m) phi^T M_j phi."""
+    """stiffness: (n_c, m) phi^T K_c phi (the 18 CLT coefficients, then the element's
+    others, e.g. transverse shear); inertia: (3, m) phi^T M_j phi."""
 
     stiffness: np.ndarray
     inertia: np.ndarray
@@ -28,7 +29,8 @@ class ModalEnergies:
     def of(cls, units: UnitMatrices, modes: Modes) -> "ModalEnergies":
         both = np.concatenate([units.element_stiffness, units.element_mass])
         q = units.element_quadratic_forms(modes.shapes, both)
-        return cls(q[:18], q[18:])
+        n_c = len(units.element_stiffness)
+        return cls(q[:n_c], q[n_c:])
 
 
 def eigenvalue_derivatives(
@@ -36,7 +38,7 @@ def eigenvalue_derivatives(
 ) -> np.ndarray:
     """d(omega_i^2)/dp for every mode i and parameter p: (m, p).
 
-    d_stiffness: (p, 18) dX/dp; d_inertia: (p, 3) dI/dp.
+    d_stiffness: (p, n_c) dX/dp; d_inertia: (p, 3) dI/dp.
     """
     return (d_stiffness @ energies.stiffness).T - eigenvalues[:, None] * (d_inertia @ energies.inertia).T
 

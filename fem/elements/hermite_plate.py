@@ -59,11 +59,11 @@ class HermitePlate:
         self.weights = np.outer(ws, ws).ravel() * hx * hy  # (nq,) [m^2]
 
     def _field(self, name: str, field: str) -> np.ndarray:
-        """Shape-function derivative ``name`` spread onto the 48 element DOFs: (nq, 48)."""
+        """Shape-function derivative ``name`` spread onto the element DOFs: (nq, 4 x node DOFs)."""
         f = self.FIELDS.index(field)
-        out = np.zeros((self.weights.size, 4, 12))
+        out = np.zeros((self.weights.size, 4, len(self.NODE_DOFS)))
         out[:, :, 4 * f : 4 * f + 4] = self.shape[name].T.reshape(-1, 4, 4)
-        return out.reshape(-1, 48)
+        return out.reshape(self.weights.size, -1)
 
     def strain_operators(self) -> tuple[np.ndarray, np.ndarray]:
         """Membrane and curvature operators at the quadrature points, each (nq, 3, 48)."""
@@ -76,8 +76,8 @@ class HermitePlate:
         return membrane, curvature
 
     def unit_stiffness(self, pairs) -> np.ndarray:
-        """The 18 element matrices K_c (18, 48, 48), one per laminate coefficient
-        (A, B, D blocks, each in the order of ``pairs``)."""
+        """The 18 element matrices K_c (18, n, n), one per laminate coefficient
+        (A, B, D blocks, each in the order of ``pairs``), from ``strain_operators``."""
         bm, bk = self.strain_operators()
         out = []
         for first, second, symmetrise in ((bm, bm, False), (bm, bk, True), (bk, bk, False)):
@@ -91,18 +91,43 @@ class HermitePlate:
                 out.append(k)
         return np.array(out)
 
-    def unit_mass(self) -> np.ndarray:
-        """Element mass matrices per inertia term (3, 48, 48): I0, I1, I2.
+    def rotations(self) -> tuple[np.ndarray, np.ndarray]:
+        """Section rotations (beta_x, beta_y) at the quadrature points, each (nq, 48): the
+        in-plane displacements are U = u + z beta_x, V = v + z beta_y; here beta = -grad w."""
+        return -self._field("Nx", "w"), -self._field("Ny", "w")
 
-        Kinetic energy of the Kirchhoff kinematics U = u - z w_x, V = v - z w_y, W = w:
-        I0 (u^2 + v^2 + w^2) - 2 I1 (u w_x + v w_y) + I2 (w_x^2 + w_y^2).
+    def unit_mass(self) -> np.ndarray:
+        """Element mass matrices per inertia term (3, n, n): I0, I1, I2.
+
+        Kinetic energy of U = u + z beta_x, V = v + z beta_y, W = w:
+        I0 (u^2 + v^2 + w^2) + 2 I1 (u beta_x + v beta_y) + I2 (beta_x^2 + beta_y^2).
         """
         w = self.weights
-        n = {f: self._field("N", f) for f in self.FIELDS}
-        wx, wy = self._field("Nx", "w"), self._field("Ny", "w")
+        n = {f: self._field("N", f) for f in ("u", "v", "w")}
+        bx, by = self.rotations()
         gram = lambda a, b: np.einsum("q,qa,qb->ab", w, a, b)  # noqa: E731
-        m0 = sum(gram(n[f], n[f]) for f in self.FIELDS)
-        m1 = -(gram(n["u"], wx) + gram(n["v"], wy))
+        m0 = sum(gram(n[f], n[f]) for f in ("u", "v", "w"))
+        m1 = gram(n["u"], bx) + gram(n["v"], by)
         m1 = m1 + m1.T
-        m2 = gram(wx, wx) + gram(wy, wy)
+        m2 = gram(bx, bx) + gram(by, by)
         return np.array([m0, m1, m2])
+
+    @classmethod
+    def rigid_body_modes(cls, node_xy: np.ndarray) -> np.ndarray:
+        """The six rigid-body fields at nodes (n_nodes, 2) [m] as (n_nodes * node DOFs, 6):
+        u, v, w translations, rotations w = y and w = x, in-plane rotation u = -y, v = x."""
+        x, y = node_xy.T
+        r = np.zeros((len(node_xy), len(cls.NODE_DOFS), 6))
+        names = cls.NODE_DOFS
+        r[:, names.index("u"), 0] = 1
+        r[:, names.index("v"), 1] = 1
+        r[:, names.index("w"), 2] = 1
+        r[:, names.index("w"), 3] = y
+        r[:, names.index("w_y"), 3] = 1
+        r[:, names.index("w"), 4] = x
+        r[:, names.index("w_x"), 4] = 1
+        r[:, names.index("u"), 5] = -y
+        r[:, names.index("u_y"), 5] = -1
+        r[:, names.index("v"), 5] = x
+        r[:, names.index("v_x"), 5] = 1
+        return r.reshape(-1, 6)
