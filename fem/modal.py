@@ -9,7 +9,6 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from .assembly import UnitMatrices
-from .elements import HermitePlate
 from .errors import ModelError
 
 N_RIGID_BODY = 6
@@ -48,6 +47,7 @@ def solve_modes(
     mass_data: np.ndarray,
     n_modes: int,
     shift_scale: float,
+    suspended: bool = False,
 ) -> Modes:
     """The lowest ``n_modes`` elastic modes of K phi = omega^2 M phi for a free plate.
 
@@ -56,24 +56,40 @@ def solve_modes(
     -0.1 of it, where K - sigma M is positive definite despite the rigid-body modes,
     so a banded Cholesky factor (LAPACK pbtrf) serves as the shift-invert operator.
 
-    The six rigid-body modes are removed by deflation, not by counting: they are
-    checked to be zero-energy fields of K, and the Lanczos iteration runs in their
-    M-orthogonal complement, so exactly six are dropped whatever the plate's scale.
-    A seventh near-zero mode (a mechanism) is reported as an error.
+    The six rigid-body modes (the element type's fields) are removed by deflation, not
+    by counting: they are checked to be zero-energy fields of K, and the Lanczos
+    iteration runs in their M-orthogonal complement, so exactly six are dropped whatever
+    the plate's scale.  A seventh near-zero mode (a mechanism) is reported as an error.
+    M may be singular (an element's shear-strain DOFs carry no inertia without rotary
+    inertia): shift-invert Lanczos needs only K - sigma M definite and M semi-definite.
+
+    suspended: springs hold some rigid-body motions.  Only the zero-energy combinations
+    are deflated; the others become low suspension modes, which are solved for and
+    dropped by their projection on the rigid-body space (their number is checked).
     """
     n_dofs = units.n_dofs
-    k = n_modes + 2
+    stiffness, mass = units.matrix(stiffness_data), units.matrix(mass_data)
+    all_rigid = units.rigid_body_modes
+    n_suspension = 0
+    if suspended:
+        # Rigid-body combinations by their spring energy (omega^2 of a rigid plate on the springs).
+        energy = all_rigid.T @ (stiffness @ all_rigid)
+        mu, combos = sla.eigh(energy, all_rigid.T @ (mass @ all_rigid))
+        held = mu > RIGID_LEAK * shift_scale
+        n_suspension = int(held.sum())
+        rigid = all_rigid @ combos[:, ~held]
+    else:
+        rigid = all_rigid
+        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (abs(stiffness).max() * np.linalg.norm(rigid, axis=0))
+        if leak.max() > RIGID_LEAK:
+            raise ModelError(
+                f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free plate"
+            )
+    k = n_modes + 2 + n_suspension
     if k >= n_dofs // 2:
         raise ModelError(f"mesh too coarse: {n_dofs} DOFs for {n_modes} elastic modes; refine the mesh")
-    stiffness, mass = units.matrix(stiffness_data), units.matrix(mass_data)
-    rigid = units.rigid_body_modes
     m_rigid = mass @ rigid
     gram = rigid.T @ m_rigid
-    leak = np.linalg.norm(stiffness @ rigid, axis=0) / (abs(stiffness).max() * np.linalg.norm(rigid, axis=0))
-    if leak.max() > RIGID_LEAK:
-        raise ModelError(
-            f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free plate"
-        )
 
     def deflate(x: np.ndarray) -> np.ndarray:
         return x - rigid @ np.linalg.solve(gram, m_rigid.T @ x)
@@ -101,9 +117,21 @@ def solve_modes(
         )
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
-    order = np.argsort(lam)[:n_modes]
+    order = np.argsort(lam)
     lam, phi = lam[order], phi[:, order]
     phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
+    if n_suspension:
+        m_all = mass @ all_rigid
+        coupling = m_all.T @ phi
+        share = np.einsum("ik,ik->k", coupling, np.linalg.solve(all_rigid.T @ m_all, coupling))
+        suspension = share > 0.5
+        if suspension.sum() != n_suspension or not suspension[:n_suspension].all():
+            raise ModelError(
+                f"the {n_suspension} suspension modes cannot be told from the elastic ones (found "
+                f"{int(suspension.sum())} rigid-like among the lowest); the suspension is too stiff for a free test"
+            )
+        lam, phi = lam[~suspension], phi[:, ~suspension]
+    lam, phi = lam[:n_modes], phi[:, :n_modes]
     if lam[0] < MECHANISM_GAP * shift_scale:
         raise ModelError(
             f"an elastic mode has near-zero frequency (omega^2 = {lam[0]:.3g}): the model has a mechanism; "
@@ -116,7 +144,7 @@ def mode_label(units: UnitMatrices, shape: np.ndarray) -> str:
     """A readable label: the numbers of nodal lines crossed along x and along y,
     e.g. "(2,0)" for the first bending mode along x, or "in-plane"."""
     nodal = shape.reshape(units.mesh.n_nodes, -1)
-    names = HermitePlate.NODE_DOFS
+    names = units.element_type.NODE_DOFS
     w = nodal[:, names.index("w")]
     uv = nodal[:, [names.index("u"), names.index("v")]]
     scale = np.ptp(units.mesh.node_xy)  # make translations comparable

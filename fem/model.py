@@ -7,7 +7,10 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
+from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
+from .attachments import eigenvalue_derivative as attachment_derivative
 from .assembly import UnitMatrices, unit_matrices
+from .elements import ShearDifferencePlate
 from .laminate import Laminate
 from .mesh import PlateMesh
 from .modal import Modes, _first_bending_estimate, solve_modes
@@ -23,14 +26,20 @@ MIN_DIVISIONS = 8
 #: Inertia terms (I0, I1, I2) kept by the classical (Kirchhoff) baseline: translational
 #: inertia only, as in the paper's eqs. 6-8; the rotary_inertia effect adds I1 and I2.
 KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
+#: Inertia terms with the rotary_inertia effect: all three (I1 couples in-plane and
+#: rotational inertia in unsymmetric stacks, I2 is the rotary inertia proper).
+ROTARY_INERTIA = (1.0, 1.0, 1.0)
 
 
 @dataclass(frozen=True)
 class ModelOptions:
-    """How configurations are modelled: elastic modes kept and mesh density."""
+    """How configurations are modelled: elastic modes kept, mesh density and the
+    physical effects of the plate theory (both off = the paper's Kirchhoff model)."""
 
     modes: int = 5
     divisions: int | None = None  # elements along the longer side; None = the default rule
+    transverse_shear: bool = False  # first-order shear deformation (ShearDifferencePlate)
+    rotary_inertia: bool = False  # keep the inertia terms I1, I2
 
     def mesh(self, specimen: Specimen) -> PlateMesh:
         divisions = self.divisions
@@ -42,12 +51,18 @@ class ModelOptions:
 
 @dataclass(frozen=True)
 class LaminateSolution:
-    """Elastic modes of one laminate on one mesh, with modal energies for sensitivities."""
+    """Elastic modes of one laminate on one mesh, with modal energies for sensitivities.
+
+    inertia_terms: which of I0, I1, I2 the model keeps (1) or drops (0);
+    transverse_shear: the stiffness also has the three shear coefficients (A44, A55, A45).
+    """
 
     laminate: Laminate
     units: UnitMatrices
     modes: Modes
     inertia_terms: tuple[float, float, float] = KIRCHHOFF_INERTIA
+    transverse_shear: bool = False
+    attachments: tuple = ()
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -61,22 +76,54 @@ class LaminateSolution:
         """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""
         if not parameters:
             return np.zeros((len(self.modes.eigenvalues), 0))
-        dx, di = zip(*(self.laminate.derivative(p.kind, p.target) for p in parameters))
-        di = np.array(di) * self.inertia_terms
-        d_lambda = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx), di)
+        d_lambda = np.zeros((len(self.modes.eigenvalues), len(parameters)))
+        laminate = [j for j, p in enumerate(parameters) if p.kind not in ATTACHMENT_PARAMETERS]
+        if laminate:
+            dx, di = zip(*(self.laminate.derivative(parameters[j].kind, parameters[j].target) for j in laminate))
+            if self.transverse_shear:
+                dx = [np.concatenate([x, self.laminate.shear_derivative(parameters[j].kind, parameters[j].target)])
+                      for x, j in zip(dx, laminate)]
+            di = np.array(di) * self.inertia_terms
+            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx), di)
+        by_label = {a.label: a for a in self.attachments}
+        for j, p in enumerate(parameters):
+            if p.kind in ATTACHMENT_PARAMETERS and p.target in by_label:
+                d_lambda[:, j] = attachment_derivative(self.units, by_label[p.target], p.kind, self.modes.shapes,
+                                                       self.modes.eigenvalues)
         return frequency_derivatives(self.modes.eigenvalues, d_lambda)
 
 
 @lru_cache(maxsize=512)
-def solve_laminate(laminate: Laminate, mesh: PlateMesh, n_modes: int) -> LaminateSolution:
-    """Solve (and cache by content) the free-free modes of a laminate on a mesh."""
-    units = unit_matrices(mesh)
-    inertia = laminate.inertia * np.array(KIRCHHOFF_INERTIA)
+def solve_laminate(
+    laminate: Laminate, mesh: PlateMesh, n_modes: int, *, transverse_shear: bool = False, rotary_inertia: bool = False,
+    attachments: tuple = (),
+) -> LaminateSolution:
+    """Solve (and cache by content) the free-free modes of a laminate on a mesh.
+
+    transverse_shear: first-order shear deformation theory (``ShearDifferencePlate``, the
+    laminate's shear stiffness with its shear correction) instead of Kirchhoff;
+    rotary_inertia: keep I1 and I2 in the kinetic energy;
+    attachments: point masses and suspension springs (``fem.attachments``).
+    """
+    terms = ROTARY_INERTIA if rotary_inertia else KIRCHHOFF_INERTIA
+    inertia = laminate.inertia * np.array(terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
-    modes = solve_modes(
-        units, laminate.stiffness @ units.stiffness_data, inertia @ units.mass_data, n_modes, shift
-    )
-    return LaminateSolution(laminate, units, modes)
+    if transverse_shear:
+        # 80 x 80 elements: weighting the element matrices before one aggregation keeps
+        # memory at one data array instead of 21.
+        units = unit_matrices(mesh, ShearDifferencePlate)
+        coefficients = np.concatenate([laminate.stiffness, laminate.shear_stiffness])
+        stiffness = units.combined_data(coefficients, units.element_stiffness)
+        mass = units.combined_data(inertia, units.element_mass)
+    else:
+        units = unit_matrices(mesh)
+        stiffness, mass = laminate.stiffness @ units.stiffness_data, inertia @ units.mass_data
+    if attachments:
+        extra_stiffness, extra_mass = attachment_data(units, attachments)
+        stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
+    suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
+    modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
+    return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments)
 
 
 @dataclass(frozen=True)
@@ -91,7 +138,11 @@ class SpecimenModel:
         return self.options.mesh(self.specimen)
 
     def solve(self, configuration: str) -> LaminateSolution:
-        return solve_laminate(self.specimen.laminate(configuration), self.mesh, self.options.modes)
+        return solve_laminate(
+            self.specimen.laminate(configuration), self.mesh, self.options.modes,
+            transverse_shear=self.options.transverse_shear, rotary_inertia=self.options.rotary_inertia,
+            attachments=self.specimen.attachments,
+        )
 
     def frequencies(self) -> dict[str, np.ndarray]:
         """Elastic frequencies [Hz] of every configuration."""

@@ -3,25 +3,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from .attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, check_attachment
 from .errors import SpecError
 from .laminate import Laminate, Layer
 from .material import MATERIAL_PARAMETERS, Material
 
 LAYER_PARAMETERS = ("thickness", "angle")
+KINDS = MATERIAL_PARAMETERS + LAYER_PARAMETERS + ATTACHMENT_PARAMETERS
 
 
 @dataclass(frozen=True)
 class Parameter:
-    """A model parameter: a material property (target = material name) or a layer
-    property (``thickness`` [m] or ``angle`` [rad]; target = layer label)."""
+    """A model parameter: a material property (target = material name), a layer
+    property (``thickness`` [m] or ``angle`` [rad]; target = layer label) or an
+    attachment's (``mass`` [kg], ``x``, ``y`` [m], ``stiffness`` [N/m]; target = its label)."""
 
     kind: str
     target: str
 
     def __post_init__(self):
-        if self.kind not in MATERIAL_PARAMETERS + LAYER_PARAMETERS:
-            allowed = ", ".join(MATERIAL_PARAMETERS + LAYER_PARAMETERS)
-            raise SpecError(f"parameter kind {self.kind!r} is unknown; allowed: {allowed}")
+        if self.kind not in KINDS:
+            raise SpecError(f"parameter kind {self.kind!r} is unknown; allowed: {', '.join(KINDS)}")
 
     @property
     def name(self) -> str:
@@ -53,6 +55,20 @@ class Specimen:
     width: float
     layers: tuple[Layer, ...]
     configurations: tuple[Configuration, ...] = field(default=(Configuration("original"),))
+    attachments: tuple[PointMass | Suspension, ...] = ()
+
+    def __post_init__(self):
+        labels = [a.label for a in self.attachments]
+        if len(set(labels)) != len(labels):
+            raise SpecError(f"attachments need distinct labels; got {', '.join(labels)}")
+        for attachment in self.attachments:
+            check_attachment(attachment, self.length, self.width)
+
+    def attachment(self, label: str) -> PointMass | Suspension:
+        for a in self.attachments:
+            if a.label == label:
+                return a
+        raise SpecError(f"no attachment labelled {label!r}; known: {', '.join(a.label for a in self.attachments) or 'none'}")
 
     @property
     def materials(self) -> dict[str, Material]:
@@ -87,6 +103,8 @@ class Specimen:
 
     def value(self, parameter: Parameter) -> float:
         """The current value of a parameter (SI units)."""
+        if parameter.kind in ATTACHMENT_PARAMETERS:
+            return float(getattr(self.attachment(parameter.target), parameter.kind))
         if parameter.kind in MATERIAL_PARAMETERS:
             try:
                 return self.materials[parameter.target].value(parameter.kind)
@@ -102,8 +120,13 @@ class Specimen:
         materials = dict(self.materials)
         changes: dict[str, dict[str, float]] = {}
         layer_changes: dict[str, dict[str, float]] = {}
+        attachment_changes: dict[str, dict[str, float]] = {}
         for p, v in values.items():
-            target = changes if p.kind in MATERIAL_PARAMETERS else layer_changes
+            if p.kind in ATTACHMENT_PARAMETERS:
+                self.attachment(p.target)
+                target = attachment_changes
+            else:
+                target = changes if p.kind in MATERIAL_PARAMETERS else layer_changes
             target.setdefault(p.target, {})[p.kind] = float(v)
         for name, change in changes.items():
             if name not in materials:
@@ -119,10 +142,15 @@ class Specimen:
         configurations = tuple(
             replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations
         )
-        return replace(self, layers=stack(self.layers), configurations=configurations)
+        attachments = tuple(replace(a, **attachment_changes.get(a.label, {})) for a in self.attachments)
+        return replace(self, layers=stack(self.layers), configurations=configurations, attachments=attachments)
 
     def with_configurations(self, configurations) -> "Specimen":
         return replace(self, configurations=tuple(configurations))
+
+    def with_attachments(self, attachments) -> "Specimen":
+        """A copy with these attachments (validated)."""
+        return replace(self, attachments=tuple(attachments))
 
     def material_parameters(self, kinds=("E1", "E2", "G12", "nu12")) -> list[Parameter]:
         """The parameters of every identified material, material by material."""

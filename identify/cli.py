@@ -3,13 +3,19 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
+from pathlib import Path
 
-from fem.io import run_cli, to_json
+from fem.effects import apply_fixed, effect
+from fem.io import run_cli, to_json, write_text
 from fem.model import SpecimenModel
 from fem.spec import Spec, load_spec
 
 from .examples import COATED_PLATE, COATED_PLATE_MEASURED
 from .measurements import load_measurements
+from .compare import compare as compare_layers
+from .diagnose import diagnose as diagnose_layers
+from .plots import plot_comparison, plot_point_map
 from .report import report_text, to_dict, write_report
 from .updating import fit as fit_layers
 
@@ -59,17 +65,92 @@ def _progress(iteration) -> None:
           f"largest relative change {iteration.step:.2e}", file=sys.stderr)
 
 
+def _with_spec_effects(spec: Spec):
+    """The specimen and model options with the spec's [[effects]] (fixed parameters)."""
+    specimen, options, notes = apply_fixed(spec.specimen, spec.model, spec.effects)
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
+    return specimen, options
+
+
 def fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
     spec, measurements = _load_pair(args.spec, args.measurements)
-    print(f"identifying {len(spec.specimen.material_parameters())} parameters from {len(measurements)} "
-          "frequencies", file=sys.stderr)
-    result = fit_layers(spec.specimen, measurements, model=spec.model, progress=_progress)
+    specimen, options = _with_spec_effects(spec)
+    parameters = specimen.material_parameters()
+    free, effect_of = [], {}
+    before = None
+    if args.effect:
+        print("baseline fit (no added effect):", file=sys.stderr)
+        before = fit_layers(specimen, measurements, model=options)
+        for kind in args.effect:
+            on = effect(kind).free_all(specimen, options)
+            specimen, options = on.specimen, on.options
+            free += on.free
+            effect_of.update({p: kind for p in on.free})
+            if on.note:
+                print(f"note: {kind}: {on.note}", file=sys.stderr)
+    print(f"identifying {len(parameters) + len(free)} parameters from {len(measurements)} frequencies",
+          file=sys.stderr)
+    result = fit_layers(specimen, measurements, parameters=parameters + free, model=options, progress=_progress,
+                        effects=effect_of)
     if args.report:
-        folder = write_report(result, args.report)
+        folder = write_report(result, args.report, before)
         print(f"report written to {folder}/", file=sys.stderr)
-    print(to_json(to_dict(result)) if args.json else report_text(result))
+    print(to_json(to_dict(result)) if args.json else report_text(result, before))
     return 0 if result.converged else 1
+
+
+def compare(args) -> int:
+    """Where the model fails: residuals per mode and the patterns that point at causes."""
+    spec, measurements = _load_pair(args.spec, args.measurements)
+    specimen, options = _with_spec_effects(spec)
+    comparison = compare_layers(specimen, measurements, options, refit=not args.no_fit)
+    if args.report:
+        folder = Path(args.report)
+        folder.mkdir(parents=True, exist_ok=True)
+        write_text(folder / "comparison.txt", comparison.report())
+        write_text(folder / "comparison.csv", comparison.table.to_csv(index=False))
+        shown = comparison.fitted.specimen if comparison.fitted else specimen
+        plot_comparison(comparison, shown, replace(options, modes=int(measurements.table["mode"].max()) + 3),
+                        folder / "residuals_with_shapes.png")
+        plot_point_map(comparison, specimen, folder / "point_mass_map.png")
+        print(f"report written to {folder}/", file=sys.stderr)
+    if args.json:
+        print(to_json({"rms_rel_error": comparison.rms_rel_error,
+                       "reduced_chi2": comparison.reduced_chi2 if comparison.reduced_chi2 == comparison.reduced_chi2 else None,
+                       "at_noise_level": comparison.at_noise_level,
+                       "patterns": [{"pattern": p.name, "share": p.share, "detail": p.detail, "suggests": list(p.suggests)}
+                                    for p in comparison.patterns],
+                       "residuals": comparison.table.to_dict(orient="records")}))
+    else:
+        print(comparison.report())
+    return 0
+
+
+def diagnose(args) -> int:
+    """Rank the candidate physical effects by how much of the misfit each explains."""
+    spec, measurements = _load_pair(args.spec, args.measurements)
+    specimen, options = _with_spec_effects(spec)
+    kinds = args.effects.split(",") if args.effects else None
+    for kind in kinds or []:
+        effect(kind)  # unknown kinds fail before any work
+    result = diagnose_layers(specimen, measurements, options, kinds,
+                             progress=lambda text: print(f"  {text}", file=sys.stderr))
+    if args.report:
+        folder = Path(args.report)
+        folder.mkdir(parents=True, exist_ok=True)
+        write_text(folder / "diagnosis.txt", result.report())
+        write_text(folder / "diagnosis.json", to_json(result.to_dict()))
+        if result.candidates and result.candidates[0].fit is not None:
+            from .plots import plot_before_after
+
+            best = result.candidates[0]
+            plot_before_after(result.baseline, best.fit, best.kind, folder / "before_after.png")
+        plot_point_map(result.comparison, specimen, folder / "point_mass_map.png")
+        print(f"report written to {folder}/", file=sys.stderr)
+    print(to_json(result.to_dict()) if args.json else result.report())
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -80,12 +161,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--modes", type=int, help="elastic modes per configuration (default: [model] modes)")
     p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
     p.set_defaults(run=predict)
-    p = sub.add_parser("fit", help="identify the layer properties from measured frequencies")
-    p.add_argument("spec", nargs="?", help="specimen spec (TOML); default: the bundled example")
-    p.add_argument("measurements", nargs="?", help="measured frequencies (CSV); default: the bundled example's")
-    p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
-    p.add_argument("--report", metavar="DIR", help="write a report folder (text, JSON, CSV, plots)")
-    p.set_defaults(run=fit)
+    for name, run, text in (("fit", fit, "identify the layer properties from measured frequencies"),
+                            ("compare", compare, "where the model fails: residual patterns and plots"),
+                            ("diagnose", diagnose, "which physical effect is the model missing?")):
+        p = sub.add_parser(name, help=text)
+        p.add_argument("spec", nargs="?", help="specimen spec (TOML); default: the bundled example")
+        p.add_argument("measurements", nargs="?", help="measured frequencies (CSV); default: the bundled example's")
+        p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
+        p.add_argument("--report", metavar="DIR", help="write a report folder (text, JSON, CSV, plots)")
+        p.set_defaults(run=run)
+        if name == "fit":
+            p.add_argument("--effect", action="append", metavar="KIND",
+                           help="switch an effect on with its parameters free (repeatable): "
+                                "transverse_shear, rotary_inertia, point_mass, suspension, orientation, adhesive, "
+                                "thickness, or a registered kind")
+        if name == "compare":
+            p.add_argument("--no-fit", action="store_true", help="compare at the spec's values, without fitting")
+        if name == "diagnose":
+            p.add_argument("--effects", metavar="K1,K2", help="only these candidate effects (default: all registered)")
     return parser
 
 

@@ -13,10 +13,11 @@ import numpy as np
 from fem.errors import SpecError
 from fem.specimen import Parameter, Specimen
 
-LOG_KINDS = frozenset({"E1", "E2", "G12", "density", "thickness"})
+LOG_KINDS = frozenset({"E1", "E2", "G12", "density", "thickness", "mass", "stiffness"})
 #: Display units per kind: (unit name, factor from SI).
 UNITS = {"E1": ("GPa", 1e-9), "E2": ("GPa", 1e-9), "G12": ("GPa", 1e-9), "nu12": ("", 1.0),
-         "density": ("kg/m^3", 1.0), "thickness": ("mm", 1e3), "angle": ("deg", 180 / np.pi)}
+         "density": ("kg/m^3", 1.0), "thickness": ("mm", 1e3), "angle": ("deg", 180 / np.pi),
+         "mass": ("g", 1e3), "x": ("mm", 1e3), "y": ("mm", 1e3), "stiffness": ("N/m", 1.0)}
 
 
 def display(parameter: Parameter, value: float) -> float:

@@ -42,21 +42,26 @@ def _finite(x: float):
 def to_dict(result: FitResult) -> dict:
     """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
     materials: dict[str, dict] = {}
+    effects: dict[str, dict] = {}
     for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
-        if p.kind in UNITS and p.target in result.specimen.materials:
+        kind = result.effect_of.get(p)
+        if kind or p.target not in result.specimen.materials:
+            entry = effects.setdefault(kind or p.target, {"std": {}, "flags": {}})
+            key = json_key(p) if p.kind not in ("angle", "thickness") else f"{p.target}.{json_key(p)}"
+        else:
             entry = materials.setdefault(p.target, {"std": {}, "flags": {}})
             key = json_key(p)
-            entry[key] = display(p, value)
-            entry["std"][key] = _finite(display(p, sd))
-            if flags:
-                entry["flags"][key] = list(flags)
+        entry[key] = display(p, value)
+        entry["std"][key] = _finite(display(p, sd))
+        if flags:
+            entry["flags"][key] = list(flags)
     u = result.uncertainty
     return {
         "converged": result.converged,
         "status": result.status,
         "iterations": result.iterations,
         "materials": materials,
-        "effects": {},
+        "effects": effects,
         "residuals": residual_table(result)[["configuration", "mode", "measured_hz", "model_hz", "rel_error"]]
         .to_dict(orient="records"),
         "rms_rel_error": result.rms_rel_error,
@@ -72,7 +77,15 @@ def to_dict(result: FitResult) -> dict:
     }
 
 
-def report_text(result: FitResult) -> str:
+def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
+    """Relative error per measured mode without and with the effects switched on."""
+    table = before.measurements.table
+    return pd.DataFrame({"configuration": table["configuration"], "mode": table["mode"],
+                         "measured_hz": table["frequency_hz"], "rel_error_before": before.rel_error,
+                         "rel_error_after": after.rel_error})
+
+
+def report_text(result: FitResult, before: FitResult | None = None) -> str:
     """Fixed sections: statistics, parameters +- std with flags, correlations, residuals, warnings."""
     u = result.uncertainty
     lines = [f"== identification: {result.status} =="]
@@ -100,6 +113,11 @@ def report_text(result: FitResult) -> str:
     lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
     lines += ["", "residuals", residual_table(result).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+    if before is not None:
+        kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
+        lines += ["", f"error per mode before and after adding {kinds} (RMS {100 * before.rms_rel_error:.4g} % -> "
+                  f"{100 * result.rms_rel_error:.4g} %)",
+                  before_after_table(before, result).to_string(index=False, float_format=lambda x: f"{x:.4g}")]
     lines += ["", "warnings"] + ([f"  - {w}" for w in result.warnings] or ["  none"])
     return "\n".join(lines) + "\n"
 
@@ -165,11 +183,18 @@ def plot_residuals(result: FitResult, path: Path) -> None:
     plt.close(fig)
 
 
-def write_report(result: FitResult, folder: str | Path) -> Path:
-    """A report folder: report.txt, fit.json, residuals.csv, history.csv and plots."""
+def write_report(result: FitResult, folder: str | Path, before: FitResult | None = None) -> Path:
+    """A report folder: report.txt, fit.json, residuals.csv, history.csv and plots (and the
+    error per mode before and after the effects when ``before`` is given)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    write_text(folder / "report.txt", report_text(result))
+    write_text(folder / "report.txt", report_text(result, before))
+    if before is not None:
+        from .plots import plot_before_after
+
+        write_text(folder / "before_after.csv", before_after_table(before, result).to_csv(index=False))
+        plot_before_after(before, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
+                          folder / "before_after.png")
     write_text(folder / "fit.json", to_json(to_dict(result)))
     write_text(folder / "residuals.csv", residual_table(result).to_csv(index=False))
     write_text(folder / "history.csv", history_table(result).to_csv(index=False))

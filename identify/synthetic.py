@@ -1,6 +1,8 @@
 """Virtual experiments: measurements computed by the model itself (paper section 2.2)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
@@ -27,7 +29,7 @@ def synthetic_measurements(
     model: the model that generates the data (default: the default mesh for ``modes``).
     """
     model = model or ModelOptions(modes=modes)
-    solver = SpecimenModel(specimen, ModelOptions(modes=max(modes, model.modes), divisions=model.divisions))
+    solver = SpecimenModel(specimen, replace(model, modes=max(modes, model.modes)))
     rng = np.random.default_rng(seed)
     rows = []
     for c in specimen.configurations:

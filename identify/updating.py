@@ -9,7 +9,7 @@ size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -81,6 +81,9 @@ class FitResult:
     specimen: Specimen
     warnings: tuple[str, ...] = field(default=())
     twins: tuple[np.ndarray, ...] = field(default=())  # other solutions that fit within the scatter
+    pairings: dict = field(default_factory=dict)       # configuration -> final ModePairing
+    jacobian: np.ndarray | None = None                 # weighted d residual / d z at the result
+    effect_of: dict = field(default_factory=dict)      # parameter -> effect kind it belongs to
 
     @property
     def iterations(self) -> int:
@@ -113,8 +116,8 @@ class Updater:
         table = measurements.table
         self.configurations = measurements.configurations
         highest = int(table["mode"].max())
-        mesh = ModelOptions(modes=highest, divisions=model.divisions).mesh(specimen)
-        self.model_options = ModelOptions(modes=highest + options.extra_modes, divisions=max(mesh.nx, mesh.ny))
+        mesh = replace(model, modes=highest).mesh(specimen)
+        self.model_options = replace(model, modes=highest + options.extra_modes, divisions=max(mesh.nx, mesh.ny))
         self.measured_hz = table["frequency_hz"].to_numpy()
         self.sigma = table["std_hz"].to_numpy() if measurements.has_std else self.measured_hz.copy()
         self.rows = {c: np.flatnonzero(table["configuration"].to_numpy() == c) for c in self.configurations}
@@ -257,9 +260,11 @@ def fit(
     model: ModelOptions = ModelOptions(),
     options: FitOptions = FitOptions(),
     progress: Callable[[Iteration], None] | None = None,
+    effects: dict[Parameter, str] | None = None,
 ) -> FitResult:
     """Identify ``parameters`` (default: E1, E2, G12, nu12 of every identified material)
-    from measured frequencies of all configurations at once."""
+    from measured frequencies of all configurations at once.  ``effects`` names the
+    effect kind a parameter belongs to, for reporting."""
     parameters = list(parameters) if parameters is not None else specimen.material_parameters()
     if not parameters:
         raise MeasurementError("nothing to identify: mark at least one material with identify = true")
@@ -288,7 +293,7 @@ def fit(
                   f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data")
     return FitResult(converged, status, tuple(parameters), current.values, uncertainty, tuple(history),
                      measurements, current.model_hz, current.specimen, tuple(warnings) + uncertainty.warnings,
-                     tuple(twins))
+                     tuple(twins), current.pairings, updater.jacobian(current), dict(effects or {}))
 
 
 def _iterate(updater: Updater, current: Evaluation, history: list, options: FitOptions, progress):

@@ -115,7 +115,7 @@ def test_equivalent_plate_same_frequencies_different_A(paper_specimen):
 def test_exactly_six_rigid_body_modes_dropped(thickness, E):
     """Very thin (a/h = 15 000), ordinary, very thick (a/h = 7.5) and very stiff plates:
     a dense generalised eigen-solution of the same matrices has exactly six eigenvalues
-    below 1e-6 of the seventh, and the deflated Lanczos solve returns the 7th onwards.
+    below 1e-3 of the seventh, and the deflated Lanczos solve returns the 7th onwards.
     Tolerance 1e-6: dense LAPACK's eigenvalue error is ~eps * lambda_max / lambda, and
     for the thinnest plate the in-plane modes make lambda_max / lambda_7 ~ 1e10.)"""
     import scipy.linalg as sla
@@ -128,6 +128,9 @@ def test_exactly_six_rigid_body_modes_dropped(thickness, E):
     K = units.stiffness(lam.stiffness).toarray()
     M = units.mass(lam.inertia * [1, 0, 0]).toarray()
     dense = sla.eigh(K, M, eigvals_only=True)
-    assert np.sum(np.abs(dense) < 1e-6 * dense[6]) == 6
+    # Dense LAPACK puts the rigid-body eigenvalues at ~eps * lambda_max (~1e-6 lambda_7 for the
+    # thinnest plate, whose in-plane modes are 1e10 above the first bending one): ask for a
+    # gap of three orders between the sixth and the seventh.
+    assert np.sum(np.abs(dense) < 1e-3 * dense[6]) == 6
     ours = solve_laminate(lam, mesh, 6).modes.eigenvalues
     np.testing.assert_allclose(ours, dense[6:12], rtol=1e-6)

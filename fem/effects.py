@@ -1,0 +1,273 @@
+"""Physical effects beyond the baseline Kirchhoff free-plate model, and their registry.
+
+An effect is a parameterised change of the model.  Switched on from a spec's
+``[[effects]]`` table its parameters are fixed; switched on free (``--effect KIND`` or
+by the diagnosis) it brings parameters that are estimated with the layer properties.
+Every built-in effect has exact sensitivities (modal energies, or the attachment
+formulas in ``fem.attachments``).
+
+Registering a new kind (see the README, "Adding an effect"): subclass ``Effect``, give
+it a ``kind`` and implement ``fixed`` and ``free``, then call ``register(MyEffect())``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+
+from .attachments import PointMass, Suspension
+from .errors import SpecError
+from .model import ModelOptions
+from .specimen import Parameter, Specimen
+
+
+@dataclass(frozen=True)
+class SwitchedOn:
+    """A model with an effect switched on: the specimen and options to solve, the free
+    parameters the effect brings (empty when fixed) and a note for the report."""
+
+    kind: str
+    specimen: Specimen
+    options: ModelOptions
+    free: tuple[Parameter, ...] = ()
+    note: str = ""
+
+
+class Effect:
+    """Base class of effects.  ``keys`` lists the spec table keys ``fixed`` accepts."""
+
+    kind = ""
+    description = ""
+    keys: tuple[str, ...] = ()
+
+    def fixed(self, specimen: Specimen, options: ModelOptions, table: dict) -> SwitchedOn:
+        raise NotImplementedError
+
+    def free(self, specimen: Specimen, options: ModelOptions, hint: dict | None = None) -> list[SwitchedOn]:
+        """Variants with free parameters (e.g. one per candidate layer); ``hint`` may carry
+        start values from the residual patterns."""
+        raise NotImplementedError
+
+    def free_all(self, specimen: Specimen, options: ModelOptions) -> SwitchedOn:
+        """All variants at once (e.g. every candidate layer's angle), for ``--effect``."""
+        variants = self.free(specimen, options)
+        if not variants:
+            raise SpecError(f"effect '{self.kind}' has nothing to act on in this spec")
+        if len(variants) == 1:
+            return variants[0]
+        starts = {p: v.specimen.value(p) for v in variants for p in v.free}
+        return SwitchedOn(self.kind, specimen.with_values(starts), variants[0].options,
+                          tuple(starts), "; ".join(v.note for v in variants if v.note))
+
+    def _check(self, table: dict) -> None:
+        for key in table:
+            if key not in self.keys + ("kind",):
+                raise SpecError(f"[[effects]] kind = '{self.kind}': unknown key '{key}'; allowed: {', '.join(self.keys)}")
+
+    def _number(self, table: dict, key: str, default=None) -> float:
+        if key not in table:
+            if default is None:
+                raise SpecError(f"[[effects]] kind = '{self.kind}': missing field '{key}'")
+            return default
+        value = table[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise SpecError(f"[[effects]] kind = '{self.kind}': {key} = {value!r} must be a number")
+        return float(value)
+
+
+class TransverseShear(Effect):
+    kind = "transverse_shear"
+    description = "first-order shear deformation (G13, G23; G12 where not given)"
+
+    def _on(self, specimen, options):
+        defaulted = [m.name for m in specimen.materials.values() if m.G13 is None or m.G23 is None]
+        note = (f"G13 = G23 = G12 assumed for {', '.join(defaulted)} (exact for isotropic layers)"
+                if defaulted else "")
+        return SwitchedOn(self.kind, specimen, replace(options, transverse_shear=True), (), note)
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        return self._on(specimen, options)
+
+    def free(self, specimen, options, hint=None):
+        return [self._on(specimen, options)]
+
+
+class RotaryInertia(Effect):
+    kind = "rotary_inertia"
+    description = "rotary inertia of the plate (I1, I2 terms)"
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        return SwitchedOn(self.kind, specimen, replace(options, rotary_inertia=True))
+
+    def free(self, specimen, options, hint=None):
+        return [self.fixed(specimen, options, {})]
+
+
+class PointMassEffect(Effect):
+    kind = "point_mass"
+    description = "a mass at a point (an accelerometer, a glue blob): mass and position"
+    keys = ("mass_g", "x_mm", "y_mm", "label")
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        mass = PointMass(self._number(table, "mass_g") * 1e-3, self._number(table, "x_mm") * 1e-3,
+                         self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)))
+        return SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (mass,)), options)
+
+    def free(self, specimen, options, hint=None):
+        hint = hint or {}
+        plate_mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
+        mass = hint.get("mass_kg") or 0.01 * plate_mass
+        x, y = hint.get("xy", (0.8 * specimen.length, 0.7 * specimen.width))
+        on = PointMass(max(mass, 1e-3 * plate_mass), x, y, self.kind)
+        free = tuple(Parameter(k, self.kind) for k in ("mass", "x", "y"))
+        note = "start from the residual pattern" if "xy" in hint else "start at a guessed position"
+        if all(abs(math.sin(2 * layer.angle)) < 1e-12 for layer in specimen.all_layers()):
+            note += "; mirrored positions (L - x, W - y) give the same frequencies"
+        return [SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (on,)), options, free, note)]
+
+
+class SuspensionEffect(Effect):
+    kind = "suspension"
+    description = "out-of-plane springs where the plate is suspended: stiffness"
+    keys = ("stiffness_N_m", "points_mm")
+    #: Default support points when none are given: near the four corners (10 % in).
+    DEFAULT_INSET = 0.1
+
+    def _points(self, specimen, table):
+        if "points_mm" not in table:
+            a, b, t = specimen.length, specimen.width, self.DEFAULT_INSET
+            return ((t * a, t * b), ((1 - t) * a, t * b), ((1 - t) * a, (1 - t) * b), (t * a, (1 - t) * b))
+        points = table["points_mm"]
+        if not isinstance(points, list) or not all(isinstance(p, list) and len(p) == 2 for p in points):
+            raise SpecError("[[effects]] kind = 'suspension': points_mm must be a list of [x, y] pairs in mm")
+        return tuple((1e-3 * float(x), 1e-3 * float(y)) for x, y in points)
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        springs = Suspension(self._number(table, "stiffness_N_m"), self._points(specimen, table), self.kind)
+        return SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (springs,)), options)
+
+    def free(self, specimen, options, hint=None):
+        # Start where the suspension modes sit at ~5 % of the first elastic frequency.
+        laminate = specimen.laminate(specimen.configurations[0].name)
+        plate_mass = laminate.inertia[0] * specimen.length * specimen.width
+        d = max(laminate.stiffness[12], laminate.stiffness[14])
+        omega1 = (22.0 / max(specimen.length, specimen.width) ** 2) * math.sqrt(d / laminate.inertia[0])
+        points = self._points(specimen, {})
+        k = (0.05 * omega1) ** 2 * plate_mass / len(points)
+        springs = Suspension(k, points, self.kind)
+        note = "springs near the four corners (give points_mm in the spec to fix them)"
+        return [SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (springs,)), options,
+                           (Parameter("stiffness", self.kind),), note)]
+
+
+class Orientation(Effect):
+    kind = "orientation"
+    description = "material axes of a layer turned from the plate edges: angle"
+    keys = ("layer", "angle_deg")
+    #: Frequencies are even in the angle, so the search starts off zero.
+    START_DEG = 3.0
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        layer = str(table.get("layer", ""))
+        if layer not in [l.label for l in specimen.layers]:
+            raise SpecError(f"[[effects]] kind = 'orientation': layer = {layer!r}; use one of "
+                            f"{', '.join(l.label for l in specimen.layers)}")
+        angle = math.radians(self._number(table, "angle_deg"))
+        return SwitchedOn(self.kind, specimen.with_values({Parameter("angle", layer): angle}), options)
+
+    def free(self, specimen, options, hint=None):
+        out = []
+        for layer in specimen.layers:
+            if layer.material.identify:
+                p = Parameter("angle", layer.label)
+                moved = specimen.with_values({p: layer.angle + math.radians(self.START_DEG)})
+                out.append(SwitchedOn(self.kind, moved, options, (p,), f"angle of {layer.label} ({layer.material.name})"))
+        return out
+
+
+class Adhesive(Effect):
+    kind = "adhesive"
+    description = "bond-line thickness of each bonded configuration off nominal"
+    keys = ("thickness_mm",)
+
+    @staticmethod
+    def bond_layers(specimen):
+        """The added layer next to the specimen in each configuration that adds two or more."""
+        for c in specimen.configurations:
+            for added in (c.bottom, c.top):
+                if len(added) >= 2:
+                    yield added[0]
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        t = self._number(table, "thickness_mm") * 1e-3
+        return SwitchedOn(self.kind, specimen.with_values({Parameter("thickness", l.label): t
+                                                           for l in self.bond_layers(specimen)}), options)
+
+    def free(self, specimen, options, hint=None):
+        free = tuple(Parameter("thickness", l.label) for l in self.bond_layers(specimen))
+        return [SwitchedOn(self.kind, specimen, options, free, "bond-line thicknesses free")] if free else []
+
+
+class Thickness(Effect):
+    kind = "thickness"
+    description = "specimen layer thicknesses off nominal"
+    keys = ("layer", "thickness_mm")
+
+    def fixed(self, specimen, options, table):
+        self._check(table)
+        layer = str(table.get("layer", ""))
+        if layer not in [l.label for l in specimen.layers]:
+            raise SpecError(f"[[effects]] kind = 'thickness': layer = {layer!r}; use one of "
+                            f"{', '.join(l.label for l in specimen.layers)}")
+        return SwitchedOn(self.kind, specimen.with_values(
+            {Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}), options)
+
+    def free(self, specimen, options, hint=None):
+        free = tuple(Parameter("thickness", l.label) for l in specimen.layers)
+        return [SwitchedOn(self.kind, specimen, options, free, "specimen layer thicknesses free")]
+
+
+REGISTRY: dict[str, Effect] = {}
+
+
+def register(effect: Effect) -> Effect:
+    """Make an effect kind available to specs, ``--effect`` and the diagnosis."""
+    if not effect.kind:
+        raise ValueError("an effect needs a 'kind' name")
+    REGISTRY[effect.kind] = effect
+    return effect
+
+
+for _effect in (TransverseShear(), RotaryInertia(), PointMassEffect(), SuspensionEffect(), Orientation(),
+                Adhesive(), Thickness()):
+    register(_effect)
+
+
+def effect(kind: str) -> Effect:
+    """The registered effect of this kind, or a one-line error listing the known kinds."""
+    try:
+        return REGISTRY[kind]
+    except KeyError:
+        raise SpecError(f"unknown effect kind {kind!r}; known: {', '.join(REGISTRY)}") from None
+
+
+def apply_fixed(specimen: Specimen, options: ModelOptions, tables) -> tuple[Specimen, ModelOptions, list[str]]:
+    """Switch on the spec's ``[[effects]]`` tables with their fixed parameters."""
+    notes = []
+    for table in tables:
+        if "kind" not in table:
+            raise SpecError("[[effects]]: every table needs a 'kind'")
+        on = effect(str(table["kind"])).fixed(specimen, options, table)
+        specimen, options = on.specimen, on.options
+        if on.note:
+            notes.append(on.note)
+    return specimen, options, notes
+
+
+__all__ = ["Effect", "SwitchedOn", "REGISTRY", "register", "effect", "apply_fixed"]

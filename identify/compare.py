@@ -1,0 +1,187 @@
+"""Where does the model fail?  Residual patterns that point at missing physics.
+
+After the layer properties are fitted (or at the spec's values), the relative errors
+e = model / measured - 1 of all configurations are tested against the signatures of
+the effects a Kirchhoff free-plate model leaves out:
+
+- growing with the mode's wavenumber (q = f / f_1 of its configuration, ~ k^2):
+  transverse shear and rotary inertia soften short waves (model too stiff);
+- following the squared mode amplitude at one point, e = c phi(x, y)^2 with
+  mass-normalised shapes: a point mass there lowers every frequency by
+  df/f = -m phi^2 / 2 (a sensor, a glue blob), so c estimates m / 2;
+- largest in the lowest modes, e = a + b / q^2: springs in the suspension raise low
+  frequencies most (df/f = k w^2 / (2 omega^2));
+- only in bonded configurations: the adhesive or the added plates are off.
+
+Each signature is scored by the share of the weighted misfit it explains beyond what
+the fitted layer properties can absorb (a score test: its columns are projected on the
+complement of the fit's Jacobian).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from fem.model import ModelOptions, SpecimenModel
+from fem.specimen import Specimen
+
+from .measurements import Measurements
+from .updating import FitOptions, FitResult, Updater, fit
+
+#: A signature explaining more than this share of the misfit is reported as present.
+PATTERN_SHARE = 0.5
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """A residual signature: the share of the misfit it explains and what it suggests."""
+
+    name: str
+    share: float
+    detail: str
+    suggests: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Measured against model per configuration and mode, with residual patterns."""
+
+    table: pd.DataFrame
+    rms_rel_error: float
+    reduced_chi2: float
+    noise_rel: float
+    patterns: tuple[Pattern, ...]
+    fitted: FitResult | None
+    point_map: np.ndarray | None = None     # share explained by a point mass at each node
+    node_xy: np.ndarray | None = None
+    point_mass_hints: tuple = ()            # best distinct positions with mass estimates
+
+    @property
+    def at_noise_level(self) -> bool:
+        return bool(np.isfinite(self.reduced_chi2) and self.reduced_chi2 < 2.0)
+
+    def report(self) -> str:
+        lines = ["== model against measurement ==", "",
+                 f"RMS relative error {100 * self.rms_rel_error:.4f} %"
+                 + (f", reduced chi^2 {self.reduced_chi2:.3g} (1 = the measurement scatter)"
+                    if np.isfinite(self.reduced_chi2) else ""),
+                 "", self.table.to_string(index=False, float_format=lambda x: f"{x:.6g}"), "",
+                 "residual patterns (share of the misfit each explains)"]
+        for p in sorted(self.patterns, key=lambda p: -p.share):
+            mark = "*" if p.share > PATTERN_SHARE and not self.at_noise_level else " "
+            lines.append(f" {mark} {p.name:34s} {100 * p.share:5.1f} %  {p.detail}  -> {', '.join(p.suggests)}")
+        if self.at_noise_level:
+            lines += ["", "the misfit is at the level of the measurement scatter: nothing is clearly missing"]
+        return "\n".join(lines) + "\n"
+
+
+class _ScoreTest:
+    """Share of the weighted misfit a signature explains beyond what the fitted layer
+    properties can absorb: the signature columns are projected onto the complement of the
+    baseline Jacobian before the least-squares fit (a score test for the missing term)."""
+
+    def __init__(self, e: np.ndarray, weight: np.ndarray, jacobian: np.ndarray | None):
+        self.weight = weight
+        self.r = e * weight
+        self.total = float(self.r @ self.r)
+        self.q = np.linalg.qr(jacobian)[0] if jacobian is not None and jacobian.size else None
+
+    def __call__(self, columns: np.ndarray) -> tuple[float, np.ndarray]:
+        b = columns * self.weight[:, None]
+        if self.q is not None:
+            b = b - self.q @ (self.q.T @ b)
+        coef, *_ = np.linalg.lstsq(b, self.r, rcond=None)
+        explained = b @ coef
+        return (float(explained @ explained) / self.total if self.total > 0 else 0.0), coef
+
+
+def residual_patterns(specimen: Specimen, measurements: Measurements, model_hz: np.ndarray, options: ModelOptions,
+                      pairings=None, jacobian: np.ndarray | None = None):
+    """Score every signature; returns (patterns, per-node share map of the point signature,
+    node coordinates, point-mass hints best first)."""
+    table = measurements.table
+    measured = table["frequency_hz"].to_numpy()
+    e = model_hz / measured - 1
+    sigma_rel = (table["std_hz"].to_numpy() / measured) if measurements.has_std else np.ones_like(e)
+    score = _ScoreTest(e, 1 / sigma_rel, jacobian)
+    configs = table["configuration"].to_numpy()
+    q = np.empty_like(e)
+    for name in measurements.configurations:
+        rows = configs == name
+        q[rows] = measured[rows] / measured[rows].min()
+    patterns = []
+    share, coef = score(q[:, None])
+    patterns.append(Pattern("grows with wavenumber", share if coef[0] > 0 else 0.0,
+                            f"{coef[0]:+.2e} per unit f/f1 (model stiffer for short waves if > 0)",
+                            ("transverse_shear", "rotary_inertia")))
+    share, coef = score((1 / q**2)[:, None])
+    patterns.append(Pattern("largest in the lowest modes", share if coef[0] < 0 else 0.0,
+                            f"{coef[0]:+.2e} x (f1/f)^2 (model too soft at low modes if < 0)", ("suspension",)))
+    bonded = np.array([not specimen.configuration(c).is_original for c in configs])
+    if bonded.any() and (~bonded).any():
+        share, _ = score(bonded[:, None].astype(float))
+        ratio = float(np.mean((score.r[bonded]) ** 2) / max(np.mean(score.r[~bonded] ** 2), 1e-300))
+        patterns.append(Pattern("only in bonded configurations", share if ratio > 4 else 0.0,
+                                f"mean squared error bonded / original = {ratio:.3g}", ("adhesive", "thickness")))
+    # Point-mass signature: e = (m / 2) phi(x, y)^2, scanned over every node.
+    model = SpecimenModel(specimen, options)
+    phi2 = []
+    for name in measurements.configurations:
+        solution = model.solve(name)
+        group = table[configs == name]
+        units = solution.units
+        w_index = units.element_type.NODE_DOFS.index("w")
+        shapes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, solution.modes.shapes.shape[1])[:, w_index, :]
+        indices = pairings[name].indices if pairings else group["mode"].to_numpy() - 1
+        phi2.append(shapes[:, indices].T ** 2)  # (rows, nodes) [1/kg]
+    phi2 = np.vstack(phi2)
+    fits = [score(phi2[:, k : k + 1]) for k in range(phi2.shape[1])]
+    shares = np.array([f[0] if f[1][0] > 0 else 0.0 for f in fits])
+    masses = np.array([2 * f[1][0] for f in fits])
+    xy = model.mesh.node_xy
+    span = max(specimen.length, specimen.width)
+    hints = []
+    for k in np.argsort(-shares):
+        if shares[k] <= 0 or len(hints) == 3:
+            break
+        if all(np.hypot(*(xy[k] - h["xy"])) > 0.15 * span for h in hints):
+            hints.append({"xy": tuple(xy[k]), "mass_kg": float(masses[k]), "share": float(shares[k])})
+    best = int(np.argmax(shares))
+    equivalent = int(np.sum(shares > shares[best] - 0.01))
+    patterns.append(Pattern("follows one point's mode amplitude", float(shares[best]),
+                            f"best at x = {1e3 * xy[best, 0]:.0f} mm, y = {1e3 * xy[best, 1]:.0f} mm "
+                            f"({equivalent} points about as good), about {1e3 * masses[best]:.2g} g there",
+                            ("point_mass",)))
+    return tuple(patterns), shares, xy, hints
+
+
+def compare(specimen: Specimen, measurements: Measurements, model: ModelOptions = ModelOptions(),
+            refit: bool = True) -> Comparison:
+    """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
+    fitted = fit(specimen, measurements, model=model, options=FitOptions()) if refit else None
+    if fitted is not None:
+        specimen_now, model_hz = fitted.specimen, fitted.model_hz
+        updater_options = Updater(specimen, measurements, fitted.parameters, model, FitOptions()).model_options
+        pairings, jacobian = fitted.pairings, fitted.jacobian
+    else:
+        updater = Updater(specimen, measurements, [], model, FitOptions())
+        evaluation = updater.evaluate(np.zeros(0), None)
+        specimen_now, model_hz, updater_options, pairings = specimen, evaluation.model_hz, updater.model_options, \
+            evaluation.pairings
+        jacobian = None
+    table = measurements.table
+    frame = pd.DataFrame({"configuration": table["configuration"], "mode": table["mode"],
+                          "measured_hz": table["frequency_hz"], "model_hz": model_hz,
+                          "rel_error": model_hz / table["frequency_hz"] - 1})
+    chi2 = float("nan")
+    if measurements.has_std:
+        frame["error_over_std"] = (frame["model_hz"] - frame["measured_hz"]) / table["std_hz"]
+        dof = len(frame) - (len(fitted.parameters) if fitted else 0)
+        chi2 = float(np.sum(frame["error_over_std"] ** 2) / max(dof, 1))
+    patterns, shares, xy, hints = residual_patterns(specimen_now, measurements, model_hz, updater_options, pairings,
+                                                    jacobian)
+    noise = float(np.median(table["std_hz"] / table["frequency_hz"])) if measurements.has_std else float("nan")
+    return Comparison(frame, float(np.sqrt(np.mean(frame["rel_error"] ** 2))), chi2, noise, patterns, fitted, shares,
+                      xy, tuple(hints))

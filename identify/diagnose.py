@@ -1,0 +1,141 @@
+"""Which physical effect is the model missing?
+
+The baseline (layer properties fitted, no effect) is compared with one refit per
+candidate effect, its parameters free together with the layer properties.  Each is
+judged by the Bayesian information criterion, BIC = chi^2 + k ln n (chi^2 in units of the
+measurement scatter, k free parameters, n frequencies), so an effect's extra parameters
+must pay for themselves; without a stated scatter, chi^2 is replaced by n ln(RSS / n).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from fem.effects import REGISTRY, SwitchedOn, effect
+from fem.errors import LayerIdError
+from fem.model import ModelOptions
+from fem.specimen import Specimen
+
+from .compare import Comparison, compare
+from .measurements import Measurements
+from .parameters import display, json_key
+from .updating import FitOptions, FitResult, fit
+
+#: A baseline reduced chi^2 below this is at the noise level: nothing is clearly missing.
+NOISE_CHI2 = 2.0
+
+
+def information_criterion(result: FitResult) -> float:
+    """BIC of a fit: chi^2 + k ln n, or n ln(RSS/n) + k ln n without a stated scatter."""
+    table = result.measurements.table
+    n, k = len(table), len(result.parameters)
+    if result.measurements.has_std:
+        chi2 = float(np.sum(((result.model_hz - table["frequency_hz"]) / table["std_hz"]) ** 2))
+    else:
+        chi2 = n * math.log(max(float(np.mean(result.rel_error**2)), 1e-300))
+    return chi2 + k * math.log(n)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One effect refitted: its fit, the BIC gain over the baseline (positive = better)."""
+
+    kind: str
+    note: str
+    switched_on: SwitchedOn
+    fit: FitResult | None
+    gain: float
+    error: str = ""
+
+    @property
+    def rms_rel_error(self) -> float:
+        return self.fit.rms_rel_error if self.fit else float("nan")
+
+    def effect_values(self) -> dict[str, float]:
+        """The effect's own parameters in display units (e.g. mass_g, x_mm)."""
+        if not self.fit:
+            return {}
+        return {json_key(p) if p.kind not in ("angle", "thickness") else f"{p.target}.{json_key(p)}":
+                display(p, self.fit.value(p)) for p in self.switched_on.free}
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    baseline: FitResult
+    comparison: Comparison
+    candidates: tuple[Candidate, ...]        # best first
+
+    @property
+    def at_noise_level(self) -> bool:
+        chi2 = self.baseline.uncertainty.reduced_chi2
+        return bool(self.baseline.measurements.has_std and np.isfinite(chi2) and chi2 < NOISE_CHI2)
+
+    @property
+    def verdict(self) -> str:
+        if self.at_noise_level:
+            return "nothing beyond the measurement scatter remains: no effect is needed"
+        best = self.candidates[0] if self.candidates else None
+        if best is None or best.gain <= 0:
+            return "no candidate effect explains the misfit well enough to pay for its parameters"
+        return (f"most likely missing: {best.kind} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
+                f"{100 * best.rms_rel_error:.3g} %)")
+
+    def to_dict(self) -> dict:
+        return {
+            "rms_rel_error": self.baseline.rms_rel_error,
+            "reduced_chi2": self.baseline.uncertainty.reduced_chi2 if self.baseline.measurements.has_std else None,
+            "verdict": self.verdict,
+            "at_noise_level": self.at_noise_level,
+            "ranking": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error if c.fit else None,
+                         "bic_gain": c.gain if np.isfinite(c.gain) else None, "parameters": c.effect_values(),
+                         "note": " ".join(x for x in (c.note, c.error) if x)} for c in self.candidates],
+        }
+
+    def report(self) -> str:
+        lines = ["== diagnosis ==", "", self.verdict, "",
+                 f"baseline: RMS relative error {100 * self.baseline.rms_rel_error:.4f} %, "
+                 f"reduced chi^2 {self.baseline.uncertainty.reduced_chi2:.3g}", "",
+                 f"  {'effect':18s} {'RMS after %':>12s} {'BIC gain':>10s}  parameters"]
+        for c in self.candidates:
+            values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
+            gain = f"{c.gain:10.1f}" if np.isfinite(c.gain) else f"{'failed':>10s}"
+            lines.append(f"  {c.kind:18s} {100 * c.rms_rel_error:12.4f} {gain}  {values} {c.note} {c.error}".rstrip())
+        return "\n".join(lines) + "\n\n" + self.comparison.report()
+
+
+def diagnose(specimen: Specimen, measurements: Measurements, model: ModelOptions = ModelOptions(),
+             kinds: list[str] | None = None, progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """Rank the candidate effects by how much of the misfit they explain (best first)."""
+    kinds = list(kinds) if kinds is not None else list(REGISTRY)
+    comparison = compare(specimen, measurements, model)
+    baseline = comparison.fitted
+    base_bic = information_criterion(baseline)
+    start = baseline.specimen
+    layer_parameters = list(baseline.parameters)
+    candidates = []
+    for kind in kinds:
+        variants = []
+        for hint in comparison.point_mass_hints if kind == "point_mass" else (None,):
+            variants += effect(kind).free(start, model, hint)
+        for on in variants:
+            if progress:
+                progress(f"trying {kind} {on.note}".strip())
+            try:
+                result = fit(on.specimen, measurements, parameters=layer_parameters + list(on.free),
+                             model=on.options, options=FitOptions(max_iterations=40))
+            except LayerIdError as exc:
+                candidates.append(Candidate(kind, on.note, on, None, float("-inf"), f"failed: {exc}"))
+                continue
+            gain = base_bic - information_criterion(result) if result.converged else float("-inf")
+            note = on.note if result.converged else f"{on.note}; {result.status}"
+            candidates.append(Candidate(kind, note, on, result, gain))
+    # One line per kind: its best variant.
+    best: dict[str, Candidate] = {}
+    for c in candidates:
+        if c.kind not in best or c.gain > best[c.kind].gain:
+            best[c.kind] = c
+    ranking = sorted(best.values(), key=lambda c: -c.gain)
+    return Diagnosis(baseline, comparison, tuple(ranking))
