@@ -1,4 +1,6 @@
 """Run every benchmark: ``python -m benchmarks``."""
-from . import core
+from . import core, designer, identification
 
 core.main()
+designer.main()
+identification.main()

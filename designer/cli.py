@@ -1,18 +1,143 @@
-"""``plan-tests``: plan bonded test configurations (brought by the test-planner issue)."""
+"""``plan-tests``: plan the bonded test configurations of a laminated plate."""
 from __future__ import annotations
 
+import argparse
 import sys
+from dataclasses import replace
 
-from fem.io import run_cli
+from fem.errors import DesignError
+from fem.io import run_cli, to_json
+from fem.spec import MAX_MODES
+from identify.examples import COATED_PLATE
+
+from .candidates import candidates
+from .check import check
+from .parallel import executor
+from .problem import Problem
+from .progress import Progress
+from .refine import refine
+from .search import METHODS, recommend
+from .space import CRITERIA, load
+from .sweep import parse_variable, sweep
+
+DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
+
+  recommend  the best sets of added plates from the spec's [design] space
+  check      is the spec's own set of configurations identifiable? (exit 1 if not)
+  sweep      how the scores change with each design variable (a report folder)
+
+Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 bad input."""
+
+
+def _problem(args) -> Problem:
+    path = args.spec
+    if path is None:
+        print(f"(no SPEC given: using the bundled example {COATED_PLATE.name})", file=sys.stderr)
+        path = COATED_PLATE
+    spec, space = load(path)
+    if getattr(args, "criterion", None):
+        space = replace(space, criterion=args.criterion)
+    if args.modes is not None and not 1 <= args.modes <= MAX_MODES:
+        raise DesignError(f"--modes {args.modes}: need a whole number from 1 to {MAX_MODES}")
+    return Problem.from_spec(spec, space, args.modes)
+
+
+def _progress(args) -> Progress:
+    show = sys.stderr.isatty() if args.progress is None else args.progress
+    return Progress(sys.stderr if show else None)
+
+
+def run_recommend(args) -> int:
+    """Ranked designs with scores, predicted std and the frequencies to expect."""
+    problem = _problem(args)
+    tasks = len(candidates(problem.space, problem.specimen)) + 1
+    with executor(args.workers, args.scheduler, tasks) as pool:
+        result = recommend(problem, args.top, args.method, pool, _progress(args))
+    refined = refine(problem, result.best) if args.refine else None
+    if args.json:
+        out = result.to_dict()
+        if refined is not None:
+            out["refined"] = refined.to_dict()
+        print(to_json(out))
+        return 0
+    print(result.report())
+    if refined is not None:
+        print("\n" + refined.report())
+    return 0
+
+
+def run_check(args) -> int:
+    """Feasibility of the spec's configurations; exit status 1 when infeasible."""
+    problem = _problem(args)
+    configurations = None
+    if args.configurations:
+        configurations = [problem.specimen.configuration(n.strip()) for n in args.configurations.split(",")]
+    result = check(problem, configurations, progress=_progress(args))
+    print(to_json(result.to_dict()) if args.json else result.report())
+    return 0 if result.feasible else 1
+
+
+def run_sweep(args) -> int:
+    """A report folder: CSV, plots, summary."""
+    problem = _problem(args)
+    variables = [parse_variable(v, problem) for v in (args.vary or ["thickness", "material"])]
+    tasks = len(problem.specimen.configurations) * (1 + sum(len(v.values) for v in variables))
+    with executor(args.workers, args.scheduler, tasks) as pool:
+        result = sweep(problem, variables, pool, _progress(args))
+    files = result.write(args.out)
+    if args.json:
+        print(to_json({"folder": str(args.out), "files": [str(f) for f in files], **result.to_dict()}))
+        return 0
+    print(result.report())
+    print(f"\nwritten: {', '.join(str(f) for f in files)}")
+    return 0
+
+
+def _common(p: argparse.ArgumentParser, parallel: bool = True) -> None:
+    p.add_argument("spec", nargs="?", help="specimen spec (TOML); default: the bundled example")
+    p.add_argument("--modes", type=int, help="modes measured per plate (default: [model] modes)")
+    p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar on stderr (default: when stderr is a terminal)")
+    if parallel:
+        p.add_argument("--workers", type=int, default=0,
+                       help="processes (default 0: all cores when there are enough solves to pay for them)")
+        p.add_argument("--scheduler", help="run on the Dask cluster at this address (needs the dask extra)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="plan-tests", description=DESCRIPTION,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("recommend", help="best sets of added plates from the [design] space")
+    _common(p)
+    p.add_argument("--top", type=int, default=5, help="designs to list (default 5)")
+    p.add_argument("--method", choices=METHODS, default="auto",
+                   help="exhaustive, relaxation (cvxpy) or auto (exhaustive up to 50 000 sets)")
+    p.add_argument("--criterion", choices=list(CRITERIA), help="rank by (default: [design] criterion)")
+    p.add_argument("--refine", action="store_true", help="also refine the best set's thicknesses (nlopt)")
+    p.set_defaults(run=run_recommend)
+    p = sub.add_parser("check", help="feasibility of the spec's configurations (exit 1 if infeasible)")
+    _common(p, parallel=False)
+    p.add_argument("--configurations", help="comma-separated names to check (default: all in the spec)")
+    p.set_defaults(run=run_check)
+    p = sub.add_parser("sweep", help="scores against each design variable: CSV, plots, summary")
+    _common(p)
+    p.add_argument("--vary", action="append", metavar="VAR[=VALUES]",
+                   help="thickness, adhesive_thickness, material, placement or modes, optionally CONFIG.VAR; "
+                        "values 0.5,1,2 or START:STOP:COUNT (repeatable; default: thickness and material)")
+    p.add_argument("--out", default="reports/sweep", help="report folder (default reports/sweep)")
+    p.set_defaults(run=run_sweep)
+    return parser
 
 
 def _main(argv=None) -> int:
-    print("plan-tests is not available yet: it arrives with the test-planner issue "
-          "(recommend, check, sweep).", file=sys.stderr)
-    return 2
+    args = build_parser().parse_args(argv)
+    return args.run(args)
 
 
 def main(argv=None) -> int:
+    """Run a command; bad input becomes one line on stderr and exit status 2."""
     return run_cli(_main, argv)
 
 

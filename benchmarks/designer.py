@@ -1,0 +1,127 @@
+"""Test-planner benchmarks (issue 4).
+
+Targets on the 2-core reference machine: 36 candidates (3 materials x 6 thicknesses x 2
+placements) and all 630 sets of two additions < 10 s; 1000 candidates through the
+convex relaxation < 60 s.  Times are from a cold cache (every configuration solved).
+"""
+import itertools
+import math
+import os
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from designer import problem as problem_module
+from designer.candidates import candidates
+from designer.parallel import executor
+from designer.problem import Problem
+from designer.relaxation import information_loss
+from designer.search import ORIGINAL, recommend, stacked_rows
+from designer.space import DesignSpace
+from fem.model import solve_laminate
+
+from .common import paper_spec
+
+THICKNESSES_36 = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+MATERIALS_1000 = ("brass", "aluminium", "steel_stock", "copper", "titanium")
+
+
+def paper_problem(materials, thicknesses_mm, size: int = 3) -> Problem:
+    """The paper's plate (Table 1 values, 5 modes) with a design space."""
+    spec = paper_spec()
+    design = {**spec.design, "materials": list(materials), "thicknesses_mm": list(thicknesses_mm),
+              "configurations": size}
+    return Problem.from_spec(spec, DesignSpace.from_spec(replace(spec, design=design)))
+
+
+def cold() -> None:
+    """Forget every solved configuration (this process's caches)."""
+    problem_module._CACHE.clear()
+    solve_laminate.cache_clear()
+
+
+def timed(function):
+    start = time.perf_counter()
+    out = function()
+    return out, time.perf_counter() - start
+
+
+def small_space() -> None:
+    problem = paper_problem(("brass", "aluminium", "steel_stock"), THICKNESSES_36)
+    print(f"-- 36 candidates, all {math.comb(36, 2)} sets of two additions (target < 10 s) --")
+    cold()
+    serial, t_serial = timed(lambda: recommend(problem, method="exhaustive"))
+    cold()
+
+    def with_pool():
+        with executor(2) as pool:
+            return recommend(problem, method="exhaustive", pool=pool)
+
+    parallel, t_parallel = timed(with_pool)
+    assert [d.names for d in parallel.designs] == [d.names for d in serial.designs]
+    print(f"serial: {t_serial:.2f} s ({t_serial / 10:.2f} of the target); 2 processes (start-up included): "
+          f"{t_parallel:.2f} s ({t_parallel / 10:.2f} of the target); serial / parallel {t_serial / t_parallel:.2f}")
+    scored = recommend(problem, method="exhaustive")  # warm: the set scoring alone
+    print(f"scoring the {scored.sets} sets alone (batched SVD, warm cache): {scored.seconds * 1e3:.0f} ms; "
+          f"best {', '.join(scored.best.names[1:])}: condition number {scored.best.scores.condition_number:.4g}")
+    relaxed = recommend(problem, method="relaxation")
+    for criterion in ("d", "e"):
+        exact = recommend(replace(problem, space=replace(problem.space, criterion=criterion)), top=1,
+                          method="exhaustive").best
+        bound = recommend(replace(problem, space=replace(problem.space, criterion=criterion)), top=1,
+                          method="relaxation").bound
+        print(f"relaxation ({criterion}): bound {bound.relaxed:.6g}, chosen {bound.chosen:.6g}, exhaustive optimum "
+              f"{exact.scores.value(criterion):.6g}")
+    print(f"relaxation (condition number, via e): chosen {relaxed.best.scores.condition_number:.4g}, exhaustive "
+          f"optimum {serial.best.scores.condition_number:.4g}")
+
+
+def large_space() -> None:
+    thicknesses = tuple(np.round(np.linspace(0.3, 3.0, 100), 4))
+    problem = paper_problem(MATERIALS_1000, thicknesses)
+    space = candidates(problem.space, problem.specimen)
+    workers = os.cpu_count() or 1
+    print(f"-- {len(space)} candidates through the convex relaxation (target < 60 s) --")
+    cold()
+
+    def solve():
+        with executor(workers) as pool:
+            return problem.solve((ORIGINAL,) + space.configurations, pool=pool)
+
+    solved, t_solve = timed(solve)
+    result, t_search = timed(lambda: recommend(problem, method="relaxation"))  # warm: relaxation and swaps
+    total = t_solve + t_search
+    print(f"solving {len(solved)} configurations on {workers} processes: {t_solve:.1f} s; relaxation, rounding and "
+          f"swaps: {t_search:.1f} s; total {total:.1f} s ({total / 60:.2f} of the target)")
+    print(result.bound.report())
+    d = replace(problem, space=replace(problem.space, criterion="d"))
+    by_d, t_d = timed(lambda: recommend(d, top=1, method="relaxation"))
+    print(f"log det relaxation instead: {t_d:.1f} s; {by_d.bound.report()}")
+    rows0 = problem.rows(solved[0])
+    blocks = stacked_rows(problem, solved[1:])
+    info0, infos = rows0.T @ rows0, np.einsum("mrp,mrq->mpq", blocks, blocks)
+    best, t_exhaustive = timed(lambda: exhaustive_condition(info0, infos))
+    print(f"chosen {', '.join(result.best.names[1:])}: condition number {result.best.scores.condition_number:.4g}; "
+          f"all {math.comb(len(infos), 2)} sets checked ({t_exhaustive:.1f} s): best {best:.4g}, "
+          f"chosen / best {result.best.scores.condition_number / best:.4f}")
+
+
+def exhaustive_condition(info0: np.ndarray, infos: np.ndarray) -> float:
+    """The smallest condition number over every pair (from information matrices)."""
+    best = np.inf
+    pairs = itertools.combinations(range(len(infos)), 2)
+    while chunk := list(itertools.islice(pairs, 20000)):
+        index = np.array(chunk)
+        best = min(best, information_loss(info0 + infos[index[:, 0]] + infos[index[:, 1]], "condition").min())
+    return math.exp(best)
+
+
+def main() -> None:
+    print("== test planner ==")
+    small_space()
+    large_space()
+
+
+if __name__ == "__main__":
+    main()

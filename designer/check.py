@@ -1,0 +1,84 @@
+"""``check``: is the spec's own set of configurations a feasible test (paper section 4.6)?"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .design import Design
+from .limits import CLOSE_MODES_WARNING
+from .poisson import PoissonPlate, poisson_plate
+from .problem import Problem, Solved, unmeasurable
+from .progress import Progress
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """The scored spec design, the Poisson-plate rule, warnings (close modes, modes
+    outside the band, too few frequencies) and violations of the lab's limits."""
+
+    design: Design
+    poisson: PoissonPlate
+    warnings: tuple[str, ...]
+    violations: tuple[str, ...]
+
+    @property
+    def feasible(self) -> bool:
+        """Not singular and within every limit."""
+        return self.design.scores.verdict != "singular" and not self.violations
+
+    def to_dict(self) -> dict:
+        return {**self.design.to_dict(), "feasible": self.feasible, "warnings": list(self.warnings),
+                "violations": list(self.violations), "poisson_plate": self.poisson.to_dict()}
+
+    def report(self) -> str:
+        lines = [self.design.report(), "", self.poisson.report()]
+        if self.warnings:
+            lines += ["", "warnings:"] + [f"  - {w}" for w in self.warnings]
+        if self.violations:
+            lines += ["", "limits broken:"] + [f"  - {v}" for v in self.violations]
+        lines += ["", "feasible: " + ("yes" if self.feasible else "NO (" + (
+            "singular: the layers cannot be told apart" if self.design.scores.verdict == "singular"
+            else "a limit is broken") + ")")]
+        return "\n".join(lines)
+
+
+def mode_warnings(problem: Problem, solved: Solved) -> list[str]:
+    """Close pairs among the measured modes, and modes the band leaves out."""
+    limits = problem.space.limits
+    f = solved.frequencies_hz
+    name = solved.configuration.name
+    out = []
+    threshold = max(CLOSE_MODES_WARNING, limits.min_separation)
+    n = problem.modes
+    for i in range(min(n, f.size - 1)):
+        gap = (f[i + 1] - f[i]) / f[i]
+        if gap < threshold:
+            action = ("both are dropped (min_separation_rel)" if gap < limits.min_separation else
+                      "pair them by mode shape (measure where they differ) or set [design] min_separation_rel")
+            which = f"modes {i + 1} and {i + 2}" if i + 1 < n else f"mode {n} and the unmeasured mode {n + 1}"
+            out.append(f"{which} of '{name}' are {100 * gap:.3g} % apart ({f[i]:.2f}, {f[i + 1]:.2f} Hz, "
+                       f"shapes {solved.labels[i]}, {solved.labels[i + 1]}): {action}")
+    if limits.band is not None:
+        outside = [i for i in range(min(n, f.size)) if not limits.band[0] <= f[i] <= limits.band[1]]
+        if outside:
+            listed = ", ".join(f"{i + 1} ({f[i]:.1f} Hz)" for i in outside)
+            out.append(f"'{name}': modes {listed} lie outside the band {limits.band[0]:g}..{limits.band[1]:g} Hz "
+                       "and are not measured")
+    return out
+
+
+def check(problem: Problem, configurations=None, pool=None, progress: Progress | None = None) -> CheckResult:
+    """Score the spec's configurations (or the given ones) as one test set."""
+    configurations = tuple(configurations or problem.specimen.configurations)
+    solved = problem.solve(configurations, pool=pool, progress=progress)
+    warnings, violations = [], []
+    for s in solved:
+        if not problem.measured(s).any():
+            raise unmeasurable(problem, s)
+        warnings += mode_warnings(problem, s)
+        violations += [f"'{s.configuration.name}' {v}" for v in problem.space.limits.violations(s.configuration,
+                                                                                             problem.area)]
+    design = Design.of(problem, solved)
+    if design.n_measured < len(design.parameters):
+        warnings.append(f"{design.n_measured} measured frequencies for {len(design.parameters)} parameters: "
+                        "singular whatever the plates; measure more modes ([model] modes) or add configurations")
+    return CheckResult(design, poisson_plate(problem.specimen), tuple(warnings), tuple(violations))
