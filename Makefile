@@ -4,6 +4,8 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+# Small banded solves: threaded BLAS only costs (see fem/__init__.py).
+export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: demo test bench clean
 
@@ -14,6 +16,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
+	$(BIN)/plan-tests recommend
 	$(BIN)/identify-layers predict
 	$(BIN)/identify-layers fit --report reports/demo
 

@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, replace
 
 
+import numpy as np
+
 from .attachments import PointMass, Suspension
 from .errors import SpecError
 from .model import ModelOptions
@@ -121,6 +123,9 @@ class PointMassEffect(Effect):
         plate_mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
         mass = hint.get("mass_kg") or 0.01 * plate_mass
         x, y = hint.get("xy", (0.8 * specimen.length, 0.7 * specimen.width))
+        # Start inside the plate, so that the first step may go either way.
+        x, y = np.clip(x, 0.02 * specimen.length, 0.98 * specimen.length), np.clip(y, 0.02 * specimen.width,
+                                                                                   0.98 * specimen.width)
         on = PointMass(max(mass, 1e-3 * plate_mass), x, y, self.kind)
         free = tuple(Parameter(k, self.kind) for k in ("mass", "x", "y"))
         note = "start from the residual pattern" if "xy" in hint else "start at a guessed position"

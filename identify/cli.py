@@ -15,6 +15,7 @@ from .examples import COATED_PLATE, COATED_PLATE_MEASURED
 from .measurements import load_measurements
 from .compare import compare as compare_layers
 from .diagnose import diagnose as diagnose_layers
+from .diagnose import fit_with_effects
 from .plots import plot_comparison, plot_point_map
 from .report import report_text, to_dict, write_report
 from .updating import fit as fit_layers
@@ -77,23 +78,17 @@ def fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
     spec, measurements = _load_pair(args.spec, args.measurements)
     specimen, options = _with_spec_effects(spec)
-    parameters = specimen.material_parameters()
-    free, effect_of = [], {}
+    for kind in args.effect or []:
+        effect(kind)  # unknown kinds fail before any work
     before = None
     if args.effect:
-        print("baseline fit (no added effect):", file=sys.stderr)
-        before = fit_layers(specimen, measurements, model=options)
-        for kind in args.effect:
-            on = effect(kind).free_all(specimen, options)
-            specimen, options = on.specimen, on.options
-            free += on.free
-            effect_of.update({p: kind for p in on.free})
-            if on.note:
-                print(f"note: {kind}: {on.note}", file=sys.stderr)
-    print(f"identifying {len(parameters) + len(free)} parameters from {len(measurements)} frequencies",
-          file=sys.stderr)
-    result = fit_layers(specimen, measurements, parameters=parameters + free, model=options, progress=_progress,
-                        effects=effect_of)
+        print(f"baseline fit, then with {', '.join(args.effect)} (parameters free):", file=sys.stderr)
+        before, result = fit_with_effects(specimen, measurements, options, args.effect,
+                                          progress=lambda text: print(f"  {text}", file=sys.stderr))
+    else:
+        print(f"identifying {len(specimen.material_parameters())} parameters from {len(measurements)} "
+              "frequencies", file=sys.stderr)
+        result = fit_layers(specimen, measurements, model=options, progress=_progress)
     if args.report:
         folder = write_report(result, args.report, before)
         print(f"report written to {folder}/", file=sys.stderr)

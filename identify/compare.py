@@ -32,6 +32,8 @@ from .updating import FitOptions, FitResult, Updater, fit
 
 #: A signature explaining more than this share of the misfit is reported as present.
 PATTERN_SHARE = 0.5
+#: Distinct start positions the diagnosis tries for a point mass.
+POINT_MASS_STARTS = 4
 
 
 @dataclass(frozen=True)
@@ -142,11 +144,15 @@ def residual_patterns(specimen: Specimen, measurements: Measurements, model_hz: 
     masses = np.array([2 * f[1][0] for f in fits])
     xy = model.mesh.node_xy
     span = max(specimen.length, specimen.width)
-    hints = []
+    # Distinct start positions: on a plate symmetric about its centre lines, mirrored
+    # points are equivalent, so positions are compared folded into one quarter.
+    folded = np.abs(xy - np.array([specimen.length, specimen.width]) / 2)
+    hints, chosen = [], []
     for k in np.argsort(-shares):
-        if shares[k] <= 0 or len(hints) == 3:
+        if shares[k] <= 0 or len(hints) == POINT_MASS_STARTS:
             break
-        if all(np.hypot(*(xy[k] - h["xy"])) > 0.15 * span for h in hints):
+        if all(np.hypot(*(folded[k] - folded[j])) > 0.2 * span for j in chosen):
+            chosen.append(k)
             hints.append({"xy": tuple(xy[k]), "mass_kg": float(masses[k]), "share": float(shares[k])})
     best = int(np.argmax(shares))
     equivalent = int(np.sum(shares > shares[best] - 0.01))

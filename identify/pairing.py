@@ -37,6 +37,7 @@ class ModePairing:
     indices: np.ndarray
     shapes: np.ndarray | None = None
     lowest_mac: float = 1.0
+    note: str = ""
 
     @classmethod
     def initial(cls, configuration: str, modes: Modes, measured_modes, labels) -> "ModePairing":
@@ -48,16 +49,15 @@ class ModePairing:
                                    f"{n_model} model modes computed")
         indices = np.full(len(ranks), -1)
         used: set[int] = set()
+        unmatched = []
         for k, label in enumerate(labels):
             if not label:
                 continue
             # the unused model mode with this label, closest in rank to the measured one
             candidates = [i for i, l in enumerate(modes.labels) if l == label and i not in used]
             if not candidates:
-                raise MeasurementError(
-                    f"configuration {configuration!r}: measured mode {measured_modes[k]} has label {label!r}, "
-                    f"but no unpaired model mode has it (model labels: {', '.join(modes.labels)})"
-                )
+                unmatched.append(f"mode {measured_modes[k]} {label}")
+                continue  # paired by rank below: a label is a hint, the start model may differ
             indices[k] = min(candidates, key=lambda i: abs(i - ranks[k]))
             used.add(int(indices[k]))
         # Unlabelled modes take the remaining model modes in rank order.
@@ -65,7 +65,9 @@ class ModePairing:
         for k in np.argsort(ranks, kind="stable"):
             if indices[k] < 0:
                 indices[k] = next(free)
-        return cls(configuration, indices, modes.shapes[:, indices])
+        note = (f"{configuration}: no start-model mode has the label of {', '.join(unmatched)}; paired by rank"
+                if unmatched else "")
+        return cls(configuration, indices, modes.shapes[:, indices], note=note)
 
     def track(self, modes: Modes, weight: sp.spmatrix) -> "ModePairing":
         """The pairing for new model modes, following the previous paired shapes by MAC."""

@@ -33,22 +33,34 @@ def json_key(parameter: Parameter) -> str:
 
 @dataclass(frozen=True)
 class ParameterSpace:
-    """Parameters with their transform z = log(p) or z = p."""
+    """Parameters with their transform: z = log(p), or z = p / scale for the others
+    (positions in plate lengths, so every z is dimensionless and steps compare)."""
 
     parameters: tuple[Parameter, ...]
+    scales: tuple[float, ...] = ()
+
+    @classmethod
+    def of(cls, parameters, specimen: Specimen) -> "ParameterSpace":
+        scale = {"x": specimen.length, "y": specimen.width}
+        return cls(tuple(parameters), tuple(scale.get(p.kind, 1.0) for p in parameters))
 
     @property
     def is_log(self) -> np.ndarray:
-        return np.array([p.kind in LOG_KINDS for p in self.parameters])
+        return np.array([p.kind in LOG_KINDS for p in self.parameters], dtype=bool)
+
+    @property
+    def _scale(self) -> np.ndarray:
+        return np.array(self.scales) if self.scales else np.ones(len(self.parameters))
 
     def to_z(self, values: np.ndarray) -> np.ndarray:
-        return np.where(self.is_log, np.log(np.abs(values)), values)
+        log = self.is_log
+        return np.where(log, np.log(np.where(log, np.abs(values), 1.0)), values / self._scale)
 
     def to_values(self, z: np.ndarray) -> np.ndarray:
-        return np.where(self.is_log, np.exp(z), z)
+        return np.where(self.is_log, np.exp(z), z * self._scale)
 
     def dvalue_dz(self, values: np.ndarray) -> np.ndarray:
-        return np.where(self.is_log, values, 1.0)
+        return np.where(self.is_log, values, self._scale)
 
     def apply(self, specimen: Specimen, values: np.ndarray) -> Specimen:
         """The specimen with these values; raises ``SpecError`` for an inadmissible material."""

@@ -25,6 +25,8 @@ from .uncertainty import Uncertainty
 
 #: Adjacent measured modes closer than this (relative) may be paired either way round.
 CLOSE_MODES = 0.01
+#: The updating stops once no parameter moves by more than this fraction of its std.
+STEP_PER_STD = 0.01
 #: Up to this many close pairs every assignment (2^k) is refitted; beyond, single swaps.
 MAX_EXHAUSTIVE_PAIRS = 4
 
@@ -112,7 +114,7 @@ class Updater:
                  options: FitOptions):
         self.specimen = specimen
         self.measurements = measurements
-        self.space = ParameterSpace(tuple(parameters))
+        self.space = ParameterSpace.of(parameters, specimen)
         table = measurements.table
         self.configurations = measurements.configurations
         highest = int(table["mode"].max())
@@ -144,6 +146,16 @@ class Updater:
             model_hz[rows] = solution.frequencies_hz[pairing.indices]
             derivatives[rows] = solution.derivatives(list(self.space.parameters))[pairing.indices]
         return Evaluation(values, model_hz, derivatives, new_pairings, specimen)
+
+    def std_z(self, e: Evaluation) -> np.ndarray:
+        """Linearised std of each z at ``e`` (scatter from std_hz, or from the residual)."""
+        _, s, vt = np.linalg.svd(self.jacobian(e), full_matrices=False)
+        if s[-1] <= 1e-12 * s[0]:
+            return np.zeros(len(s))
+        dof = len(self.measured_hz) - len(e.values)
+        chi2 = 2 * self.cost(e) / dof if dof > 0 else 0.0
+        scale = max(chi2, 1.0) if self.measurements.has_std else chi2
+        return np.sqrt(scale * np.sum((vt / s[:, None]) ** 2, axis=0))
 
     def cost(self, e: Evaluation) -> float:
         r = self.residual(e)
@@ -276,10 +288,12 @@ def fit(
     updater = Updater(specimen, measurements, parameters, model, options)
     values = np.array([specimen.value(p) for p in parameters], dtype=float)
     current = updater.evaluate(values, None)
+    start_notes = [p.note for p in current.pairings.values() if p.note]
     history = [Iteration(0, values, current.model_hz, updater.rms(current), updater.cost(current), 0.0, 0.0)]
     if progress:
         progress(history[-1])
     current, converged, status, warnings = _iterate(updater, current, history, options, progress)
+    warnings = start_notes + warnings
     twins = []
     if converged:
         current, status, notes, twins = _explore_pairings(updater, current, history, options, status)
@@ -320,11 +334,14 @@ def _iterate(updater: Updater, current: Evaluation, history: list, options: FitO
             dz = -vt.T @ (gain * ur)
             dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), 1e-300))))
             trial_values = space.to_values(z + dz)
-            for _ in range(30):  # keep inside the physical bounds (nu12^2 < E1/E2)
+            for _ in range(30):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
                 if space.admissible(updater.specimen, trial_values):
                     break
                 dz *= 0.5
                 trial_values = space.to_values(z + dz)
+            else:
+                damping = max(10 * damping, 1e-6 * s[0] ** 2)  # the step leaves the bounds: damp it
+                continue
             trial = updater.evaluate(trial_values, current.pairings)
             if updater.cost(trial) <= updater.cost(current):
                 accepted = (trial, dz)
@@ -348,6 +365,8 @@ def _iterate(updater: Updater, current: Evaluation, history: list, options: FitO
                             "(a mode shape changed strongly; check the pairing in the residual table)")
         if step < options.parameter_tolerance:
             return current, True, f"converged: parameter change {step:.1e} below {options.parameter_tolerance:g}", warnings
+        if np.all(np.abs(dz) < STEP_PER_STD * updater.std_z(current)):
+            return current, True, f"converged: every change below {STEP_PER_STD:g} of its parameter's std", warnings
         if updater.rms(current) < 1e-11:
             return current, True, "converged: the model reproduces the measurements exactly", warnings
         if previous_cost - updater.cost(current) <= options.cost_tolerance * previous_cost and step < 1e-4:

@@ -1,0 +1,93 @@
+"""The effect registry: spec tables, free switching, a user-registered kind, bad input."""
+import copy
+import tomllib
+
+import numpy as np
+import pytest
+
+from fem.effects import REGISTRY, Effect, SwitchedOn, apply_fixed, effect, register
+from fem.errors import SpecError
+from fem.model import ModelOptions, SpecimenModel
+from fem.spec import parse_spec
+from fem.specimen import Parameter
+from identify.examples import COATED_PLATE
+
+BASE = tomllib.loads(COATED_PLATE.read_text())
+
+
+def with_effects(*tables):
+    data = copy.deepcopy(BASE)
+    data["effects"] = list(tables)
+    return data
+
+
+def test_spec_point_mass_is_applied(example_spec):
+    spec = parse_spec(with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0}))
+    specimen, options, _ = apply_fixed(spec.specimen, spec.model, spec.effects)
+    (mass,) = specimen.attachments
+    assert (mass.mass, mass.x, mass.y) == pytest.approx((3e-3, 0.125, 0.110))
+    loaded = SpecimenModel(specimen, options).solve("original").frequencies_hz
+    free = SpecimenModel(example_spec.specimen, options).solve("original").frequencies_hz
+    assert np.all(loaded < free)
+
+
+def test_spec_plate_theory_effects_switch_options(example_spec):
+    spec = parse_spec(with_effects({"kind": "transverse_shear"}, {"kind": "rotary_inertia"}))
+    _, options, notes = apply_fixed(spec.specimen, spec.model, spec.effects)
+    assert options.transverse_shear and options.rotary_inertia
+    assert any("G13 = G23 = G12 assumed" in n for n in notes)
+
+
+@pytest.mark.parametrize("table,message", [
+    ({"kind": "sensor"}, "unknown effect kind 'sensor'; known: transverse_shear"),
+    ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 180.0, "y_mm": 10.0}, "outside the plate"),
+    ({"kind": "point_mass", "mass_g": -3.0, "x_mm": 10.0, "y_mm": 10.0}, "must not be negative"),
+    ({"kind": "suspension", "stiffness_N_m": -50.0}, "must not be negative"),
+    ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 10.0}, "missing field 'y_mm'"),
+    ({"kind": "point_mass", "mass": 3.0, "x_mm": 10.0, "y_mm": 10.0}, "unknown key 'mass'"),
+    ({"kind": "orientation", "layer": "layer9", "angle_deg": 5.0}, "layer = 'layer9'"),
+])
+def test_bad_effect_tables_fail_at_load(table, message):
+    with pytest.raises(SpecError, match=message.replace("(", r"\(")):
+        parse_spec(with_effects(table))
+
+
+def test_free_effects_bring_parameters(example_spec):
+    specimen, options = example_spec.specimen, ModelOptions()
+    on = effect("point_mass").free(specimen, options)[0]
+    assert on.free == tuple(Parameter(k, "point_mass") for k in ("mass", "x", "y"))
+    assert effect("orientation").free_all(specimen, options).free == tuple(
+        Parameter("angle", f"layer{i}") for i in (1, 2, 3))
+    assert {p.target for p in effect("adhesive").free(specimen, options)[0].free} == {
+        "brass_bottom.bottom1", "brass_top.top1"}
+
+
+def test_user_registered_effect(example_spec):
+    """The README's worked example: a layer of paint of unknown mass per area on top."""
+
+    class Paint(Effect):
+        kind = "paint_test"
+        description = "paint on the top face: extra mass per area"
+        keys = ("grams_per_m2",)
+
+        def fixed(self, specimen, options, table):
+            self._check(table)
+            return SwitchedOn(self.kind, self._painted(specimen, self._number(table, "grams_per_m2")), options)
+
+        def free(self, specimen, options, hint=None):
+            painted = self._painted(specimen, 20.0)
+            return [SwitchedOn(self.kind, painted, options, (Parameter("density", "top_coating"),), "top mass free")]
+
+        @staticmethod
+        def _painted(specimen, grams_per_m2):
+            top = specimen.layers[-1]
+            extra = grams_per_m2 * 1e-3 / top.thickness
+            return specimen.with_values({Parameter("density", top.material.name): top.material.density + extra})
+
+    try:
+        register(Paint())
+        spec = parse_spec(with_effects({"kind": "paint_test", "grams_per_m2": 50.0}))
+        specimen, _, _ = apply_fixed(spec.specimen, spec.model, spec.effects)
+        assert specimen.materials["top_coating"].density == pytest.approx(2700 + 0.05 / 2e-4)
+    finally:
+        REGISTRY.pop("paint_test", None)

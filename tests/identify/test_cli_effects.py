@@ -1,0 +1,56 @@
+"""identify-layers fit --effect, compare and diagnose on data with a hidden sensor mass."""
+import json
+
+import pytest
+
+from fem.attachments import PointMass
+from identify.cli import main
+from identify.examples import COATED_PLATE
+from identify.synthetic import synthetic_measurements
+from studies.common import true_specimen
+
+
+@pytest.fixture(scope="module")
+def sensor_csv(tmp_path_factory):
+    truth = true_specimen().with_attachments([PointMass(3e-3, 0.125, 0.110)])
+    data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=8, labels="close")
+    path = tmp_path_factory.mktemp("data") / "sensor.csv"
+    data.table.to_csv(path, index=False)
+    return str(path)
+
+
+def test_fit_with_free_point_mass(sensor_csv, capsys, tmp_path):
+    """DESIGN.md: the effect's parameters are reported under "effects"; the report shows
+    the error per mode before and after."""
+    code = main(["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json",
+                 "--report", str(tmp_path)])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["converged"]
+    mass = out["effects"]["point_mass"]
+    assert mass["mass_g"] == pytest.approx(3.0, rel=0.1) and mass["std"]["mass_g"] > 0
+    assert set(out["materials"]) == {"steel", "top_coating", "bottom_coating"}
+    assert out["rms_rel_error"] < 1e-3
+    assert (tmp_path / "before_after.png").exists()
+    assert "before and after adding point_mass" in (tmp_path / "report.txt").read_text()
+
+
+def test_compare_flags_the_point_signature(sensor_csv, capsys, tmp_path):
+    assert main(["compare", str(COATED_PLATE), sensor_csv, "--json", "--report", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert not out["at_noise_level"]
+    best = max(out["patterns"], key=lambda p: p["share"])
+    assert best["pattern"] == "follows one point's mode amplitude" and best["share"] > 0.5
+    assert (tmp_path / "residuals_with_shapes.png").exists() and (tmp_path / "point_mass_map.png").exists()
+
+
+def test_diagnose_json_shape(sensor_csv, capsys):
+    assert main(["diagnose", str(COATED_PLATE), sensor_csv, "--effects", "point_mass,rotary_inertia", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["ranking"][0]["effect"] == "point_mass"
+    assert out["ranking"][0]["rms_rel_error_after"] < out["rms_rel_error"] / 5
+    assert set(out["ranking"][0]["parameters"]) == {"mass_g", "x_mm", "y_mm"}
+
+
+def test_unknown_effect_is_a_one_line_error(capsys):
+    assert main(["diagnose", "--effects", "sensor"]) == 2
+    assert "unknown effect kind 'sensor'" in capsys.readouterr().err
