@@ -21,14 +21,13 @@ from __future__ import annotations
 
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from fem.errors import DesignError
 from fem.laminate import Layer
 from fem.material import Material
-from fem.spec import Spec, _material, load_spec, parse_spec
+from fem.spec import Spec, load_spec, parse_spec
 
 from .limits import Limits
 from .stock import DEFAULT_ADHESIVE, STOCK, STOCK_SUFFIX, STOCK_THICKNESSES_MM, stock_name
@@ -84,20 +83,18 @@ class DesignSpace:
 def load(path: str | Path) -> tuple[Spec, DesignSpace]:
     """Read a spec and its design space (with every material the file defines)."""
     spec = load_spec(path)
-    return spec, design_space(spec, tomllib.loads(Path(path).read_text()))  # validated by load_spec
+    return spec, design_space(spec)
 
 
 def from_data(data: dict, source: str = "<spec>") -> tuple[Spec, DesignSpace]:
     """A spec and its design space from a parsed TOML document."""
     spec = parse_spec(data, source)
-    return spec, design_space(spec, data)
+    return spec, design_space(spec)
 
 
-def design_space(spec: Spec, data: dict) -> DesignSpace:
-    """The spec's design space, knowing every ``[materials]`` table of its document
-    (``Spec`` keeps only the materials its layers use)."""
-    defined = {name: _material(name, table) for name, table in data["materials"].items()}
-    return DesignSpace.from_spec(spec, defined)
+def design_space(spec: Spec) -> DesignSpace:
+    """The spec's design space, knowing every material the spec defines."""
+    return DesignSpace.from_spec(spec, dict(spec.materials))
 
 
 def _number(design: dict, key: str, default, low: float, high: float, what: str, *, zero: bool = False):

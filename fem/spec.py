@@ -33,13 +33,15 @@ MAX_MODES = 60
 @dataclass(frozen=True)
 class Spec:
     """A loaded spec: the specimen with its configurations, the model options, the
-    ``[[effects]]`` tables and the ``[design]`` table (validated by their users)."""
+    ``[[effects]]`` tables, the ``[design]`` table (validated by its user) and every
+    material defined, including those only a design may use."""
 
     specimen: Specimen
     model: ModelOptions
     effects: tuple[dict, ...] = ()
     design: dict = field(default_factory=dict)
     source: str = "<spec>"
+    materials: dict[str, Material] = field(default_factory=dict)  # every [materials] table, used or not
 
 
 def _check_keys(table: dict, allowed, where: str) -> None:
@@ -198,7 +200,10 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
     if not isinstance(design, dict):
         raise SpecError("[design]: must be a table")
     specimen = Specimen(sp.get("name", Path(source).stem), length * MM, width * MM, layers, tuple(configurations))
-    return Spec(specimen, options, tuple(effects), design, source)
+    from .effects import apply_fixed  # effects build on the model; validate them here, at the entry point
+
+    apply_fixed(specimen, options, effects)
+    return Spec(specimen, options, tuple(effects), design, source, materials)
 
 
 def load_spec(path: str | Path) -> Spec:

@@ -1,5 +1,4 @@
 """Free-free plate frequencies against published and independent references."""
-import math
 
 import numpy as np
 import pytest
