@@ -131,14 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    return args.run(args)
-
-
 def main(argv=None) -> int:
     """Run a command; bad input becomes one line on stderr and exit status 2."""
-    return run_cli(_main, argv)
+    return run_cli(build_parser, argv)
 
 
 if __name__ == "__main__":

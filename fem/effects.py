@@ -66,6 +66,14 @@ class Effect:
             if key not in self.keys + ("kind",):
                 raise SpecError(f"[[effects]] kind = '{self.kind}': unknown key '{key}'; allowed: {', '.join(self.keys)}")
 
+    def _layer(self, specimen: Specimen, table: dict) -> str:
+        """The specimen layer label a table names, checked."""
+        layer = str(table.get("layer", ""))
+        if layer not in [l.label for l in specimen.layers]:
+            raise SpecError(f"[[effects]] kind = '{self.kind}': layer = {layer!r}; use one of "
+                            f"{', '.join(l.label for l in specimen.layers)}")
+        return layer
+
     def _number(self, table: dict, key: str, default=None) -> float:
         if key not in table:
             if default is None:
@@ -178,10 +186,7 @@ class Orientation(Effect):
 
     def fixed(self, specimen, options, table):
         self._check(table)
-        layer = str(table.get("layer", ""))
-        if layer not in [l.label for l in specimen.layers]:
-            raise SpecError(f"[[effects]] kind = 'orientation': layer = {layer!r}; use one of "
-                            f"{', '.join(l.label for l in specimen.layers)}")
+        layer = self._layer(specimen, table)
         angle = math.radians(self._number(table, "angle_deg"))
         return SwitchedOn(self.kind, specimen.with_values({Parameter("angle", layer): angle}), options)
 
@@ -226,10 +231,7 @@ class Thickness(Effect):
 
     def fixed(self, specimen, options, table):
         self._check(table)
-        layer = str(table.get("layer", ""))
-        if layer not in [l.label for l in specimen.layers]:
-            raise SpecError(f"[[effects]] kind = 'thickness': layer = {layer!r}; use one of "
-                            f"{', '.join(l.label for l in specimen.layers)}")
+        layer = self._layer(specimen, table)
         return SwitchedOn(self.kind, specimen.with_values(
             {Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}), options)
 

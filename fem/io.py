@@ -51,10 +51,12 @@ def to_json(data) -> str:
     return json.dumps(data, indent=2, default=_plain, allow_nan=False)
 
 
-def run_cli(main, argv=None) -> int:
-    """Run a CLI entry point: user errors become one line on stderr and exit status 2."""
+def run_cli(build_parser, argv=None) -> int:
+    """Parse the command line and run the chosen command (``args.run``): user errors
+    become one line on stderr and exit status 2."""
     try:
-        return main(argv) or 0
+        args = build_parser().parse_args(argv)
+        return args.run(args) or 0
     except LayerIdError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -7,6 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from fem.effects import apply_fixed, effect
+from fem.errors import MeasurementError
 from fem.io import run_cli, to_json, write_text
 from fem.model import SpecimenModel
 from fem.spec import Spec, load_spec
@@ -56,7 +57,7 @@ def _load_pair(spec_path: str | None, measurements_path: str | None):
               f"{COATED_PLATE_MEASURED.name})", file=sys.stderr)
         spec_path, measurements_path = COATED_PLATE, COATED_PLATE_MEASURED
     elif measurements_path is None:
-        raise SystemExit("identify-layers: give both SPEC and MEASUREMENTS (or neither, for the bundled example)")
+        raise MeasurementError("give both SPEC and MEASUREMENTS (or neither, for the bundled example)")
     spec = load_spec(spec_path)
     return spec, load_measurements(measurements_path, spec.specimen)
 
@@ -177,13 +178,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    return args.run(args)
-
-
 def main(argv=None) -> int:
-    return run_cli(_main, argv)
+    return run_cli(build_parser, argv)
 
 
 if __name__ == "__main__":
