@@ -9,7 +9,7 @@ from __future__ import annotations
 import difflib
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -130,13 +130,37 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
     return tuple(out)
 
 
+def _with_measured_mass(mass_g: float, layers, materials: dict, area: float, configurations):
+    """Densities of the specimen's layers scaled so the plate weighs ``mass_g``.
+
+    When the layer densities are unknown the plate's weight still fixes its mass per
+    area, and that is all the Kirchhoff model's frequencies use (paper: the average
+    density suffices).  So the densities given are treated as relative guesses.
+    """
+    names = {layer.material.name for layer in layers}
+    for table in configurations:
+        for side in ("bottom", "top"):
+            for item in table.get(side, []) if isinstance(table, dict) else []:
+                if isinstance(item, dict) and item.get("material") in names:
+                    raise SpecError(f"[specimen].mass_g: material {item['material']!r} is also an added plate; "
+                                    "give its density explicitly or use another material name for the addition")
+    nominal = sum(layer.material.density * layer.thickness for layer in layers) * area
+    factor = mass_g * 1e-3 / nominal
+    average = mass_g * 1e-3 / (area * sum(layer.thickness for layer in layers))
+    if not DENSITY_RANGE[0] <= average <= DENSITY_RANGE[1]:
+        raise SpecError(f"[specimen].mass_g = {mass_g:g}: an average density of {average:.4g} kg/m^3 is implausible; "
+                        "the mass is in grams")
+    scaled = {n: (m.with_values(density=m.density * factor) if n in names else m) for n, m in materials.items()}
+    return tuple(replace(layer, material=scaled[layer.material.name]) for layer in layers), scaled
+
+
 def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
     """Build a validated ``Spec`` from a parsed TOML document."""
     _check_keys(data, ("specimen", "materials", "configurations", "model", "effects", "design"), "spec")
     if "specimen" not in data:
         raise SpecError("spec: missing table [specimen]")
     sp = data["specimen"]
-    _check_keys(sp, ("name", "length_mm", "width_mm", "layers"), "[specimen]")
+    _check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g"), "[specimen]")
     length = _positive(sp, "length_mm", "[specimen]")
     width = _positive(sp, "width_mm", "[specimen]")
     for key, v in (("length_mm", length), ("width_mm", width)):
@@ -159,6 +183,9 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
             "thicknesses are in mm"
         )
 
+    if "mass_g" in sp:
+        layers, materials = _with_measured_mass(_positive(sp, "mass_g", "[specimen]"), layers, materials,
+                                                length * MM * width * MM, data.get("configurations", []))
     configurations = []
     seen_names, seen_stacks = set(), {}
     for i, table in enumerate(data.get("configurations", [{"name": "original"}])):

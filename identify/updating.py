@@ -25,7 +25,9 @@ from .uncertainty import Uncertainty
 
 #: Adjacent measured modes closer than this (relative) may be paired either way round.
 CLOSE_MODES = 0.01
-#: The updating stops once no parameter moves by more than this fraction of its std.
+#: The updating stops once the misfit has stalled (falls by less than this fraction) and
+#: no parameter moves by more than STEP_PER_STD of its std.
+STALLED = 1e-4
 STEP_PER_STD = 0.01
 #: Up to this many close pairs every assignment (2^k) is refitted; beyond, single swaps.
 MAX_EXHAUSTIVE_PAIRS = 4
@@ -152,9 +154,11 @@ class Updater:
         _, s, vt = np.linalg.svd(self.jacobian(e), full_matrices=False)
         if s[-1] <= 1e-12 * s[0]:
             return np.zeros(len(s))
-        dof = len(self.measured_hz) - len(e.values)
-        chi2 = 2 * self.cost(e) / dof if dof > 0 else 0.0
-        scale = max(chi2, 1.0) if self.measurements.has_std else chi2
+        if self.measurements.has_std:
+            scale = 1.0  # the stated scatter, never inflated by a misfit
+        else:
+            dof = len(self.measured_hz) - len(e.values)
+            scale = 2 * self.cost(e) / dof if dof > 0 else 0.0
         return np.sqrt(scale * np.sum((vt / s[:, None]) ** 2, axis=0))
 
     def cost(self, e: Evaluation) -> float:
@@ -365,7 +369,8 @@ def _iterate(updater: Updater, current: Evaluation, history: list, options: FitO
                             "(a mode shape changed strongly; check the pairing in the residual table)")
         if step < options.parameter_tolerance:
             return current, True, f"converged: parameter change {step:.1e} below {options.parameter_tolerance:g}", warnings
-        if np.all(np.abs(dz) < STEP_PER_STD * updater.std_z(current)):
+        stalled = previous_cost - updater.cost(current) <= STALLED * previous_cost
+        if stalled and np.all(np.abs(dz) < STEP_PER_STD * updater.std_z(current)):
             return current, True, f"converged: every change below {STEP_PER_STD:g} of its parameter's std", warnings
         if updater.rms(current) < 1e-11:
             return current, True, "converged: the model reproduces the measurements exactly", warnings
