@@ -75,14 +75,10 @@ class Effect:
         return layer
 
     def _number(self, table: dict, key: str, default=None) -> float:
-        if key not in table:
-            if default is None:
-                raise SpecError(f"[[effects]] kind = '{self.kind}': missing field '{key}'")
-            return default
-        value = table[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise SpecError(f"[[effects]] kind = '{self.kind}': {key} = {value!r} must be a number")
-        return float(value)
+        from .spec import number_field  # the spec loader imports the effects lazily
+
+        return number_field(table, key, f"[[effects]] kind = '{self.kind}'", required=default is None,
+                            default=default)
 
 
 class TransverseShear(Effect):

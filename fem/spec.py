@@ -52,7 +52,8 @@ def _check_keys(table: dict, allowed, where: str) -> None:
             raise SpecError(f"{where}: unknown key '{key}'{hint}")
 
 
-def _number(table: dict, key: str, where: str, *, required: bool = True, default=None) -> float | None:
+def number_field(table: dict, key: str, where: str, *, required: bool = True, default=None) -> float | None:
+    """A finite number from a TOML table, or a one-line error naming ``where.key``."""
     if key not in table:
         if required:
             raise SpecError(f"{where}: missing field '{key}'")
@@ -64,7 +65,7 @@ def _number(table: dict, key: str, where: str, *, required: bool = True, default
 
 
 def _positive(table: dict, key: str, where: str, **kw) -> float | None:
-    value = _number(table, key, where, **kw)
+    value = number_field(table, key, where, **kw)
     if value is not None and value <= 0:
         raise SpecError(f"{where}.{key} = {value:g}: must be positive")
     return value
@@ -90,7 +91,7 @@ def _material(name: str, table: dict) -> Material:
             f"{where}.density_kg_m3 = {density:g} is outside {DENSITY_RANGE[0]:g}..{DENSITY_RANGE[1]:g} kg/m^3; "
             "give it in kg/m^3 (e.g. 7900 for steel, not 7.9)"
         )
-    nu12 = _number(table, "nu12", where)
+    nu12 = number_field(table, "nu12", where)
     identify = table.get("identify", False)
     if not isinstance(identify, bool):
         raise SpecError(f"{where}.identify = {identify!r}: need true or false")
@@ -125,7 +126,7 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
             )
         if t < 1e-4:
             raise SpecError(f"{here}.thickness_mm = {t:g} mm is below 0.1 um; thicknesses are in mm, not m")
-        angle = _number(item, "angle_deg", here, required=False, default=0.0)
+        angle = number_field(item, "angle_deg", here, required=False, default=0.0)
         out.append(Layer(materials[name], t * MM, math.radians(angle), label(i)))
     return tuple(out)
 
