@@ -7,11 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration, Parameter
 
 from .limits import added_mass
 from .problem import Problem, Solved
-from .scoring import GOOD_BELOW, SINGULAR_ABOVE, WEAK_STD_REL, Scores, score
+from .scoring import WEAK_STD_REL, Scores, score
 
 GPA = 1e9
 #: Correlations of estimates beyond this are listed in reports.

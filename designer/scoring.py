@@ -16,19 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Verdict thresholds on the condition number (paper section 4.6, after its ref. [29]):
-#: ill-conditioned above 1e3, singular above 1e7.
-GOOD_BELOW = 1e3
-SINGULAR_ABOVE = 1e7
+from fem.sensitivity import condition_verdict as verdict
+
 #: Relative std above which a parameter is flagged weakly identifiable (10 %).
 WEAK_STD_REL = 0.1
-
-
-def verdict(condition_number: float) -> str:
-    """'good' below 1e3, 'ill-conditioned' up to 1e7, 'singular' above (or rank deficient)."""
-    if not condition_number <= SINGULAR_ABOVE:  # NaN too
-        return "singular"
-    return "good" if condition_number < GOOD_BELOW else "ill-conditioned"
 
 
 def singular_values(stacks: np.ndarray) -> np.ndarray:

@@ -35,7 +35,7 @@ from .candidates import outer_face, with_plate_thickness
 from .design import Design
 from .problem import Problem, unmeasurable
 from .progress import Progress
-from .scoring import GOOD_BELOW, SINGULAR_ABOVE
+from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 
 KINDS = {
     "thickness": "added plate thickness [mm]",

@@ -52,3 +52,16 @@ def frequency_derivatives(eigenvalues: np.ndarray, d_eigenvalues: np.ndarray) ->
 def normalised(frequencies: np.ndarray, derivatives: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Relative sensitivities (p / f) df/dp: (m, p)."""
     return derivatives * values[None, :] / frequencies[:, None]
+
+
+#: The paper's thresholds (section 4.6, after its ref. 29) on the condition number of the
+#: normalised sensitivity matrix: ill-conditioned above 1e3, singular above 1e7.
+GOOD_BELOW = 1e3
+SINGULAR_ABOVE = 1e7
+
+
+def condition_verdict(condition_number: float) -> str:
+    """'good' below 1e3, 'ill-conditioned' up to 1e7, 'singular' above (NaN: singular)."""
+    if not condition_number <= SINGULAR_ABOVE:
+        return "singular"
+    return "good" if condition_number < GOOD_BELOW else "ill-conditioned"

@@ -45,12 +45,6 @@ class Measurements:
     def __len__(self) -> int:
         return len(self.table)
 
-    def with_frequencies(self, frequencies_hz: np.ndarray) -> "Measurements":
-        """The same rows with other frequencies (e.g. a noise draw)."""
-        table = self.table.copy()
-        table["frequency_hz"] = np.asarray(frequencies_hz, dtype=float)
-        return Measurements(table, self.source)
-
 
 def _fail(source: str, message: str) -> MeasurementError:
     return MeasurementError(f"{source}: {message}")

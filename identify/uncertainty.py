@@ -12,20 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: The paper's thresholds (section 4.6, after its ref. 29) on the condition number of the
-#: normalised sensitivity matrix.
-ILL_CONDITIONED, SINGULAR = 1e3, 1e7
+from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, condition_verdict
+
 #: A reduced chi-square above this says the misfit exceeds the stated scatter.
 CHI2_WARNING = 4.0
 #: Relative std above which a parameter is flagged weakly identifiable.
 WEAK_REL_STD = 0.1
-
-
-def condition_verdict(condition_number: float) -> str:
-    """'good' below 1e3, 'ill-conditioned' up to 1e7, 'singular' above (paper section 4.6)."""
-    if not np.isfinite(condition_number) or condition_number > SINGULAR:
-        return "singular"
-    return "ill-conditioned" if condition_number > ILL_CONDITIONED else "good"
 
 
 def condition_number(matrix: np.ndarray) -> float:
@@ -87,11 +79,11 @@ class Uncertainty:
         _, s_rel, vt_rel = np.linalg.svd(relative, full_matrices=False)
         weak = tuple(
             f"{describe_combination(vt_rel[k], names)} (singular value {s_rel[k] / s_rel[0]:.1e} of the largest)"
-            for k in range(len(s_rel)) if s_rel[k] < s_rel[0] / ILL_CONDITIONED
+            for k in range(len(s_rel)) if s_rel[k] < s_rel[0] / GOOD_BELOW
         )
         _, s, vt = np.linalg.svd(J, full_matrices=False)
         dvdz = space.dvalue_dz(values)
-        if cond > SINGULAR or s[-1] <= 1e-12 * s[0]:
+        if cond > SINGULAR_ABOVE or s[-1] <= 1e-12 * s[0]:
             covariance = np.full((p, p), np.inf)
             std = np.full(p, np.inf)
             correlation = np.full((p, p), np.nan)
