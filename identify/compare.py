@@ -28,6 +28,7 @@ from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Specimen
 
 from .measurements import Measurements
+from .report import residual_table
 from .updating import FitOptions, FitResult, Updater, fit
 
 #: A signature explaining more than this share of the misfit is reported as present.
@@ -53,7 +54,6 @@ class Comparison:
     table: pd.DataFrame
     rms_rel_error: float
     reduced_chi2: float
-    noise_rel: float
     patterns: tuple[Pattern, ...]
     fitted: FitResult | None
     point_map: np.ndarray | None = None     # share explained by a point mass at each node
@@ -177,17 +177,12 @@ def compare(specimen: Specimen, measurements: Measurements, model: ModelOptions 
         specimen_now, model_hz, updater_options, pairings = specimen, evaluation.model_hz, updater.model_options, \
             evaluation.pairings
         jacobian = None
-    table = measurements.table
-    frame = pd.DataFrame({"configuration": table["configuration"], "mode": table["mode"],
-                          "measured_hz": table["frequency_hz"], "model_hz": model_hz,
-                          "rel_error": model_hz / table["frequency_hz"] - 1})
+    frame = residual_table(measurements, model_hz)
     chi2 = float("nan")
     if measurements.has_std:
-        frame["error_over_std"] = (frame["model_hz"] - frame["measured_hz"]) / table["std_hz"]
         dof = len(frame) - (len(fitted.parameters) if fitted else 0)
         chi2 = float(np.sum(frame["error_over_std"] ** 2) / max(dof, 1))
     patterns, shares, xy, hints = residual_patterns(specimen_now, measurements, model_hz, updater_options, pairings,
                                                     jacobian)
-    noise = float(np.median(table["std_hz"] / table["frequency_hz"])) if measurements.has_std else float("nan")
-    return Comparison(frame, float(np.sqrt(np.mean(frame["rel_error"] ** 2))), chi2, noise, patterns, fitted, shares,
+    return Comparison(frame, float(np.sqrt(np.mean(frame["rel_error"] ** 2))), chi2, patterns, fitted, shares,
                       xy, tuple(hints))

@@ -220,10 +220,4 @@ def diagnose(specimen: Specimen, measurements: Measurements, model: ModelOptions
         notes = [w for w in result.warnings if w.startswith(kind)]
         note = "; ".join(notes) if result.converged else f"{result.status}"
         candidates.append(Candidate(kind, note, on, result, gain))
-    # One line per kind: its best variant.
-    best: dict[str, Candidate] = {}
-    for c in candidates:
-        if c.kind not in best or c.gain > best[c.kind].gain:
-            best[c.kind] = c
-    ranking = sorted(best.values(), key=lambda c: -c.gain)
-    return Diagnosis(baseline, comparison, tuple(ranking))
+    return Diagnosis(baseline, comparison, tuple(sorted(candidates, key=lambda c: -c.gain)))

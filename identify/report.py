@@ -9,18 +9,20 @@ import pandas as pd
 
 from fem.io import atomic_path, to_json, write_text
 
+from .measurements import Measurements
 from .parameters import UNITS, display, json_key
 from .updating import FitResult
 
 
-def residual_table(result: FitResult) -> pd.DataFrame:
+def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
     """Per measured mode: measured and model frequency, relative error, error / std."""
-    table = result.measurements.table
+    table = measurements.table
     out = pd.DataFrame({
         "configuration": table["configuration"], "mode": table["mode"],
-        "measured_hz": table["frequency_hz"], "model_hz": result.model_hz, "rel_error": result.rel_error,
+        "measured_hz": table["frequency_hz"], "model_hz": model_hz,
+        "rel_error": model_hz / table["frequency_hz"] - 1,
     })
-    if result.measurements.has_std:
+    if measurements.has_std:
         out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
     return out
 
@@ -62,7 +64,7 @@ def to_dict(result: FitResult) -> dict:
         "iterations": result.iterations,
         "materials": materials,
         "effects": effects,
-        "residuals": residual_table(result)[["configuration", "mode", "measured_hz", "model_hz", "rel_error"]]
+        "residuals": residual_table(result.measurements, result.model_hz)[["configuration", "mode", "measured_hz", "model_hz", "rel_error"]]
         .to_dict(orient="records"),
         "rms_rel_error": result.rms_rel_error,
         "condition_number": _finite(u.condition_number),
@@ -112,7 +114,7 @@ def report_text(result: FitResult, before: FitResult | None = None) -> str:
               for i, j in strong] or ["  none"]
     lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
-    lines += ["", "residuals", residual_table(result).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+    lines += ["", "residuals", residual_table(result.measurements, result.model_hz).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
     if before is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
         lines += ["", f"error per mode before and after adding {kinds} (RMS {100 * before.rms_rel_error:.4g} % -> "
@@ -160,7 +162,7 @@ def plot_residuals(result: FitResult, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    table = residual_table(result)
+    table = residual_table(result.measurements, result.model_hz)
     configurations = list(dict.fromkeys(table["configuration"]))
     fig, ax = plt.subplots(figsize=(max(6, 0.5 * len(table) + 2), 3.6))
     width = 0.8 / len(configurations)
@@ -196,7 +198,7 @@ def write_report(result: FitResult, folder: str | Path, before: FitResult | None
         plot_before_after(before, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
                           folder / "before_after.png")
     write_text(folder / "fit.json", to_json(to_dict(result)))
-    write_text(folder / "residuals.csv", residual_table(result).to_csv(index=False))
+    write_text(folder / "residuals.csv", residual_table(result.measurements, result.model_hz).to_csv(index=False))
     write_text(folder / "history.csv", history_table(result).to_csv(index=False))
     plot_convergence(result, folder / "convergence.png")
     plot_residuals(result, folder / "residuals.png")
