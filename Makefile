@@ -4,8 +4,6 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-# Small banded solves: threaded BLAS only costs (see fem/__init__.py).
-export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: demo test bench clean
 

@@ -4,13 +4,13 @@ import time
 
 from fem.model import solve_laminate
 from identify.synthetic import synthetic_measurements
-from identify.updating import fit
-from studies.common import start_specimen, true_specimen
+from identify.fitting import fit
+from studies.common import start_model, true_model
 
 
 def timed_fit(labels: str) -> tuple[float, int]:
-    data = synthetic_measurements(true_specimen(), modes=5, labels=labels)
-    start = start_specimen()
+    data = synthetic_measurements(true_model(), modes=5, labels=labels)
+    start = start_model()
     solve_laminate.cache_clear()
     t0 = time.perf_counter()
     result = fit(start, data)

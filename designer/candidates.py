@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from fem.design_space import DesignSpace
 from fem.laminate import Layer
 from fem.material import Material
 from fem.specimen import Configuration, Specimen
-
-from .space import DesignSpace
 
 
 def plate_configuration(material: Material, thickness: float, placement: str, adhesive: Layer | None,

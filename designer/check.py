@@ -3,8 +3,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from fem.io import html_pre
+from fem.limits import CLOSE_MODES_WARNING
+from fem.model import SpecimenModel
+
 from .design import Design
-from .limits import CLOSE_MODES_WARNING
 from .poisson import PoissonPlate, poisson_plate
 from .problem import Problem, Solved, unmeasurable
 from .progress import Progress
@@ -24,6 +27,9 @@ class CheckResult:
     def feasible(self) -> bool:
         """Not singular and within every limit."""
         return self.design.scores.verdict != "singular" and not self.violations
+
+    def _repr_html_(self) -> str:
+        return html_pre(self.report())
 
     def to_dict(self) -> dict:
         return {**self.design.to_dict(), "feasible": self.feasible, "warnings": list(self.warnings),
@@ -66,8 +72,11 @@ def mode_warnings(problem: Problem, solved: Solved) -> list[str]:
     return out
 
 
-def check(problem: Problem, configurations=None, pool=None, progress: Progress | None = None) -> CheckResult:
-    """Score the spec's configurations (or the given ones) as one test set."""
+def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
+          progress: Progress | None = None) -> CheckResult:
+    """Score the spec's configurations (or the given ones) as one test set.  ``problem``:
+    a planning problem, or a model (its ``[design]`` table makes the problem)."""
+    problem = Problem.of(problem)
     configurations = tuple(configurations or problem.specimen.configurations)
     solved = problem.solve(configurations, pool=pool, progress=progress)
     warnings, violations = [], []

@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 
+from fem.design_space import CRITERIA
 from fem.errors import DesignError
-from fem.io import run_cli, to_json
-from fem.spec import MAX_MODES
-from identify.examples import COATED_PLATE
+from fem.io import add_common_arguments, run_cli, to_json
+from fem.model import MAX_MODES
+from fem.spec import load_spec
+from fem.validation import whole
+from identify.examples import spec_or_example
 
 from .candidates import candidates
 from .check import check
@@ -17,7 +19,6 @@ from .problem import Problem
 from .progress import Progress
 from .refine import refine
 from .search import METHODS, recommend
-from .space import CRITERIA, load
 from .sweep import parse_variable, sweep
 
 DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
@@ -30,16 +31,11 @@ Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 ba
 
 
 def _problem(args) -> Problem:
-    path = args.spec
-    if path is None:
-        print(f"(no SPEC given: using the bundled example {COATED_PLATE.name})", file=sys.stderr)
-        path = COATED_PLATE
-    spec, space = load(path)
-    if getattr(args, "criterion", None):
-        space = replace(space, criterion=args.criterion)
-    if args.modes is not None and not 1 <= args.modes <= MAX_MODES:
-        raise DesignError(f"--modes {args.modes}: need a whole number from 1 to {MAX_MODES}")
-    return Problem.from_spec(spec, space, args.modes)
+    model = load_spec(spec_or_example(args.spec))
+    for note in model.notes:
+        print(f"note: {note}", file=sys.stderr)
+    modes = None if args.modes is None else whole(args.modes, "--modes", 1, MAX_MODES, "", DesignError)
+    return Problem.of(model, modes, getattr(args, "criterion", None))
 
 
 def _progress(args) -> Progress:
@@ -94,9 +90,8 @@ def run_sweep(args) -> int:
 
 
 def _common(p: argparse.ArgumentParser, parallel: bool = True) -> None:
-    p.add_argument("spec", nargs="?", help="specimen spec (TOML); default: the bundled example")
+    add_common_arguments(p)
     p.add_argument("--modes", type=int, help="modes measured per plate (default: [model] modes)")
-    p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr (default: when stderr is a terminal)")
     if parallel:

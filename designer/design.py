@@ -7,10 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.limits import added_mass
 from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration, Parameter
 
-from .limits import added_mass
 from .problem import Problem, Solved
 from .scoring import WEAK_STD_REL, Scores, score
 

@@ -1,5 +1,5 @@
-"""A planning problem: the specimen at its nominal properties, the model options and the
-design space; configurations solved once each, cached by content, possibly in parallel."""
+"""A planning problem: the model at its nominal properties and the design space;
+configurations solved once each, cached by content, possibly in parallel."""
 from __future__ import annotations
 
 from collections import OrderedDict
@@ -7,19 +7,16 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
-from fem.effects import apply_fixed
+from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
 from fem.mesh import PlateMesh
-from fem.model import ModelOptions, solve_laminate
+from fem.model import ModelOptions, SpecimenModel, solve_laminate
 from fem.sensitivity import normalised
-from fem.spec import Spec
 from fem.specimen import Configuration, Parameter, Specimen
 
 from .parallel import chunked, run_chunks
 from .progress import Progress
-from .space import DesignSpace
 
 #: Solved configurations kept in this process (a few kB each: no mode shapes).
 CACHE_SIZE = 8192
@@ -49,30 +46,25 @@ def solve_chunk(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_mo
                 parameters: tuple[Parameter, ...], configurations: list[Configuration]) -> list[tuple]:
     """(frequencies, labels, relative sensitivities) of each configuration: the task run
     by workers (a module-level function, so it pickles to processes and Dask workers).
-
-    BLAS runs one thread meanwhile: these solves are small (a few thousand DOFs), extra
-    BLAS threads gain nothing on them (18 ms against 24 ms a solve here) and, where cores
-    are busy (a loaded machine, several workers), their spinning makes each solve 3-50x
-    slower.  Parallelism comes from processes instead."""
+    Parallelism comes from processes: each solve runs BLAS on one thread (``fem.model``)."""
     values = np.array([specimen.value(p) for p in parameters])
     out = []
-    with threadpool_limits(limits=1, user_api="blas"):
-        for configuration in configurations:
-            solution = solve_laminate(  # the model SpecimenModel solves (effects, attachments)
-                specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
-                rotary_inertia=options.rotary_inertia, attachments=specimen.attachments)
-            f = solution.frequencies_hz
-            out.append((f, solution.modes.labels, normalised(f, solution.derivatives(list(parameters)), values)))
+    for configuration in configurations:
+        solution = solve_laminate(  # the model SpecimenModel solves (effects, attachments)
+            specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
+            rotary_inertia=options.rotary_inertia, attachments=specimen.attachments)
+        f = solution.frequencies_hz
+        out.append((f, solution.modes.labels, normalised(f, solution.derivatives(list(parameters)), values)))
     return out
 
 
 @dataclass(frozen=True)
 class Problem:
-    """What test sets are scored against: ``specimen`` at its nominal (start) properties,
-    ``options`` (modes measured per plate, mesh) and the design ``space``."""
+    """What test sets are scored against: the ``model`` at its nominal (start)
+    properties (its options: modes measured per plate, mesh, effects) and the design
+    ``space``."""
 
-    specimen: Specimen
-    options: ModelOptions
+    model: SpecimenModel
     space: DesignSpace
 
     def __post_init__(self):
@@ -81,12 +73,30 @@ class Problem:
                               "test to plan; set identify = true on the layer materials to find")
 
     @classmethod
-    def from_spec(cls, spec: Spec, space: DesignSpace | None = None, modes: int | None = None) -> "Problem":
-        """The spec's specimen and model with its ``[[effects]]`` switched on (fixed), as
-        ``identify-layers`` models them; ``modes`` overrides ``[model] modes``."""
-        options = spec.model if modes is None else replace(spec.model, modes=modes)
-        specimen, options, _ = apply_fixed(spec.specimen, options, spec.effects)
-        return cls(specimen, options, space if space is not None else DesignSpace.from_spec(spec))
+    def of(cls, model: "SpecimenModel | Problem", modes: int | None = None, criterion: str | None = None) -> "Problem":
+        """The planning problem of a model (its ``[design]`` table, or the defaults);
+        ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion."""
+        if isinstance(model, Problem):
+            problem = model
+        else:
+            space = model.design or parse_design({}, model.defined_materials, len(model.specimen.identified_materials))
+            problem = cls(model, space)
+        if modes is not None:
+            problem = problem.with_options(modes=modes)
+        if criterion is not None:
+            problem = replace(problem, space=replace(problem.space, criterion=criterion))
+        return problem
+
+    @property
+    def specimen(self) -> Specimen:
+        return self.model.specimen
+
+    @property
+    def options(self) -> ModelOptions:
+        return self.model.options
+
+    def with_options(self, **changes) -> "Problem":
+        return replace(self, model=self.model.with_options(**changes))
 
     @cached_property
     def parameters(self) -> tuple[Parameter, ...]:

@@ -12,11 +12,11 @@ from dataclasses import dataclass
 import nlopt
 import numpy as np
 
+from fem.limits import added_mass, added_thickness
 from fem.specimen import Configuration
 
 from .candidates import outer_face, with_plate_thickness
 from .design import Design
-from .limits import added_mass, added_thickness
 from .problem import Problem
 
 #: Relative thickness change [-] at which the refinement stops, and evaluations allowed

@@ -14,7 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.design_space import CRITERIA
 from fem.errors import DesignError
+from fem.io import html_pre
+from fem.model import SpecimenModel
 from fem.specimen import Configuration
 
 from .candidates import candidates
@@ -24,7 +27,6 @@ from .problem import Problem, Solved, unmeasurable
 from .progress import Bar, Progress
 from .relaxation import information_loss, relax, swap_search
 from .scoring import loss, singular_values
-from .space import CRITERIA
 
 #: Sets up to which the search is exhaustive (a few seconds of batched SVDs).
 EXHAUSTIVE_LIMIT = 50_000
@@ -90,6 +92,9 @@ class Recommendation:
             "baseline": self.baseline.to_dict() if self.baseline else None,
             "poisson_plate": self.poisson.to_dict(),
         }
+
+    def _repr_html_(self) -> str:
+        return html_pre(self.report())
 
     def report(self) -> str:
         lines = [f"searched {self.sets} sets of {len(self.best.solved) - 1} added plates from {self.candidates} "
@@ -168,9 +173,11 @@ def relaxed(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int,
     return best, len(seen), bound
 
 
-def recommend(problem: Problem, top: int = 5, method: str = "auto", pool=None,
+def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "auto", pool=None,
               progress: Progress | None = None) -> Recommendation:
-    """The ``top`` best sets of ``space.size - 1`` candidates for the original plate."""
+    """The ``top`` best sets of ``space.size - 1`` candidates for the original plate.
+    ``problem``: a planning problem, or a model (its ``[design]`` table makes the problem)."""
+    problem = Problem.of(problem)
     start = time.perf_counter()
     space = problem.space
     if method not in METHODS:

@@ -15,7 +15,6 @@ values the design space's (or a default set) are used.  The report folder gets
 """
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -27,15 +26,16 @@ import pandas as pd
 from fem.errors import DesignError
 from fem.io import atomic_path, write_text
 from fem.laminate import Layer
-from fem.model import ModelOptions
-from fem.spec import MAX_MODES
+from fem.model import MAX_MODES, ModelOptions, SpecimenModel
+from fem.plotting import new_figure, save_figure
+from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration
+from fem.validation import did_you_mean
 
 from .candidates import outer_face, with_plate_thickness
 from .design import Design
 from .problem import Problem, unmeasurable
 from .progress import Progress
-from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 
 KINDS = {
     "thickness": "added plate thickness [mm]",
@@ -90,8 +90,7 @@ def parse_variable(text: str, problem: Problem) -> Variable:
     name, _, values = text.partition("=")
     target, _, kind = name.rpartition(".")
     if kind not in KINDS:
-        close = difflib.get_close_matches(kind, list(KINDS), n=1)
-        hint = f"did you mean '{close[0]}'? " if close else ""
+        hint = (did_you_mean(kind, KINDS) + " ").lstrip()
         raise DesignError(f"{where}: unknown variable '{kind}'; {hint}allowed: {', '.join(KINDS)} "
                           "(optionally CONFIG.KIND)")
     added = [c for c in problem.specimen.configurations if not c.is_original]
@@ -131,7 +130,7 @@ def _relabelled(layers, name: str, face: str) -> tuple[Layer, ...]:
 def vary(problem: Problem, variable: Variable, value) -> tuple[Problem, tuple[Configuration, ...]]:
     """The problem and configurations with ``variable`` set to ``value``."""
     if variable.kind == "modes":
-        return replace(problem, options=replace(problem.options, modes=value)), problem.specimen.configurations
+        return problem.with_options(modes=value), problem.specimen.configurations
     out = []
     for c in problem.specimen.configurations:
         if c.is_original or (variable.target and c.name != variable.target):
@@ -246,14 +245,9 @@ def plot_name(variable: Variable) -> str:
 def plot_variable(part: pd.DataFrame, variable: Variable, path: Path) -> None:
     """Condition number (verdict zones shaded) and predicted std of every parameter
     against the variable's values."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     numeric = variable.kind in NUMERIC
     x = part.value.astype(float).to_numpy() if numeric else np.arange(len(part))
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    fig, (top, bottom) = new_figure(2, 1, figsize=(9, 7), sharex=True)
     cond = part.condition_number.to_numpy(dtype=float)
     top.semilogy(x, np.where(np.isfinite(cond), cond, np.nan), "o-", color="k")
     high = max(np.nanmax(np.where(np.isfinite(cond), cond, np.nan), initial=1.0) * 3, SINGULAR_ABOVE * 10)
@@ -278,14 +272,15 @@ def plot_variable(part: pd.DataFrame, variable: Variable, path: Path) -> None:
     if not numeric:
         bottom.set_xticks(x, [str(v) for v in part.value])
     top.set_title(f"sweep of {variable.name}")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    save_figure(fig, path)
 
 
-def sweep(problem: Problem, variables: list[Variable], pool=None, progress: Progress | None = None) -> SweepResult:
-    """Score the spec's design and every one-at-a-time variation of it."""
+def sweep(problem: Problem | SpecimenModel, variables: list[Variable | str], pool=None,
+          progress: Progress | None = None) -> SweepResult:
+    """Score the spec's design and every one-at-a-time variation of it; ``variables`` as
+    ``Variable`` or as the command line gives them (e.g. ``"thickness=0.5:3:6"``)."""
+    problem = Problem.of(problem)
+    variables = [v if isinstance(v, Variable) else parse_variable(v, problem) for v in variables]
     plan = [("base", "", problem, problem.specimen.configurations)]
     for variable in variables:
         plan += [(variable.name, value, *vary(problem, variable, value)) for value in variable.values]
@@ -293,7 +288,8 @@ def sweep(problem: Problem, variables: list[Variable], pool=None, progress: Prog
     for _, _, p, configurations in plan:  # one parallel batch per model (modes change the model)
         by_options.setdefault(p.options, []).extend(configurations)
     for options, configurations in by_options.items():
-        replace(problem, options=options).solve(configurations, pool=pool, progress=progress)
+        replace(problem, model=replace(problem.model, options=options)).solve(configurations, pool=pool,
+                                                                              progress=progress)
     for solved in problem.solve(problem.specimen.configurations):  # the base design must be measurable
         if not problem.measured(solved).any():
             raise unmeasurable(problem, solved)

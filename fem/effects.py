@@ -14,23 +14,22 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-
 import numpy as np
 
 from .attachments import PointMass, Suspension
 from .errors import SpecError
-from .model import ModelOptions
-from .specimen import Parameter, Specimen
+from .model import SpecimenModel
+from .specimen import Parameter
+from .validation import check_keys, number
 
 
 @dataclass(frozen=True)
 class SwitchedOn:
-    """A model with an effect switched on: the specimen and options to solve, the free
-    parameters the effect brings (empty when fixed) and a note for the report."""
+    """A model with an effect switched on: the model to solve, the free parameters the
+    effect brings (empty when fixed) and a note for the report."""
 
     kind: str
-    specimen: Specimen
-    options: ModelOptions
+    model: SpecimenModel
     free: tuple[Parameter, ...] = ()
     note: str = ""
 
@@ -42,73 +41,73 @@ class Effect:
     description = ""
     keys: tuple[str, ...] = ()
 
-    def fixed(self, specimen: Specimen, options: ModelOptions, table: dict) -> SwitchedOn:
+    def fixed(self, model: SpecimenModel, table: dict) -> SwitchedOn:
+        """The model with the effect on, its parameters fixed by the spec's table."""
         raise NotImplementedError
 
-    def free(self, specimen: Specimen, options: ModelOptions, hint: dict | None = None) -> list[SwitchedOn]:
+    def free(self, model: SpecimenModel, hint: dict | None = None) -> list[SwitchedOn]:
         """Variants with free parameters (e.g. one per candidate layer); ``hint`` may carry
         start values from the residual patterns."""
         raise NotImplementedError
 
-    def free_all(self, specimen: Specimen, options: ModelOptions) -> SwitchedOn:
+    def free_all(self, model: SpecimenModel) -> SwitchedOn:
         """All variants at once (e.g. every candidate layer's angle), for ``--effect``."""
-        variants = self.free(specimen, options)
+        variants = self.free(model)
         if not variants:
             raise SpecError(f"effect '{self.kind}' has nothing to act on in this spec")
         if len(variants) == 1:
             return variants[0]
-        starts = {p: v.specimen.value(p) for v in variants for p in v.free}
-        return SwitchedOn(self.kind, specimen.with_values(starts), variants[0].options,
+        starts = {p: v.model.value(p) for v in variants for p in v.free}
+        return SwitchedOn(self.kind, replace(variants[0].model, specimen=model.specimen.with_values(starts)),
                           tuple(starts), "; ".join(v.note for v in variants if v.note))
 
-    def _check(self, table: dict) -> None:
-        for key in table:
-            if key not in self.keys + ("kind",):
-                raise SpecError(f"[[effects]] kind = '{self.kind}': unknown key '{key}'; allowed: {', '.join(self.keys)}")
+    @property
+    def _where(self) -> str:
+        return f"[[effects]] kind = '{self.kind}'"
 
-    def _layer(self, specimen: Specimen, table: dict) -> str:
+    def _check(self, table: dict) -> None:
+        check_keys(table, self.keys + ("kind",), self._where)
+
+    def _layer(self, model: SpecimenModel, table: dict) -> str:
         """The specimen layer label a table names, checked."""
+        labels = [l.label for l in model.specimen.layers]
         layer = str(table.get("layer", ""))
-        if layer not in [l.label for l in specimen.layers]:
-            raise SpecError(f"[[effects]] kind = '{self.kind}': layer = {layer!r}; use one of "
-                            f"{', '.join(l.label for l in specimen.layers)}")
+        if layer not in labels:
+            raise SpecError(f"{self._where}: layer = {layer!r}; use one of {', '.join(labels)}")
         return layer
 
     def _number(self, table: dict, key: str, default=None) -> float:
-        from .spec import number_field  # the spec loader imports the effects lazily
-
-        return number_field(table, key, f"[[effects]] kind = '{self.kind}'", required=default is None,
-                            default=default)
+        return number(table, key, self._where, required=default is None, default=default)
 
 
 class TransverseShear(Effect):
     kind = "transverse_shear"
     description = "first-order shear deformation (G13, G23; G12 where not given)"
 
-    def _on(self, specimen, options):
-        defaulted = [m.name for m in specimen.materials.values() if m.G13 is None or m.G23 is None]
+    def _on(self, model):
+        defaulted = [m.name for m in model.specimen.materials.values() if m.G13 is None or m.G23 is None]
         note = (f"G13 = G23 = G12 assumed for {', '.join(defaulted)} (exact for isotropic layers)"
                 if defaulted else "")
-        return SwitchedOn(self.kind, specimen, replace(options, transverse_shear=True), (), note)
+        return SwitchedOn(self.kind, model.with_options(transverse_shear=True), (), note)
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
-        return self._on(specimen, options)
+        return self._on(model)
 
-    def free(self, specimen, options, hint=None):
-        return [self._on(specimen, options)]
+    def free(self, model, hint=None):
+        return [self._on(model)]
 
 
 class RotaryInertia(Effect):
     kind = "rotary_inertia"
     description = "rotary inertia of the plate (I1, I2 terms)"
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
-        return SwitchedOn(self.kind, specimen, replace(options, rotary_inertia=True))
+        return SwitchedOn(self.kind, model.with_options(rotary_inertia=True))
 
-    def free(self, specimen, options, hint=None):
-        return [self.fixed(specimen, options, {})]
+    def free(self, model, hint=None):
+        return [self.fixed(model, {})]
 
 
 class PointMassEffect(Effect):
@@ -116,13 +115,14 @@ class PointMassEffect(Effect):
     description = "a mass at a point (an accelerometer, a glue blob): mass and position"
     keys = ("mass_g", "x_mm", "y_mm", "label")
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
         mass = PointMass(self._number(table, "mass_g") * 1e-3, self._number(table, "x_mm") * 1e-3,
                          self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)))
-        return SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (mass,)), options)
+        return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (mass,)))
 
-    def free(self, specimen, options, hint=None):
+    def free(self, model, hint=None):
+        specimen = model.specimen
         hint = hint or {}
         plate_mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
         mass = hint.get("mass_kg") or 0.01 * plate_mass
@@ -135,7 +135,7 @@ class PointMassEffect(Effect):
         note = "start from the residual pattern" if "xy" in hint else "start at a guessed position"
         if all(abs(math.sin(2 * layer.angle)) < 1e-12 for layer in specimen.all_layers()):
             note += "; mirrored positions (L - x, W - y) give the same frequencies"
-        return [SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (on,)), options, free, note)]
+        return [SwitchedOn(self.kind, model.with_attachments(specimen.attachments + (on,)), free, note)]
 
 
 class SuspensionEffect(Effect):
@@ -154,12 +154,13 @@ class SuspensionEffect(Effect):
             raise SpecError("[[effects]] kind = 'suspension': points_mm must be a list of [x, y] pairs in mm")
         return tuple((1e-3 * float(x), 1e-3 * float(y)) for x, y in points)
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
-        springs = Suspension(self._number(table, "stiffness_N_m"), self._points(specimen, table), self.kind)
-        return SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (springs,)), options)
+        springs = Suspension(self._number(table, "stiffness_N_m"), self._points(model.specimen, table), self.kind)
+        return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (springs,)))
 
-    def free(self, specimen, options, hint=None):
+    def free(self, model, hint=None):
+        specimen = model.specimen
         # Start where the suspension modes sit at ~5 % of the first elastic frequency.
         laminate = specimen.laminate(specimen.configurations[0].name)
         plate_mass = laminate.inertia[0] * specimen.length * specimen.width
@@ -169,7 +170,7 @@ class SuspensionEffect(Effect):
         k = (0.05 * omega1) ** 2 * plate_mass / len(points)
         springs = Suspension(k, points, self.kind)
         note = "springs near the four corners (give points_mm in the spec to fix them)"
-        return [SwitchedOn(self.kind, specimen.with_attachments(specimen.attachments + (springs,)), options,
+        return [SwitchedOn(self.kind, model.with_attachments(specimen.attachments + (springs,)),
                            (Parameter("stiffness", self.kind),), note)]
 
 
@@ -180,19 +181,19 @@ class Orientation(Effect):
     #: Frequencies are even in the angle, so the search starts off zero.
     START_DEG = 3.0
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
-        layer = self._layer(specimen, table)
+        layer = self._layer(model, table)
         angle = math.radians(self._number(table, "angle_deg"))
-        return SwitchedOn(self.kind, specimen.with_values({Parameter("angle", layer): angle}), options)
+        return SwitchedOn(self.kind, model.with_values({Parameter("angle", layer): angle}))
 
-    def free(self, specimen, options, hint=None):
+    def free(self, model, hint=None):
         out = []
-        for layer in specimen.layers:
+        for layer in model.specimen.layers:
             if layer.material.identify:
                 p = Parameter("angle", layer.label)
-                moved = specimen.with_values({p: layer.angle + math.radians(self.START_DEG)})
-                out.append(SwitchedOn(self.kind, moved, options, (p,), f"angle of {layer.label} ({layer.material.name})"))
+                moved = model.with_values({p: layer.angle + math.radians(self.START_DEG)})
+                out.append(SwitchedOn(self.kind, moved, (p,), f"angle of {layer.label} ({layer.material.name})"))
         return out
 
 
@@ -209,15 +210,15 @@ class Adhesive(Effect):
                 if len(added) >= 2:
                     yield added[0]
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
         t = self._number(table, "thickness_mm") * 1e-3
-        return SwitchedOn(self.kind, specimen.with_values({Parameter("thickness", l.label): t
-                                                           for l in self.bond_layers(specimen)}), options)
+        return SwitchedOn(self.kind, model.with_values({Parameter("thickness", l.label): t
+                                                        for l in self.bond_layers(model.specimen)}))
 
-    def free(self, specimen, options, hint=None):
-        free = tuple(Parameter("thickness", l.label) for l in self.bond_layers(specimen))
-        return [SwitchedOn(self.kind, specimen, options, free, "bond-line thicknesses free")] if free else []
+    def free(self, model, hint=None):
+        free = tuple(Parameter("thickness", l.label) for l in self.bond_layers(model.specimen))
+        return [SwitchedOn(self.kind, model, free, "bond-line thicknesses free")] if free else []
 
 
 class Thickness(Effect):
@@ -225,15 +226,15 @@ class Thickness(Effect):
     description = "specimen layer thicknesses off nominal"
     keys = ("layer", "thickness_mm")
 
-    def fixed(self, specimen, options, table):
+    def fixed(self, model, table):
         self._check(table)
-        layer = self._layer(specimen, table)
-        return SwitchedOn(self.kind, specimen.with_values(
-            {Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}), options)
+        layer = self._layer(model, table)
+        return SwitchedOn(self.kind, model.with_values(
+            {Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}))
 
-    def free(self, specimen, options, hint=None):
-        free = tuple(Parameter("thickness", l.label) for l in specimen.layers)
-        return [SwitchedOn(self.kind, specimen, options, free, "specimen layer thicknesses free")]
+    def free(self, model, hint=None):
+        free = tuple(Parameter("thickness", l.label) for l in model.specimen.layers)
+        return [SwitchedOn(self.kind, model, free, "specimen layer thicknesses free")]
 
 
 REGISTRY: dict[str, Effect] = {}
@@ -260,17 +261,17 @@ def effect(kind: str) -> Effect:
         raise SpecError(f"unknown effect kind {kind!r}; known: {', '.join(REGISTRY)}") from None
 
 
-def apply_fixed(specimen: Specimen, options: ModelOptions, tables) -> tuple[Specimen, ModelOptions, list[str]]:
-    """Switch on the spec's ``[[effects]]`` tables with their fixed parameters."""
-    notes = []
+def apply_fixed(model: SpecimenModel, tables) -> SpecimenModel:
+    """The model with the spec's ``[[effects]]`` tables switched on, their parameters
+    fixed; their kinds and notes are kept on the model.  Only the spec loader calls this:
+    a loaded model has its effects on already."""
     for table in tables:
         if "kind" not in table:
             raise SpecError("[[effects]]: every table needs a 'kind'")
-        on = effect(str(table["kind"])).fixed(specimen, options, table)
-        specimen, options = on.specimen, on.options
-        if on.note:
-            notes.append(on.note)
-    return specimen, options, notes
+        on = effect(str(table["kind"])).fixed(model, table)
+        model = replace(on.model, effects=on.model.effects + (on.kind,),
+                        notes=on.model.notes + ((on.note,) if on.note else ()))
+    return model
 
 
-__all__ = ["Effect", "SwitchedOn", "REGISTRY", "register", "effect", "apply_fixed"]
+__all__ = ["Effect", "SwitchedOn", "REGISTRY", "register", "effect"]

@@ -1,6 +1,7 @@
 """Output helpers shared by the command-line tools: atomic writes and clean errors."""
 from __future__ import annotations
 
+import html
 import json
 import os
 import sys
@@ -38,6 +39,11 @@ def write_text(path: str | Path, text: str) -> None:
         tmp.write_text(text)
 
 
+def html_pre(text: str) -> str:
+    """A text report as HTML (the notebook view of a result)."""
+    return f"<pre>{html.escape(text)}</pre>"
+
+
 def _plain(value):
     if isinstance(value, np.ndarray):
         return value.tolist()
@@ -63,3 +69,9 @@ def run_cli(build_parser, argv=None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def add_common_arguments(parser, spec_help: str = "specimen spec (TOML); default: the bundled example") -> None:
+    """The options every command of both tools has: the spec file and ``--json``."""
+    parser.add_argument("spec", nargs="?", help=spec_help)
+    parser.add_argument("--json", action="store_true", help="machine-readable output on stdout")

@@ -2,19 +2,27 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
+from .assembly import UnitMatrices, unit_matrices
 from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
 from .attachments import eigenvalue_derivative as attachment_derivative
-from .assembly import UnitMatrices, unit_matrices
+from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
 from .laminate import Laminate
+from .material import Material
 from .mesh import PlateMesh
 from .modal import Modes, _first_bending_estimate, solve_modes
-from .sensitivity import ModalEnergies, eigenvalue_derivatives, frequency_derivatives, normalised
+from .sensitivity import (
+    ModalEnergies,
+    eigenvalue_derivatives,
+    frequency_derivatives,
+    normalised,
+)
 from .specimen import Parameter, Specimen
 
 #: Elements along the longer side per sqrt(modes x aspect ratio).  The element converges
@@ -29,6 +37,14 @@ KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
 #: Inertia terms with the rotary_inertia effect: all three (I1 couples in-plane and
 #: rotational inertia in unsymmetric stacks, I2 is the rotary inertia proper).
 ROTARY_INERTIA = (1.0, 1.0, 1.0)
+#: Most elastic modes a model solves per configuration (a free-plate test rarely uses 20).
+MAX_MODES = 60
+
+
+@lru_cache(maxsize=1)
+def _blas() -> ThreadpoolController:
+    """The BLAS libraries loaded (inspected once, after scipy's are in memory)."""
+    return ThreadpoolController()
 
 
 @dataclass(frozen=True)
@@ -122,20 +138,70 @@ def solve_laminate(
         extra_stiffness, extra_mass = attachment_data(units, attachments)
         stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
     suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
-    modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
+    # These banded systems are small (a few thousand DOFs): BLAS threads only add
+    # overhead, and where cores are busy their spinning made solves 10-40x slower.
+    # Limited here, where the solve happens, whatever the caller's environment.
+    with _blas().limit(limits=1, user_api="blas"):
+        modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
     return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments)
 
 
 @dataclass(frozen=True)
 class SpecimenModel:
-    """Every configuration of a specimen, solved with the same options."""
+    """A specimen and how it is modelled: what a spec file describes, ready to solve.
+    Every command and API function takes one (``fem.load_spec`` makes it).
+
+    specimen: the plate, its test configurations and attachments, with the spec's fixed
+    ``[[effects]]`` already applied; options: modes, mesh and plate theory; design: the
+    validated ``[design]`` table (None when the model was built in code without one);
+    effects: the effect kinds the spec switched on; notes: what they assumed (for
+    reports); materials: every material the spec defines or names from stock, used or
+    not (a test design may bond one); source: the spec file.
+
+    Everything inside is SI (Pa, m, kg); reports print in the spec's units (GPa, mm, g).
+    """
 
     specimen: Specimen
     options: ModelOptions = ModelOptions()
+    design: DesignSpace | None = None
+    effects: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    materials: tuple[Material, ...] = ()
+    source: str = "<spec>"
 
     @cached_property
     def mesh(self) -> PlateMesh:
         return self.options.mesh(self.specimen)
+
+    @property
+    def name(self) -> str:
+        return self.specimen.name
+
+    @property
+    def defined_materials(self) -> dict[str, Material]:
+        """Every material by name: those the spec defines, then any other its layers use."""
+        return {**{m.name: m for m in self.materials}, **self.specimen.materials}
+
+    def value(self, parameter: Parameter) -> float:
+        """A parameter's current value (SI)."""
+        return self.specimen.value(parameter)
+
+    def with_specimen(self, specimen: Specimen) -> "SpecimenModel":
+        return replace(self, specimen=specimen)
+
+    def with_values(self, values: dict[Parameter, float]) -> "SpecimenModel":
+        """The same model with parameter values replaced (SI; materials validated again)."""
+        return replace(self, specimen=self.specimen.with_values(values))
+
+    def with_options(self, **changes) -> "SpecimenModel":
+        """The same specimen with model options changed, e.g. ``with_options(modes=8)``."""
+        return replace(self, options=replace(self.options, **changes))
+
+    def with_configurations(self, configurations) -> "SpecimenModel":
+        return replace(self, specimen=self.specimen.with_configurations(configurations))
+
+    def with_attachments(self, attachments) -> "SpecimenModel":
+        return replace(self, specimen=self.specimen.with_attachments(attachments))
 
     def solve(self, configuration: str) -> LaminateSolution:
         return solve_laminate(

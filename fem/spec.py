@@ -6,18 +6,21 @@ Inside the tool all quantities are SI.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from .design_space import parse_design
+from .effects import apply_fixed
 from .errors import SpecError
 from .laminate import Layer
 from .material import Material
-from .model import ModelOptions
+from .model import MAX_MODES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
+from .stock import STOCK, stock_name
+from .validation import check_keys, number, suggestion, whole
 
 GPA, MM = 1e9, 1e-3
 MATERIAL_KEYS = {
@@ -27,55 +30,17 @@ MATERIAL_KEYS = {
 #: Plausible ranges that catch unit slips (a modulus in MPa, a density in g/cm^3).
 MODULUS_RANGE_GPA = (1e-4, 2000.0)   # soft elastomer .. above diamond (~1050 GPa)
 DENSITY_RANGE = (10.0, 25000.0)      # foams .. above osmium (22 590 kg/m^3)
-MAX_MODES = 60
-
-
-@dataclass(frozen=True)
-class Spec:
-    """A loaded spec: the specimen with its configurations, the model options, the
-    ``[[effects]]`` tables, the ``[design]`` table (validated by its user) and every
-    material defined, including those only a design may use."""
-
-    specimen: Specimen
-    model: ModelOptions
-    effects: tuple[dict, ...] = ()
-    design: dict = field(default_factory=dict)
-    source: str = "<spec>"
-    materials: dict[str, Material] = field(default_factory=dict)  # every [materials] table, used or not
-
-
-def _check_keys(table: dict, allowed, where: str) -> None:
-    for key in table:
-        if key not in allowed:
-            close = difflib.get_close_matches(key, list(allowed), n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else f"; allowed: {', '.join(allowed)}"
-            raise SpecError(f"{where}: unknown key '{key}'{hint}")
-
-
-def number_field(table: dict, key: str, where: str, *, required: bool = True, default=None) -> float | None:
-    """A finite number from a TOML table, or a one-line error naming ``where.key``."""
-    if key not in table:
-        if required:
-            raise SpecError(f"{where}: missing field '{key}'")
-        return default
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SpecError(f"{where}.{key} = {value!r}: need a finite number")
-    return float(value)
 
 
 def _positive(table: dict, key: str, where: str, **kw) -> float | None:
-    value = number_field(table, key, where, **kw)
-    if value is not None and value <= 0:
-        raise SpecError(f"{where}.{key} = {value:g}: must be positive")
-    return value
+    return number(table, key, where, low=0.0, **kw)
 
 
 def _material(name: str, table: dict) -> Material:
     where = f"[materials.{name}]"
     if not isinstance(table, dict):
         raise SpecError(f"{where}: must be a table of properties")
-    _check_keys(table, MATERIAL_KEYS, where)
+    check_keys(table, MATERIAL_KEYS, where)
     values = {}
     for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa"):
         v = _positive(table, key, where, required=MATERIAL_KEYS[key])
@@ -91,7 +56,7 @@ def _material(name: str, table: dict) -> Material:
             f"{where}.density_kg_m3 = {density:g} is outside {DENSITY_RANGE[0]:g}..{DENSITY_RANGE[1]:g} kg/m^3; "
             "give it in kg/m^3 (e.g. 7900 for steel, not 7.9)"
         )
-    nu12 = number_field(table, "nu12", where)
+    nu12 = number(table, "nu12", where)
     identify = table.get("identify", False)
     if not isinstance(identify, bool):
         raise SpecError(f"{where}.identify = {identify!r}: need true or false")
@@ -102,6 +67,19 @@ def _material(name: str, table: dict) -> Material:
         raise SpecError(f"{where}: {exc}".replace(f"material '{name}': ", "")) from None
 
 
+def _layer_material(name, where: str, materials: dict) -> Material:
+    """A layer's material: the spec's own, else built-in stock by name (``brass`` or
+    ``brass_stock``); a stock material used is added to ``materials``."""
+    if name in materials:
+        return materials[name]
+    stock = stock_name(name) if isinstance(name, str) else None
+    if stock is None:
+        hint = suggestion(name, list(materials) + list(STOCK))
+        raise SpecError(f"{where}.material = {name!r} is not defined in [materials] nor built-in stock; {hint}")
+    materials[name] = STOCK[stock].material(name)
+    return materials[name]
+
+
 def _layers(items, where: str, materials: dict, label, plate_size: float) -> tuple[Layer, ...]:
     if not isinstance(items, list):
         raise SpecError(f"{where}: need a list of {{ material = ..., thickness_mm = ... }} tables")
@@ -110,14 +88,11 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
         here = f"{where}[{i}]"
         if not isinstance(item, dict):
             raise SpecError(f"{here}: need a table {{ material = ..., thickness_mm = ... }}")
-        _check_keys(item, ("material", "thickness_mm", "angle_deg"), here)
+        check_keys(item, ("material", "thickness_mm", "angle_deg"), here)
         name = item.get("material")
         if name is None:
             raise SpecError(f"{here}: missing field 'material'")
-        if name not in materials:
-            close = difflib.get_close_matches(str(name), list(materials), n=1)
-            hint = f"did you mean '{close[0]}'?" if close else f"known: {', '.join(materials) or 'none'}"
-            raise SpecError(f"{here}.material = {name!r} is not defined in [materials]; {hint}")
+        material = _layer_material(name, here, materials)
         t = _positive(item, "thickness_mm", here)
         if t >= 0.2 * plate_size:
             raise SpecError(
@@ -126,8 +101,8 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
             )
         if t < 1e-4:
             raise SpecError(f"{here}.thickness_mm = {t:g} mm is below 0.1 um; thicknesses are in mm, not m")
-        angle = number_field(item, "angle_deg", here, required=False, default=0.0)
-        out.append(Layer(materials[name], t * MM, math.radians(angle), label(i)))
+        angle = number(item, "angle_deg", here, required=False, default=0.0)
+        out.append(Layer(material, t * MM, math.radians(angle), label(i)))
     return tuple(out)
 
 
@@ -155,13 +130,16 @@ def _with_measured_mass(mass_g: float, layers, materials: dict, area: float, con
     return tuple(replace(layer, material=scaled[layer.material.name]) for layer in layers), scaled
 
 
-def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
-    """Build a validated ``Spec`` from a parsed TOML document."""
-    _check_keys(data, ("specimen", "materials", "configurations", "model", "effects", "design"), "spec")
+def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
+    """The validated model of a parsed TOML document: the specimen with its fixed
+    ``[[effects]]`` switched on, the model options and the ``[design]`` table."""
+    check_keys(data, ("specimen", "materials", "configurations", "model", "effects", "design"), "spec")
     if "specimen" not in data:
         raise SpecError("spec: missing table [specimen]")
     sp = data["specimen"]
-    _check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g"), "[specimen]")
+    if not isinstance(sp, dict):
+        raise SpecError("[specimen]: must be a table")
+    check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g"), "[specimen]")
     length = _positive(sp, "length_mm", "[specimen]")
     width = _positive(sp, "width_mm", "[specimen]")
     for key, v in (("length_mm", length), ("width_mm", width)):
@@ -191,7 +169,9 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
     seen_names, seen_stacks = set(), {}
     for i, table in enumerate(data.get("configurations", [{"name": "original"}])):
         here = f"[[configurations]][{i}]"
-        _check_keys(table, ("name", "bottom", "top"), here)
+        if not isinstance(table, dict):
+            raise SpecError(f"{here}: need a table with a 'name' (and 'bottom' or 'top' layers)")
+        check_keys(table, ("name", "bottom", "top"), here)
         name = table.get("name")
         if not isinstance(name, str) or not name:
             raise SpecError(f"{here}: missing field 'name'")
@@ -212,30 +192,26 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> Spec:
         raise SpecError("spec: [[configurations]] is empty; omit it for the original plate alone")
 
     model = data.get("model", {})
-    _check_keys(model, ("modes", "divisions"), "[model]")
-    modes = model.get("modes", 5)
-    if isinstance(modes, bool) or not isinstance(modes, int) or not 1 <= modes <= MAX_MODES:
-        raise SpecError(f"[model].modes = {modes!r}: need a whole number from 1 to {MAX_MODES}")
+    if not isinstance(model, dict):
+        raise SpecError(f"[model] = {model!r}: must be a table, e.g. [model] then modes = 5 on the next line")
+    check_keys(model, ("modes", "divisions"), "[model]")
+    modes = whole(model.get("modes", 5), "[model].modes", 1, MAX_MODES, "")
     divisions = model.get("divisions")
-    if divisions is not None and (isinstance(divisions, bool) or not isinstance(divisions, int) or not 2 <= divisions <= 64):
-        raise SpecError(f"[model].divisions = {divisions!r}: need a whole number of elements from 2 to 64")
+    if divisions is not None:
+        whole(divisions, "[model].divisions", 2, 64, "of elements ")
     options = ModelOptions(modes=modes, divisions=divisions)
 
     effects = data.get("effects", [])
     if not isinstance(effects, list) or not all(isinstance(e, dict) for e in effects):
         raise SpecError("[[effects]]: need a list of tables, each with a 'kind'")
-    design = data.get("design", {})
-    if not isinstance(design, dict):
-        raise SpecError("[design]: must be a table")
     specimen = Specimen(sp.get("name", Path(source).stem), length * MM, width * MM, layers, tuple(configurations))
-    from .effects import apply_fixed  # effects build on the model; validate them here, at the entry point
+    design = parse_design(data.get("design", {}), materials, len(specimen.identified_materials))
+    base = SpecimenModel(specimen, options, design=design, materials=tuple(materials.values()), source=source)
+    return apply_fixed(base, effects)
 
-    apply_fixed(specimen, options, effects)
-    return Spec(specimen, options, tuple(effects), design, source, materials)
 
-
-def load_spec(path: str | Path) -> Spec:
-    """Read and validate a spec file."""
+def load_spec(path: str | Path) -> SpecimenModel:
+    """Read and validate a spec file: the model every command and API function takes."""
     path = Path(path)
     try:
         text = path.read_text()

@@ -24,15 +24,23 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from fem.model import ModelOptions, SpecimenModel
-from fem.specimen import Specimen
+from fem.io import html_pre
+from fem.model import SpecimenModel
 
 from .measurements import Measurements
+from .objective import Objective, solving_model
 from .report import residual_table
-from .updating import FitOptions, FitResult, Updater, fit
+from .result import FitResult
+from .statistics import FitStatistics
+from .updating import update
 
 #: A signature explaining more than this share of the misfit is reported as present.
 PATTERN_SHARE = 0.5
+#: A signature whose part outside the fit's Jacobian is below this fraction of it is
+#: absorbed by the layer properties (what is left is round-off).
+ABSORBED = 1e-8
+#: A reduced chi^2 below this is at the noise level: nothing is clearly missing.
+NOISE_CHI2 = 2.0
 #: Distinct start positions the diagnosis tries for a point mass.
 POINT_MASS_STARTS = 4
 
@@ -52,8 +60,7 @@ class Comparison:
     """Measured against model per configuration and mode, with residual patterns."""
 
     table: pd.DataFrame
-    rms_rel_error: float
-    reduced_chi2: float
+    statistics: FitStatistics
     patterns: tuple[Pattern, ...]
     fitted: FitResult | None
     point_map: np.ndarray | None = None     # share explained by a point mass at each node
@@ -61,14 +68,34 @@ class Comparison:
     point_mass_hints: tuple = ()            # best distinct positions with mass estimates
 
     @property
+    def rms_rel_error(self) -> float:
+        return self.statistics.rms_rel_error
+
+    @property
     def at_noise_level(self) -> bool:
-        return bool(np.isfinite(self.reduced_chi2) and self.reduced_chi2 < 2.0)
+        """The misfit is within the stated scatter (reduced chi^2 < ``NOISE_CHI2``)."""
+        chi2 = self.statistics.reduced_chi2
+        return bool(self.statistics.scatter_known and np.isfinite(chi2) and chi2 < NOISE_CHI2)
+
+    def to_dict(self) -> dict:
+        """The ``compare --json`` document."""
+        chi2 = self.statistics.reduced_chi2
+        return {"rms_rel_error": self.rms_rel_error,
+                "reduced_chi2": chi2 if self.statistics.scatter_known and np.isfinite(chi2) else None,
+                "at_noise_level": self.at_noise_level,
+                "patterns": [{"pattern": p.name, "share": p.share, "detail": p.detail, "suggests": list(p.suggests)}
+                             for p in self.patterns],
+                "residuals": self.table.to_dict(orient="records")}
+
+    def _repr_html_(self) -> str:
+        return html_pre(self.report())
 
     def report(self) -> str:
+        chi2 = self.statistics.reduced_chi2
         lines = ["== model against measurement ==", "",
                  f"RMS relative error {100 * self.rms_rel_error:.4f} %"
-                 + (f", reduced chi^2 {self.reduced_chi2:.3g} (1 = the measurement scatter)"
-                    if np.isfinite(self.reduced_chi2) else ""),
+                 + (f", reduced chi^2 {chi2:.3g} (1 = the measurement scatter)"
+                    if self.statistics.scatter_known and np.isfinite(chi2) else ""),
                  "", self.table.to_string(index=False, float_format=lambda x: f"{x:.6g}"), "",
                  "residual patterns (share of the misfit each explains)"]
         for p in sorted(self.patterns, key=lambda p: -p.share):
@@ -79,7 +106,7 @@ class Comparison:
         return "\n".join(lines) + "\n"
 
 
-class _ScoreTest:
+class ScoreTest:
     """Share of the weighted misfit a signature explains beyond what the fitted layer
     properties can absorb: the signature columns are projected onto the complement of the
     baseline Jacobian before the least-squares fit (a score test for the missing term)."""
@@ -91,23 +118,29 @@ class _ScoreTest:
         self.q = np.linalg.qr(jacobian)[0] if jacobian is not None and jacobian.size else None
 
     def __call__(self, columns: np.ndarray) -> tuple[float, np.ndarray]:
-        b = columns * self.weight[:, None]
+        weighted = columns * self.weight[:, None]
+        b = weighted
         if self.q is not None:
-            b = b - self.q @ (self.q.T @ b)
+            b = weighted - self.q @ (self.q.T @ weighted)
+            # A signature the layer properties reproduce leaves only round-off: it explains nothing.
+            absorbed = np.linalg.norm(b, axis=0) <= ABSORBED * np.linalg.norm(weighted, axis=0)
+            b = np.where(absorbed[None, :], 0.0, b)
         coef, *_ = np.linalg.lstsq(b, self.r, rcond=None)
         explained = b @ coef
         return (float(explained @ explained) / self.total if self.total > 0 else 0.0), coef
 
 
-def residual_patterns(specimen: Specimen, measurements: Measurements, model_hz: np.ndarray, options: ModelOptions,
+def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz: np.ndarray,
                       pairings=None, jacobian: np.ndarray | None = None):
-    """Score every signature; returns (patterns, per-node share map of the point signature,
-    node coordinates, point-mass hints best first)."""
+    """Score every signature of the residuals of ``model`` (solved as the fit solved it);
+    returns (patterns, per-node share map of the point signature, node coordinates,
+    point-mass hints best first)."""
+    specimen = model.specimen
     table = measurements.table
     measured = table["frequency_hz"].to_numpy()
     e = model_hz / measured - 1
     sigma_rel = (table["std_hz"].to_numpy() / measured) if measurements.has_std else np.ones_like(e)
-    score = _ScoreTest(e, 1 / sigma_rel, jacobian)
+    score = ScoreTest(e, 1 / sigma_rel, jacobian)
     configs = table["configuration"].to_numpy()
     q = np.empty_like(e)
     for name in measurements.configurations:
@@ -128,7 +161,6 @@ def residual_patterns(specimen: Specimen, measurements: Measurements, model_hz: 
         patterns.append(Pattern("only in bonded configurations", share if ratio > 4 else 0.0,
                                 f"mean squared error bonded / original = {ratio:.3g}", ("adhesive", "thickness")))
     # Point-mass signature: e = (m / 2) phi(x, y)^2, scanned over every node.
-    model = SpecimenModel(specimen, options)
     phi2 = []
     for name in measurements.configurations:
         solution = model.solve(name)
@@ -163,26 +195,16 @@ def residual_patterns(specimen: Specimen, measurements: Measurements, model_hz: 
     return tuple(patterns), shares, xy, hints
 
 
-def compare(specimen: Specimen, measurements: Measurements, model: ModelOptions = ModelOptions(),
-            refit: bool = True) -> Comparison:
+def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
     """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
-    fitted = fit(specimen, measurements, model=model, options=FitOptions()) if refit else None
+    fitted = update(model, measurements) if refit else None
     if fitted is not None:
-        specimen_now, model_hz = fitted.specimen, fitted.model_hz
-        updater_options = Updater(specimen, measurements, fitted.parameters, model, FitOptions()).model_options
+        now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
         pairings, jacobian = fitted.pairings, fitted.jacobian
     else:
-        updater = Updater(specimen, measurements, [], model, FitOptions())
-        evaluation = updater.evaluate(np.zeros(0), None)
-        specimen_now, model_hz, updater_options, pairings = specimen, evaluation.model_hz, updater.model_options, \
-            evaluation.pairings
-        jacobian = None
-    frame = residual_table(measurements, model_hz)
-    chi2 = float("nan")
-    if measurements.has_std:
-        dof = len(frame) - (len(fitted.parameters) if fitted else 0)
-        chi2 = float(np.sum(frame["error_over_std"] ** 2) / max(dof, 1))
-    patterns, shares, xy, hints = residual_patterns(specimen_now, measurements, model_hz, updater_options, pairings,
-                                                    jacobian)
-    return Comparison(frame, float(np.sqrt(np.mean(frame["rel_error"] ** 2))), chi2, patterns, fitted, shares,
-                      xy, tuple(hints))
+        objective = Objective(model, measurements, [])
+        evaluation = objective.evaluate(np.zeros(0), None)
+        now, model_hz, pairings, jacobian = model, evaluation.model_hz, evaluation.pairings, None
+        statistics = objective.statistics(evaluation)
+    patterns, shares, xy, hints = residual_patterns(solving_model(now, measurements), measurements, model_hz, pairings, jacobian)
+    return Comparison(residual_table(measurements, model_hz), statistics, patterns, fitted, shares, xy, tuple(hints))

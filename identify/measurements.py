@@ -7,7 +7,6 @@ fixes which model mode a measured one is paired with at the start.
 """
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +14,8 @@ import numpy as np
 import pandas as pd
 
 from fem.errors import MeasurementError
-from fem.specimen import Specimen
+from fem.model import SpecimenModel
+from fem.validation import suggestion
 
 REQUIRED = ("configuration", "frequency_hz")
 OPTIONAL = ("mode", "std_hz", "label")
@@ -50,15 +50,14 @@ def _fail(source: str, message: str) -> MeasurementError:
     return MeasurementError(f"{source}: {message}")
 
 
-def parse_measurements(frame: pd.DataFrame, specimen: Specimen, source: str = "<measurements>") -> Measurements:
-    """Validate a raw table against a specimen; rows are reported by CSV line number."""
+def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = "<measurements>") -> Measurements:
+    """Validate a raw table against the model's configurations; rows are reported by CSV
+    line number."""
     frame = frame.copy()
     frame.columns = [str(c).strip() for c in frame.columns]
     for column in frame.columns:
         if column not in REQUIRED + OPTIONAL:
-            close = difflib.get_close_matches(column, REQUIRED + OPTIONAL, n=1)
-            hint = f"did you mean '{close[0]}'?" if close else f"allowed: {', '.join(REQUIRED + OPTIONAL)}"
-            raise _fail(source, f"unknown column '{column}'; {hint}")
+            raise _fail(source, f"unknown column '{column}'; {suggestion(column, REQUIRED + OPTIONAL)}")
     for column in REQUIRED:
         if column not in frame.columns:
             raise _fail(source, f"missing column '{column}' (need {', '.join(REQUIRED)})")
@@ -66,12 +65,11 @@ def parse_measurements(frame: pd.DataFrame, specimen: Specimen, source: str = "<
         raise _fail(source, "no rows: give at least one measured frequency")
     line = frame.index.to_numpy() + 2  # header is line 1
 
-    known = [c.name for c in specimen.configurations]
+    known = [c.name for c in model.specimen.configurations]
     for i, name in enumerate(frame["configuration"]):
         if pd.isna(name) or str(name).strip() not in known:
-            close = difflib.get_close_matches(str(name), known, n=1)
-            hint = f"did you mean '{close[0]}'?" if close else f"the spec has: {', '.join(known)}"
-            raise _fail(source, f"line {line[i]}: configuration = {name!r} is not in the spec; {hint}")
+            raise _fail(source, f"line {line[i]}: configuration = {name!r} is not in the spec; "
+                        f"{suggestion(name, known).replace('allowed:', 'the spec has:')}")
     frame["configuration"] = frame["configuration"].map(lambda s: str(s).strip())
 
     frequency = pd.to_numeric(frame["frequency_hz"], errors="coerce")
@@ -122,8 +120,8 @@ def parse_measurements(frame: pd.DataFrame, specimen: Specimen, source: str = "<
     return Measurements(frame[["configuration", "mode", "frequency_hz", "std_hz", "label"]], source)
 
 
-def load_measurements(path: str | Path, specimen: Specimen) -> Measurements:
-    """Read and validate a measurement CSV."""
+def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
+    """Read a measurement CSV and validate it against the model's configurations."""
     path = Path(path)
     try:
         frame = pd.read_csv(path, skipinitialspace=True, comment="#")
@@ -131,4 +129,4 @@ def load_measurements(path: str | Path, specimen: Specimen) -> Measurements:
         raise MeasurementError(f"measurement file {str(path)!r} does not exist") from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise MeasurementError(f"measurement file {str(path)!r} is not a readable CSV: {exc}") from None
-    return parse_measurements(frame, specimen, str(path))
+    return parse_measurements(frame, model, str(path))

@@ -3,15 +3,18 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from fem.io import atomic_path, to_json, write_text
+from fem.io import to_json, write_text
 
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
-from .updating import FitResult
+
+if TYPE_CHECKING:
+    from .result import FitResult
 
 
 def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
@@ -57,10 +60,11 @@ def to_dict(result: FitResult) -> dict:
         entry["std"][key] = _finite(display(p, sd))
         if flags:
             entry["flags"][key] = list(flags)
-    u = result.uncertainty
+    u, st = result.uncertainty, result.statistics
     return {
         "converged": result.converged,
-        "status": result.status,
+        "status": result.status.value,
+        "message": result.message,
         "iterations": result.iterations,
         "materials": materials,
         "effects": effects,
@@ -69,8 +73,9 @@ def to_dict(result: FitResult) -> dict:
         "rms_rel_error": result.rms_rel_error,
         "condition_number": _finite(u.condition_number),
         "verdict": u.verdict,
-        "reduced_chi2": _finite(u.reduced_chi2),
-        "noise_source": u.noise_source,
+        "reduced_chi2": _finite(st.reduced_chi2) if st.scatter_known else None,
+        "noise_source": st.noise_source,
+        "statistics": st.to_dict(),
         "weak_combinations": list(u.weak_combinations),
         "correlation": {"parameters": [p.name for p in result.parameters],
                         "matrix": [[_finite(x) for x in row] for row in u.correlation]},
@@ -87,18 +92,22 @@ def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
                          "rel_error_after": after.rel_error})
 
 
-def report_text(result: FitResult, before: FitResult | None = None) -> str:
-    """Fixed sections: statistics, parameters +- std with flags, correlations, residuals, warnings."""
-    u = result.uncertainty
-    lines = [f"== identification: {result.status} =="]
+def report_text(result: FitResult) -> str:
+    """Fixed sections: statistics, parameters +- std with flags, correlations, residuals,
+    the error per mode before and after the effects (when they were free), warnings."""
+    u, st = result.uncertainty, result.statistics
+    before = result.baseline
+    chi2 = (f"  reduced chi^2          {st.reduced_chi2:.3g}" if st.scatter_known else
+            f"  residual variance      {st.reduced_chi2:.3g} (relative errors squared; no std_hz given)")
+    lines = [f"== identification: {result.status.value} ==", f"   {result.message}"]
     lines += ["", "statistics",
               f"  measured frequencies   {len(result.measurements)} in {len(result.measurements.configurations)} "
               f"configurations",
               f"  unknown parameters     {len(result.parameters)}",
               f"  iterations             {result.iterations}",
               f"  RMS relative error     {100 * result.rms_rel_error:.4f} %",
-              f"  reduced chi^2          {u.reduced_chi2:.3g}",
-              f"  scatter from           {u.noise_source}",
+              chi2,
+              f"  scatter from           {st.noise_source}",
               f"  condition number       {u.condition_number:.3g} ({u.verdict}; paper: good < 1e3, singular > 1e7)"]
     lines += ["", "parameters (value +- 1 std)"]
     for p, value, sd, flags in zip(result.parameters, result.values, u.std, u.flags):
@@ -124,78 +133,17 @@ def report_text(result: FitResult, before: FitResult | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def plot_convergence(result: FitResult, path: Path) -> None:
-    """Parameters per material against iteration (paper Fig. 9) and RMS error (Fig. 3a)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    history = np.array([it.values for it in result.history])
-    targets = list(dict.fromkeys(p.target for p in result.parameters))
-    fig, axes = plt.subplots(1, len(targets) + 1, figsize=(4 * (len(targets) + 1), 3.6), squeeze=False)
-    for ax, target in zip(axes[0], targets):
-        for j, p in enumerate(result.parameters):
-            if p.target == target:
-                ax.plot(history[:, j] / result.values[j], marker="o", label=p.kind)
-        ax.set_title(target)
-        ax.set_xlabel("iteration")
-        ax.set_ylabel("value / identified value")
-        ax.legend(fontsize=8)
-        ax.grid(alpha=0.3)
-    ax = axes[0, -1]
-    ax.semilogy([max(it.rms_rel_error, 1e-16) for it in result.history], marker="o")
-    ax.set_title("frequency misfit")
-    ax.set_xlabel("iteration")
-    ax.set_ylabel("RMS relative error")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-
-
-def plot_residuals(result: FitResult, path: Path) -> None:
-    """Relative error per mode, grouped by configuration; error bars = 1 std when given."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    table = residual_table(result.measurements, result.model_hz)
-    configurations = list(dict.fromkeys(table["configuration"]))
-    fig, ax = plt.subplots(figsize=(max(6, 0.5 * len(table) + 2), 3.6))
-    width = 0.8 / len(configurations)
-    for k, name in enumerate(configurations):
-        rows = table[table["configuration"] == name]
-        x = rows["mode"].to_numpy() + (k - (len(configurations) - 1) / 2) * width
-        err = None
-        if result.measurements.has_std:
-            err = 100 * result.measurements.of(name)["std_hz"].to_numpy() / rows["measured_hz"].to_numpy()
-        ax.bar(x, 100 * rows["rel_error"], width, yerr=err, label=name, capsize=2)
-    ax.axhline(0, color="k", lw=0.8)
-    ax.set_xlabel("mode")
-    ax.set_ylabel("(model - measured) / measured [%]")
-    ax.set_title(f"residuals (RMS {100 * result.rms_rel_error:.3g} %)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-
-
-def write_report(result: FitResult, folder: str | Path, before: FitResult | None = None) -> Path:
+def write_report(result: FitResult, folder: str | Path) -> Path:
     """A report folder: report.txt, fit.json, residuals.csv, history.csv and plots (and the
-    error per mode before and after the effects when ``before`` is given)."""
+    error per mode before and after the effects when they were free)."""
+    from .plots import plot_before_after, plot_convergence, plot_residuals
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    write_text(folder / "report.txt", report_text(result, before))
-    if before is not None:
-        from .plots import plot_before_after
-
-        write_text(folder / "before_after.csv", before_after_table(before, result).to_csv(index=False))
-        plot_before_after(before, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
+    write_text(folder / "report.txt", report_text(result))
+    if result.baseline is not None:
+        write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
+        plot_before_after(result.baseline, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
                           folder / "before_after.png")
     write_text(folder / "fit.json", to_json(to_dict(result)))
     write_text(folder / "residuals.csv", residual_table(result.measurements, result.model_hz).to_csv(index=False))

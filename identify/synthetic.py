@@ -1,35 +1,31 @@
 """Virtual experiments: measurements computed by the model itself (paper section 2.2)."""
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pandas as pd
 
-from fem.model import ModelOptions, SpecimenModel
-from fem.specimen import Specimen
+from fem.model import SpecimenModel
 
 from .measurements import Measurements, parse_measurements
 
 
 def synthetic_measurements(
-    specimen: Specimen,
+    truth: SpecimenModel,
     modes: int = 5,
     noise_rel: float = 0.0,
     seed: int = 0,
     labels: str = "none",
-    model: ModelOptions | None = None,
     configurations: list[str] | None = None,
 ) -> Measurements:
-    """The first ``modes`` elastic frequencies of every configuration.
+    """The first ``modes`` elastic frequencies of every configuration of ``truth`` (the
+    model that generates the data: its specimen, mesh and effects).
 
     noise_rel: relative std of Gaussian noise added (also written as ``std_hz`` when > 0).
     labels: "none", "close" (nodal-line labels of modes within 1 % of a neighbour, as a lab
     would identify close modes by their shapes) or "all".
-    model: the model that generates the data (default: the default mesh for ``modes``).
     """
-    model = model or ModelOptions(modes=modes)
-    solver = SpecimenModel(specimen, replace(model, modes=max(modes, model.modes)))
+    solver = truth.with_options(modes=max(modes, truth.options.modes))
+    specimen = truth.specimen
     rng = np.random.default_rng(seed)
     rows = []
     for c in specimen.configurations:
@@ -55,4 +51,4 @@ def synthetic_measurements(
     # Noise can reorder two close modes; ranks follow the measured order.
     frame = frame.sort_values(["configuration", "frequency_hz"], kind="stable")
     frame["mode"] = frame.groupby("configuration").cumcount() + 1
-    return parse_measurements(frame, specimen, "<synthetic>")
+    return parse_measurements(frame, truth, "<synthetic>")

@@ -14,8 +14,8 @@ import numpy as np
 
 from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, condition_verdict
 
-#: A reduced chi-square above this says the misfit exceeds the stated scatter.
-CHI2_WARNING = 4.0
+from .statistics import FitStatistics
+
 #: Relative std above which a parameter is flagged weakly identifiable.
 WEAK_REL_STD = 0.1
 
@@ -34,7 +34,8 @@ def describe_combination(vector: np.ndarray, names: list[str], threshold: float 
 
 @dataclass(frozen=True)
 class Uncertainty:
-    """std and covariance in SI units of the parameters; correlation; conditioning."""
+    """std and covariance in SI units of the parameters; correlation; conditioning of
+    the relative sensitivity matrix (the paper's criterion); flags per parameter."""
 
     std: np.ndarray
     covariance: np.ndarray
@@ -43,8 +44,6 @@ class Uncertainty:
     singular_values: np.ndarray
     weak_combinations: tuple[str, ...]
     flags: tuple[tuple[str, ...], ...]
-    noise_source: str
-    reduced_chi2: float
     warnings: tuple[str, ...]
 
     @property
@@ -52,28 +51,22 @@ class Uncertainty:
         return condition_verdict(self.condition_number)
 
     @classmethod
-    def at(cls, updater, evaluation, residual: np.ndarray) -> "Uncertainty":
-        from .updating import relative_sensitivity
+    def at(cls, objective, evaluation, statistics: FitStatistics) -> "Uncertainty":
+        """The linearised uncertainty of ``evaluation``'s parameters, with the scatter
+        ``statistics`` gives (stated, inflated or estimated)."""
+        from .objective import relative_sensitivity
 
-        space = updater.space
+        space = objective.space
         names = [p.name for p in space.parameters]
         values = evaluation.values
-        n, p = len(residual), len(values)
-        J = updater.jacobian(evaluation)
-        dof = n - p
-        chi2 = float(residual @ residual / dof) if dof > 0 else float("nan")
+        p = len(values)
         warnings = []
-        if updater.measurements.has_std:
-            scale, source = 1.0, "measured std_hz"
-            if chi2 > CHI2_WARNING:
-                scale, source = chi2, f"measured std_hz inflated by the misfit (reduced chi^2 {chi2:.1f})"
-                warnings.append(f"the misfit is {np.sqrt(chi2):.1f}x the stated scatter: the model misses "
-                                "something (run 'identify-layers diagnose'); std inflated accordingly")
-        elif dof > 0:
-            scale, source = chi2, f"estimated from the residual ({dof} degrees of freedom)"
-        else:
-            scale, source = float("nan"), "none: as many unknowns as frequencies and no std_hz"
+        if statistics.inflated:
+            warnings.append(f"the misfit is {np.sqrt(statistics.reduced_chi2):.1f}x the stated scatter: the model misses "
+                            "something (run 'identify-layers diagnose'); std inflated accordingly")
+        if not statistics.scatter_known and statistics.dof <= 0:
             warnings.append("no redundancy to estimate the scatter: give std_hz or measure more modes")
+        scale = statistics.noise_scale
         relative = relative_sensitivity(evaluation)
         cond = condition_number(relative)
         _, s_rel, vt_rel = np.linalg.svd(relative, full_matrices=False)
@@ -81,7 +74,7 @@ class Uncertainty:
             f"{describe_combination(vt_rel[k], names)} (singular value {s_rel[k] / s_rel[0]:.1e} of the largest)"
             for k in range(len(s_rel)) if s_rel[k] < s_rel[0] / GOOD_BELOW
         )
-        _, s, vt = np.linalg.svd(J, full_matrices=False)
+        _, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
         dvdz = space.dvalue_dz(values)
         if cond > SINGULAR_ABOVE or s[-1] <= 1e-12 * s[0]:
             covariance = np.full((p, p), np.inf)
@@ -93,19 +86,23 @@ class Uncertainty:
             covariance = dvdz[:, None] * cov_z * dvdz[None, :]
             std = np.sqrt(np.diag(covariance))
             correlation = covariance / np.outer(std, std)
-        flags = []
-        for parameter, value, sd in zip(space.parameters, values, std):
-            f = []
-            if parameter.kind == "nu12":
-                material = evaluation.specimen.materials[parameter.target]
-                if value**2 > 0.98 * material.E1 / material.E2:
-                    f.append("at bound (nu12^2 -> E1/E2)")
-                if sd > WEAK_REL_STD * 0.3:
-                    f.append("weakly identifiable")
-            elif np.isfinite(sd) and sd > WEAK_REL_STD * abs(value):
-                f.append("weakly identifiable")
-            if not np.isfinite(sd):
-                f.append("not identifiable")
-            flags.append(tuple(f))
-        return cls(std, covariance, correlation, cond, s_rel / s_rel[0], weak, tuple(flags), source, chi2,
-                   tuple(warnings))
+        flags = tuple(parameter_flags(parameter, value, sd, evaluation.model.specimen)
+                      for parameter, value, sd in zip(space.parameters, values, std))
+        return cls(std, covariance, correlation, cond, s_rel / s_rel[0], weak, flags, tuple(warnings))
+
+
+def parameter_flags(parameter, value: float, std: float, specimen) -> tuple[str, ...]:
+    """Flags of one estimate: at its bound, weakly identifiable (std above
+    ``WEAK_REL_STD`` of the value; for nu12 of 0.3, its typical size), not identifiable."""
+    flags = []
+    if parameter.kind == "nu12":
+        material = specimen.materials[parameter.target]
+        if value**2 > 0.98 * material.E1 / material.E2:
+            flags.append("at bound (nu12^2 -> E1/E2)")
+        if std > WEAK_REL_STD * 0.3:
+            flags.append("weakly identifiable")
+    elif np.isfinite(std) and std > WEAK_REL_STD * abs(value):
+        flags.append("weakly identifiable")
+    if not np.isfinite(std):
+        flags.append("not identifiable")
+    return tuple(flags)

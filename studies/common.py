@@ -6,9 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.io import atomic_path, write_text
+from fem.io import write_text
+from fem.model import SpecimenModel
+from fem.plotting import new_figure, save_figure
 from fem.spec import load_spec
-from fem.specimen import Parameter, Specimen
+from fem.specimen import Parameter
 from identify.examples import COATED_PLATE
 
 GPA = 1e9
@@ -34,14 +36,14 @@ def material_values(table: dict) -> dict[Parameter, float]:
     return out
 
 
-def start_specimen() -> Specimen:
+def start_model() -> SpecimenModel:
     """The bundled example: the paper's plate at Table 6's start values."""
-    return load_spec(COATED_PLATE).specimen
+    return load_spec(COATED_PLATE)
 
 
-def true_specimen() -> Specimen:
+def true_model() -> SpecimenModel:
     """The paper's plate with Table 1's properties."""
-    return start_specimen().with_values(material_values(TABLE1))
+    return start_model().with_values(material_values(TABLE1))
 
 
 def report_folder(name: str, out: str | Path | None) -> Path:
@@ -56,26 +58,13 @@ def parse_args(name: str, description: str) -> argparse.Namespace:
     return parser.parse_args()
 
 
-def save_figure(fig, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-
-
 def dependency_plot(sensitivity: np.ndarray, path: Path, title: str) -> float:
     """Paper Fig. 10: the first column of the sensitivity matrix against its best linear
     combination of the others.  Returns the relative residual of that fit (0 = dependent)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     first, others = sensitivity[:, 0], sensitivity[:, 1:]
     combination = others @ np.linalg.lstsq(others, first, rcond=None)[0]
     residual = float(np.linalg.norm(first - combination) / np.linalg.norm(first))
-    fig, ax = plt.subplots(figsize=(4.2, 4))
+    fig, ax = new_figure(figsize=(4.2, 4))
     ax.plot(first, combination, "o")
     lims = [min(first.min(), combination.min()), max(first.max(), combination.max())]
     ax.plot(lims, lims, "k--", lw=0.8)
@@ -83,7 +72,6 @@ def dependency_plot(sensitivity: np.ndarray, path: Path, title: str) -> float:
     ax.set_ylabel("best combination of columns 2..n")
     ax.set_title(f"{title}\nrelative misfit {residual:.2e}", fontsize=9)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
     save_figure(fig, path)
     return residual
 

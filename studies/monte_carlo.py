@@ -11,12 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.model import ModelOptions, SpecimenModel
 from identify.measurements import Measurements
 from identify.synthetic import synthetic_measurements
-from identify.updating import fit
+from identify.fitting import fit
 
-from .common import report_folder, true_specimen, write_text
+from .common import report_folder, true_model, write_text
 
 NOISE = 5e-4
 
@@ -36,10 +35,9 @@ class MonteCarlo:
 def run(out=None, draws: int = 200, seed: int = 7) -> MonteCarlo:
     """Each draw adds fresh noise to the same true frequencies and fits from the truth
     (the start does not matter once the fit converges; it keeps the study fast)."""
-    truth = true_specimen()
+    truth = true_model()
     base = synthetic_measurements(truth, modes=5, noise_rel=NOISE, seed=0, labels="close")
-    exact = np.concatenate([SpecimenModel(truth, ModelOptions(modes=5)).solve(c).frequencies_hz[:5]
-                            for c in base.configurations])
+    exact = np.concatenate([truth.with_options(modes=5).solve(c).frequencies_hz[:5] for c in base.configurations])
     rng = np.random.default_rng(seed)
     values, stds = [], []
     for _ in range(draws):
@@ -49,7 +47,7 @@ def run(out=None, draws: int = 200, seed: int = 7) -> MonteCarlo:
             values.append(result.values)
             stds.append(result.uncertainty.std)
     values, stds = np.array(values), np.array(stds)
-    names = [p.name for p in truth.material_parameters()]
+    names = [p.name for p in truth.specimen.material_parameters()]
     outcome = MonteCarlo(names, values.std(axis=0, ddof=1), stds.mean(axis=0), len(values))
     folder = report_folder("monte_carlo", out)
     lines = [f"Monte Carlo: {outcome.draws} converged draws of {draws}, {100 * NOISE:.2g} % frequency scatter", "",

@@ -9,9 +9,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.model import ModelOptions, SpecimenModel
-
-from .common import TABLE2, material_values, parse_args, report_folder, true_specimen, write_text
+from .common import (
+    TABLE2,
+    material_values,
+    parse_args,
+    report_folder,
+    true_model,
+    write_text,
+)
 
 ENTRIES = {"11": (0, 0), "22": (1, 1), "12": (0, 1), "66": (2, 2)}
 
@@ -30,13 +35,12 @@ class EquivalentPlate:
 
 
 def run(out=None) -> EquivalentPlate:
-    original = true_specimen()
+    original = true_model()
     equivalent = original.with_values(material_values(TABLE2))
-    m0, m1 = original.laminate("original").matrices(), equivalent.laminate("original").matrices()
+    m0, m1 = (m.specimen.laminate("original").matrices() for m in (original, equivalent))
     diff = {f"{x}{k}": 100 * (1 - m1[x][ij] / m0[x][ij]) for x in "ABD" for k, ij in ENTRIES.items()}
-    options = ModelOptions(modes=10)
-    f0 = SpecimenModel(original, options).solve("original").frequencies_hz
-    f1 = SpecimenModel(equivalent, options).solve("original").frequencies_hz
+    f0 = original.with_options(modes=10).solve("original").frequencies_hz
+    f1 = equivalent.with_options(modes=10).solve("original").frequencies_hz
     result = EquivalentPlate(diff, f0, f1)
     folder = report_folder("paper_equivalent_plate", out)
     lines = ["Equivalent plate (paper section 3.4, Tables 2-4)", "",

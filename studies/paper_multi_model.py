@@ -15,13 +15,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.model import ModelOptions, SpecimenModel
+from identify.fitting import fit
 from identify.parameters import display
 from identify.report import write_report
+from identify.result import FitResult
 from identify.synthetic import synthetic_measurements
-from identify.updating import FitResult, fit
 
-from .common import dependency_plot, parse_args, report_folder, start_specimen, true_specimen, write_text
+from .common import (
+    dependency_plot,
+    parse_args,
+    report_folder,
+    start_model,
+    true_model,
+    write_text,
+)
 
 
 @dataclass(frozen=True)
@@ -33,11 +40,11 @@ class MultiModel:
 
 
 def run(out=None) -> MultiModel:
-    truth, start = true_specimen(), start_specimen()
+    truth, start = true_model(), start_model()
     data = synthetic_measurements(truth, modes=5, labels="close")
     result = fit(start, data)
     parameters = list(result.parameters)
-    S = SpecimenModel(truth, ModelOptions(modes=5)).sensitivity_matrix(parameters)
+    S = truth.with_options(modes=5).sensitivity_matrix(parameters)
     cond = float(np.linalg.cond(S))
     errors = [abs(v / truth.value(p) - 1) for p, v in zip(parameters, result.values)]
     folder = report_folder("paper_multi_model", out)
@@ -48,7 +55,7 @@ def run(out=None) -> MultiModel:
             + " ".join(f"{display(p, it.values[j]):9.4g}" for it in result.history) for j, p in enumerate(parameters)]
     lines = ["Multi-model identification of the three layers (paper section 4.5)", "",
              f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 34.4)",
-             f"fit status: {result.status}; {result.iterations} iterations (paper: 4 steps)",
+             f"fit status: {result.message}; {result.iterations} iterations (paper: 4 steps)",
              f"largest error against Table 1: {100 * max(errors):.2e} %", "",
              "evolution of the properties (paper Table 6; GPa, nu dimensionless)", header, *rows, "",
              f"Fig. 10b: column 1 against the best combination of the others: relative misfit {residual:.3g} "

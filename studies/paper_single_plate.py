@@ -10,12 +10,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.model import ModelOptions, SpecimenModel
-from identify.report import plot_convergence, write_report
+from identify.fitting import fit
+from identify.plots import plot_convergence
+from identify.report import write_report
+from identify.result import FitResult
 from identify.synthetic import synthetic_measurements
-from identify.updating import FitOptions, FitResult, fit
+from identify.updating import FitOptions
 
-from .common import dependency_plot, parse_args, report_folder, start_specimen, true_specimen, write_text
+from .common import (
+    dependency_plot,
+    parse_args,
+    report_folder,
+    start_model,
+    true_model,
+    write_text,
+)
 
 ENTRIES = {"11": (0, 0), "22": (1, 1), "12": (0, 1), "66": (2, 2)}
 
@@ -30,17 +39,17 @@ class SinglePlate:
 
 
 def run(out=None, iterations: int = 15) -> SinglePlate:
-    truth = true_specimen()
-    one = truth.with_configurations(truth.configurations[:1])
-    start = start_specimen()
-    start = start.with_configurations(start.configurations[:1])
+    truth = true_model()
+    one = truth.with_configurations(truth.specimen.configurations[:1])
+    start = start_model()
+    start = start.with_configurations(start.specimen.configurations[:1])
     data = synthetic_measurements(one, modes=15, labels="close")
     result = fit(start, data, options=FitOptions(max_iterations=iterations))
     parameters = list(result.parameters)
-    S = SpecimenModel(one, ModelOptions(modes=15)).sensitivity_matrix(parameters)
+    S = one.with_options(modes=15).sensitivity_matrix(parameters)
     cond = float(np.linalg.cond(S))
     errors = [abs(v / truth.value(p) - 1) for p, v in zip(parameters, result.values)]
-    m_true = one.laminate("original").matrices()
+    m_true = one.specimen.laminate("original").matrices()
     m_fit = result.specimen.laminate("original").matrices()
     diff = {f"{x}{k}": 100 * (1 - m_fit[x][ij] / m_true[x][ij]) for x in "ABD" for k, ij in ENTRIES.items()}
     folder = report_folder("paper_single_plate", out)
@@ -49,7 +58,7 @@ def run(out=None, iterations: int = 15) -> SinglePlate:
     residual = dependency_plot(S, folder / "fig10a_dependency.png", "one plate, 15 modes (paper Fig. 10a)")
     lines = ["One plate, 15 frequencies, 12 unknown layer properties (paper section 2.2)", "",
              f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 6.76e9; singular > 1e7)",
-             f"fit status: {result.status}",
+             f"fit status: {result.message}",
              f"RMS frequency error after {result.iterations} iterations: {100 * result.rms_rel_error:.2e} %",
              f"largest layer-property error: {100 * max(errors):.1f} %", "",
              "stiffness differences (true - identified) / true [%] (paper Table 5: D within 0.4 %, "

@@ -41,6 +41,11 @@ def example_spec():
 
 
 @pytest.fixture(scope="session")
-def paper_specimen(example_spec):
+def paper_model(example_spec):
     """The paper's plate with its true (Table 1) properties and three configurations."""
-    return example_spec.specimen.with_values(table1_values())
+    return example_spec.with_values(table1_values())
+
+
+@pytest.fixture(scope="session")
+def paper_specimen(paper_model):
+    return paper_model.specimen

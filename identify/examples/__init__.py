@@ -1,6 +1,16 @@
-"""Bundled examples: the paper's coated plate spec and its measurements."""
+"""Bundled examples: the paper's coated plate spec and its measurements, and the one
+fallback both command-line tools use when no spec is given."""
+import sys
 from pathlib import Path
 
 FOLDER = Path(__file__).parent
 COATED_PLATE = FOLDER / "coated_plate.toml"
 COATED_PLATE_MEASURED = FOLDER / "coated_plate_measured.csv"
+
+
+def spec_or_example(path: str | None) -> Path:
+    """``path``, or the bundled example's spec (said on stderr) when none is given."""
+    if path is not None:
+        return Path(path)
+    print(f"(no SPEC given: using the bundled example {COATED_PLATE.name})", file=sys.stderr)
+    return COATED_PLATE

@@ -8,7 +8,7 @@ from dataclasses import replace
 import pytest
 
 from designer.problem import Problem
-from designer.space import from_data, load
+from fem.spec import load_spec, parse_spec
 from tests.conftest import DATA
 
 PAPER_TOML = DATA / "paper_plate_table1.toml"
@@ -26,18 +26,18 @@ def problem_of(data: dict, **design) -> Problem:
     """A problem from a TOML dict with ``[design]`` keys replaced."""
     data = copy.deepcopy(data)
     data["design"] = {**data.get("design", {}), **design}
-    return Problem.from_spec(*from_data(data))
+    return Problem.of(parse_spec(data))
 
 
 @pytest.fixture(scope="session")
 def paper():
-    """(spec, space) of the paper's plate as the tests' data file has it."""
-    return load(PAPER_TOML)
+    """The model of the paper's plate as the tests' data file has it ([design] included)."""
+    return load_spec(PAPER_TOML)
 
 
 @pytest.fixture(scope="session")
 def paper_problem(paper):
-    return Problem.from_spec(*paper)
+    return Problem.of(paper)
 
 
 @pytest.fixture(scope="session")

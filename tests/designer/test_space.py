@@ -6,9 +6,9 @@ import math
 import pytest
 
 from designer.problem import Problem
-from designer.space import from_data
-from designer.stock import STOCK
 from fem.errors import DesignError
+from fem.spec import parse_spec
+from fem.stock import STOCK
 from tests.conftest import DATA
 
 from .conftest import paper_data
@@ -33,13 +33,13 @@ def test_stock_against_handbook_wave_speeds(name):
 def test_spec_materials_before_stock_and_the_stock_suffix(paper):
     """'brass' is the spec's (100 GPa), 'steel_stock' the library's steel, since the
     spec's own 'steel' is identified; the default materials rename steel the same way."""
-    _, space = paper
+    space = paper.design
     by_name = {m.name: m for m in space.materials}
     assert by_name["brass"].E1 == pytest.approx(100e9)
     assert by_name["steel_stock"].E1 == pytest.approx(210e9)
     data = paper_data()
     del data["design"]["materials"]
-    _, space = from_data(data)
+    space = parse_spec(data).design
     assert [m.name for m in space.materials] == ["brass", "aluminium", "steel_stock"]
     assert space.materials[0].E1 == pytest.approx(100e9), "the spec's brass, not the stock one"
 
@@ -47,7 +47,7 @@ def test_spec_materials_before_stock_and_the_stock_suffix(paper):
 def test_defaults_without_a_design_table():
     data = paper_data()
     del data["design"]
-    _, space = from_data(data)
+    space = parse_spec(data).design
     assert space.size == 3, "one configuration per identified material (paper section 4.1)"
     assert space.adhesive.material.name == "epoxy" and space.adhesive.thickness == pytest.approx(50e-6)
     assert space.frequency_std_rel == 1e-3 and space.criterion == "condition"
@@ -81,7 +81,7 @@ CASES = [
 @pytest.mark.parametrize("data,expected", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
 def test_bad_design_one_line_error(data, expected):
     with pytest.raises(DesignError) as info:
-        from_data(data)
+        parse_spec(data)
     message = str(info.value)
     assert "\n" not in message
     for fragment in expected:
@@ -93,4 +93,4 @@ def test_no_identified_material():
     for table in data["materials"].values():
         table["identify"] = False
     with pytest.raises(DesignError, match="no material has identify = true.*set identify = true"):
-        Problem.from_spec(*from_data(data))
+        Problem.of(parse_spec(data))

@@ -5,9 +5,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from fem.effects import REGISTRY, Effect, SwitchedOn, apply_fixed, effect, register
+from fem.effects import REGISTRY, Effect, SwitchedOn, effect, register
 from fem.errors import SpecError
-from fem.model import ModelOptions, SpecimenModel
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.examples import COATED_PLATE
@@ -22,20 +21,20 @@ def with_effects(*tables):
 
 
 def test_spec_point_mass_is_applied(example_spec):
-    spec = parse_spec(with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0}))
-    specimen, options, _ = apply_fixed(spec.specimen, spec.model, spec.effects)
-    (mass,) = specimen.attachments
+    """A loaded model has its fixed effects on: nobody applies them by hand."""
+    model = parse_spec(with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0}))
+    (mass,) = model.specimen.attachments
     assert (mass.mass, mass.x, mass.y) == pytest.approx((3e-3, 0.125, 0.110))
-    loaded = SpecimenModel(specimen, options).solve("original").frequencies_hz
-    free = SpecimenModel(example_spec.specimen, options).solve("original").frequencies_hz
+    assert model.effects == ("point_mass",)
+    loaded = model.solve("original").frequencies_hz
+    free = example_spec.solve("original").frequencies_hz
     assert np.all(loaded < free)
 
 
 def test_spec_plate_theory_effects_switch_options(example_spec):
-    spec = parse_spec(with_effects({"kind": "transverse_shear"}, {"kind": "rotary_inertia"}))
-    _, options, notes = apply_fixed(spec.specimen, spec.model, spec.effects)
-    assert options.transverse_shear and options.rotary_inertia
-    assert any("G13 = G23 = G12 assumed" in n for n in notes)
+    model = parse_spec(with_effects({"kind": "transverse_shear"}, {"kind": "rotary_inertia"}))
+    assert model.options.transverse_shear and model.options.rotary_inertia
+    assert any("G13 = G23 = G12 assumed" in n for n in model.notes)
 
 
 @pytest.mark.parametrize("table,message", [
@@ -53,12 +52,11 @@ def test_bad_effect_tables_fail_at_load(table, message):
 
 
 def test_free_effects_bring_parameters(example_spec):
-    specimen, options = example_spec.specimen, ModelOptions()
-    on = effect("point_mass").free(specimen, options)[0]
+    on = effect("point_mass").free(example_spec)[0]
     assert on.free == tuple(Parameter(k, "point_mass") for k in ("mass", "x", "y"))
-    assert effect("orientation").free_all(specimen, options).free == tuple(
+    assert effect("orientation").free_all(example_spec).free == tuple(
         Parameter("angle", f"layer{i}") for i in (1, 2, 3))
-    assert {p.target for p in effect("adhesive").free(specimen, options)[0].free} == {
+    assert {p.target for p in effect("adhesive").free(example_spec)[0].free} == {
         "brass_bottom.bottom1", "brass_top.top1"}
 
 
@@ -70,24 +68,24 @@ def test_user_registered_effect(example_spec):
         description = "paint on the top face: extra mass per area"
         keys = ("grams_per_m2",)
 
-        def fixed(self, specimen, options, table):
+        def fixed(self, model, table):
             self._check(table)
-            return SwitchedOn(self.kind, self._painted(specimen, self._number(table, "grams_per_m2")), options)
+            return SwitchedOn(self.kind, self._painted(model, self._number(table, "grams_per_m2")))
 
-        def free(self, specimen, options, hint=None):
-            painted = self._painted(specimen, 20.0)
-            return [SwitchedOn(self.kind, painted, options, (Parameter("density", "top_coating"),), "top mass free")]
+        def free(self, model, hint=None):
+            top = model.specimen.layers[-1].material.name
+            return [SwitchedOn(self.kind, self._painted(model, 20.0), (Parameter("density", top),), "top mass free")]
 
         @staticmethod
-        def _painted(specimen, grams_per_m2):
-            top = specimen.layers[-1]
+        def _painted(model, grams_per_m2):
+            top = model.specimen.layers[-1]
             extra = grams_per_m2 * 1e-3 / top.thickness
-            return specimen.with_values({Parameter("density", top.material.name): top.material.density + extra})
+            return model.with_values({Parameter("density", top.material.name): top.material.density + extra})
 
     try:
         register(Paint())
-        spec = parse_spec(with_effects({"kind": "paint_test", "grams_per_m2": 50.0}))
-        specimen, _, _ = apply_fixed(spec.specimen, spec.model, spec.effects)
-        assert specimen.materials["top_coating"].density == pytest.approx(2700 + 0.05 / 2e-4)
+        model = parse_spec(with_effects({"kind": "paint_test", "grams_per_m2": 50.0}))
+        assert model.specimen.materials["top_coating"].density == pytest.approx(2700 + 0.05 / 2e-4)
+        assert effect("paint_test").free(model)[0].free == (Parameter("density", "top_coating"),)
     finally:
         REGISTRY.pop("paint_test", None)

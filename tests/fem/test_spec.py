@@ -21,7 +21,7 @@ def test_example_loads_in_si(example_spec):
     assert [l.material.name for l in bottom[:2]] == ["brass", "adhesive"], "bottom additions listed outward"
     assert {m.name for m in s.identified_materials} == {"steel", "top_coating", "bottom_coating"}
     assert s.materials["steel"].E1 == pytest.approx(151e9)
-    assert example_spec.model.modes == 5
+    assert example_spec.options.modes == 5
 
 
 def edited(edit):

@@ -7,12 +7,12 @@ from fem.attachments import PointMass
 from identify.cli import main
 from identify.examples import COATED_PLATE
 from identify.synthetic import synthetic_measurements
-from studies.common import true_specimen
+from studies.common import true_model
 
 
 @pytest.fixture(scope="module")
 def sensor_csv(tmp_path_factory):
-    truth = true_specimen().with_attachments([PointMass(3e-3, 0.125, 0.110)])
+    truth = true_model().with_attachments([PointMass(3e-3, 0.125, 0.110)]).with_options(modes=8)
     data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=8, labels="close")
     path = tmp_path_factory.mktemp("data") / "sensor.csv"
     data.table.to_csv(path, index=False)

@@ -10,7 +10,7 @@ GOOD = pd.read_csv(COATED_PLATE_MEASURED, comment="#")
 
 
 def test_bundled_measurements_load(example_spec):
-    m = load_measurements(COATED_PLATE_MEASURED, example_spec.specimen)
+    m = load_measurements(COATED_PLATE_MEASURED, example_spec)
     assert len(m) == 15 and m.has_std
     assert m.configurations == ["original", "brass_bottom", "brass_top"]
     assert m.of("brass_top")["label"].tolist()[3:] == ["(2,1)", "(1,2)"]
@@ -18,7 +18,7 @@ def test_bundled_measurements_load(example_spec):
 
 def test_mode_numbers_default_to_rank(example_spec):
     frame = GOOD.drop(columns=["mode", "std_hz", "label"]).sample(frac=1, random_state=1)
-    m = parse_measurements(frame, example_spec.specimen)
+    m = parse_measurements(frame, example_spec)
     assert m.of("original")["mode"].tolist() == [1, 2, 3, 4, 5]
     assert not m.has_std
 
@@ -62,7 +62,7 @@ CASES = [
 @pytest.mark.parametrize("edit,expected", [(e, x) for _, e, x in CASES], ids=[c[0] for c in CASES])
 def test_bad_measurements(example_spec, edit, expected):
     with pytest.raises(MeasurementError) as info:
-        parse_measurements(edited(edit), example_spec.specimen)
+        parse_measurements(edited(edit), example_spec)
     message = str(info.value)
     assert "\n" not in message
     for fragment in expected:
@@ -71,4 +71,4 @@ def test_bad_measurements(example_spec, edit, expected):
 
 def test_missing_file(example_spec, tmp_path):
     with pytest.raises(MeasurementError, match="does not exist"):
-        load_measurements(tmp_path / "none.csv", example_spec.specimen)
+        load_measurements(tmp_path / "none.csv", example_spec)

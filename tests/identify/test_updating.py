@@ -5,44 +5,45 @@ import pytest
 from fem.errors import MeasurementError
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Parameter
+from identify.fitting import fit
 from identify.pairing import ModePairing, mac_matrix
 from identify.synthetic import synthetic_measurements
-from identify.updating import FitOptions, fit
+from identify.updating import FitOptions
 
 
 @pytest.fixture(scope="module")
 def start(example_spec):
     """Table 6 start values for all three layers."""
-    return example_spec.specimen
+    return example_spec
 
 
 def max_relative_error(result, truth):
     return max(abs(v / truth.value(p) - 1) for p, v in zip(result.parameters, result.values))
 
 
-def test_noise_free_table6_start_converges_in_six(start, paper_specimen):
+def test_noise_free_table6_start_converges_in_six(start, paper_model, paper_specimen):
     """Noise-free data from the same model, close modes labelled as a lab would: every
     parameter within 0.01 % in at most 6 iterations (paper: 4)."""
-    data = synthetic_measurements(paper_specimen, labels="close")
+    data = synthetic_measurements(paper_model, labels="close")
     result = fit(start, data)
-    assert result.converged, result.status
+    assert result.converged, result.message
     assert result.iterations <= 6
     assert max_relative_error(result, paper_specimen) < 1e-4
     assert result.uncertainty.verdict == "good"
     assert 20 < result.uncertainty.condition_number < 60  # paper: 34.4
 
 
-def test_start_with_swapped_close_modes_still_finds_truth(start, paper_specimen):
+def test_start_with_swapped_close_modes_still_finds_truth(start, paper_model, paper_specimen):
     """At Table 6's start the brass_top pair 4/5 is in the opposite order to the truth's.
     With labels the pairing follows the shapes; without, the fit refits the other
     assignments of the close pairs, keeps the lowest misfit and states the square plate's
     E1 <-> E2 mirror ambiguity."""
     options = ModelOptions(modes=5)
-    at_start = SpecimenModel(start, options).solve("brass_top").modes.labels[3:5]
+    at_start = SpecimenModel(start.specimen, options).solve("brass_top").modes.labels[3:5]
     at_truth = SpecimenModel(paper_specimen, options).solve("brass_top").modes.labels[3:5]
     assert at_start == at_truth[::-1], "precondition: the pair swaps order between start and truth"
 
-    unlabelled = fit(start, synthetic_measurements(paper_specimen, labels="none"))
+    unlabelled = fit(start, synthetic_measurements(paper_model, labels="none"))
     assert unlabelled.converged
     assert max_relative_error(unlabelled, paper_specimen) < 1e-4
     assert any("re-paired" in w for w in unlabelled.warnings)
@@ -65,46 +66,47 @@ def test_mac_tracking_follows_swapped_modes(paper_specimen):
 
 
 @pytest.mark.parametrize("seed", [11, 12, 13])
-def test_noisy_data_within_three_std(start, paper_specimen, seed):
+def test_noisy_data_within_three_std(start, paper_model, paper_specimen, seed):
     """0.05 % Gaussian scatter (the stated std): every parameter within 3 reported std."""
-    data = synthetic_measurements(paper_specimen, noise_rel=5e-4, seed=seed, labels="close")
+    data = synthetic_measurements(paper_model, noise_rel=5e-4, seed=seed, labels="close")
     result = fit(start, data)
     assert result.converged
     z = [(v - paper_specimen.value(p)) / s for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)]
     assert np.max(np.abs(z)) < 3, z
-    assert 0.05 < result.uncertainty.reduced_chi2 < 5
+    assert 0.05 < result.statistics.reduced_chi2 < 5
 
 
-def test_single_plate_is_flagged_not_identifiable(start, paper_specimen):
+def test_single_plate_is_flagged_not_identifiable(start, paper_model):
     """One plate, 15 modes, 12 unknowns: the frequencies fit but the result must say the
     parameters are not determined (paper section 2.2), with no error bars."""
-    one = paper_specimen.with_configurations(paper_specimen.configurations[:1])
+    one = paper_model.with_configurations(paper_model.specimen.configurations[:1])
     data = synthetic_measurements(one, modes=15, labels="close")
-    result = fit(start.with_configurations(start.configurations[:1]), data, options=FitOptions(max_iterations=12))
+    result = fit(start.with_configurations(start.specimen.configurations[:1]), data,
+                 options=FitOptions(max_iterations=12))
     assert not result.converged
-    assert "not identifiable" in result.status
+    assert "not identifiable" in result.message
     assert result.uncertainty.condition_number > 1e7
     assert np.all(np.isinf(result.uncertainty.std))
 
 
-def test_too_few_frequencies(start, paper_specimen):
-    data = synthetic_measurements(paper_specimen, modes=3)
+def test_too_few_frequencies(start, paper_model):
+    data = synthetic_measurements(paper_model, modes=3)
     with pytest.raises(MeasurementError, match="9 measured frequencies for 12 unknown"):
         fit(start, data)
 
 
-def test_non_convergence_is_reported_with_history(start, paper_specimen):
-    data = synthetic_measurements(paper_specimen, labels="close")
+def test_non_convergence_is_reported_with_history(start, paper_model):
+    data = synthetic_measurements(paper_model, labels="close")
     result = fit(start, data, options=FitOptions(max_iterations=2))
-    assert not result.converged and "not converged in 2 iterations" in result.status
+    assert not result.converged and "not converged in 2 iterations" in result.message
     assert len(result.history) == 3 and result.history[-1].rms_rel_error < result.history[0].rms_rel_error
 
 
-def test_bounds_keep_poisson_ratio_admissible(start, paper_specimen):
+def test_bounds_keep_poisson_ratio_admissible(start, paper_model, paper_specimen):
     """A start at nu12 = 0.7 (E1/E2 ~ 1: just inside the bound) is pulled back inside the
     positive-definite range at every step and still reaches the truth."""
     values = {Parameter("nu12", m): 0.7 for m in ("steel", "top_coating", "bottom_coating")}
-    result = fit(start.with_values(values), synthetic_measurements(paper_specimen, labels="close"))
+    result = fit(start.with_values(values), synthetic_measurements(paper_model, labels="close"))
     for it in result.history:
         for p, v in zip(result.parameters, it.values):
             if p.kind == "nu12":
@@ -114,7 +116,7 @@ def test_bounds_keep_poisson_ratio_admissible(start, paper_specimen):
     assert result.converged and max_relative_error(result, paper_specimen) < 1e-4
 
 
-def test_unknown_densities_with_measured_plate_mass(paper_specimen):
+def test_unknown_densities_with_measured_plate_mass(paper_model, paper_specimen):
     """Densities unknown (all guessed 5000 kg/m^3) but the plate weighed: the mass per area
     is exact, so the noise-free identification still lands on Table 1 (0.01 %)."""
     import copy
@@ -129,26 +131,27 @@ def test_unknown_densities_with_measured_plate_mass(paper_specimen):
     for name in ("steel", "top_coating", "bottom_coating"):
         guessed["materials"][name]["density_kg_m3"] = 5000.0
     guessed["specimen"]["mass_g"] = true_mass_g
-    specimen = parse_spec(guessed).specimen
-    assert specimen.laminate("original").inertia[0] == pytest.approx(paper_specimen.laminate("original").inertia[0])
-    result = fit(specimen, synthetic_measurements(paper_specimen, labels="close"))
+    model = parse_spec(guessed)
+    assert model.specimen.laminate("original").inertia[0] == pytest.approx(
+        paper_specimen.laminate("original").inertia[0])
+    result = fit(model, synthetic_measurements(paper_model, labels="close"))
     assert result.converged and max_relative_error(result, paper_specimen) < 1e-4
     guessed["specimen"]["mass_g"] = true_mass_g * 1000  # given in milligrams
     with pytest.raises(Exception, match="the mass is in grams"):
         parse_spec(guessed)
 
 
-def test_absurd_start_is_reported_not_silently_fitted(start, paper_specimen):
+def test_absurd_start_is_reported_not_silently_fitted(start, paper_model, paper_specimen):
     """Every moduli 20x too high and nu12 near its bound: the fit either reaches the truth or
     says it did not converge, with its history; it never reports a wrong converged answer."""
     values = {}
     for m in ("steel", "top_coating", "bottom_coating"):
         values.update({Parameter("E1", m): 1500e9, Parameter("E2", m): 1500e9, Parameter("G12", m): 900e9,
                        Parameter("nu12", m): 0.9})
-    result = fit(start.with_values(values), synthetic_measurements(paper_specimen, labels="close"),
+    result = fit(start.with_values(values), synthetic_measurements(paper_model, labels="close"),
                  options=FitOptions(max_iterations=8))
     assert len(result.history) >= 2
     if result.converged:
         assert max_relative_error(result, paper_specimen) < 1e-3
     else:
-        assert "not converged" in result.status or "stopped" in result.status
+        assert "not converged" in result.message or "stopped" in result.message

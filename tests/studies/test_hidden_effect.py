@@ -12,7 +12,7 @@ def test_true_effect_ranked_first_and_error_falls(case):
     """Acceptance (issue 5): the right effect ranks first; the RMS error falls at least 5x
     and to within 2x the noise; the layer properties come back within 3 std."""
     o = hidden_effect.run_case(case, CANDIDATES)
-    assert o.diagnosis.baseline.uncertainty.reduced_chi2 > 25, "the baseline misfit is well above the noise"
+    assert o.diagnosis.baseline.statistics.reduced_chi2 > 25, "the baseline misfit is well above the noise"
     assert o.ranked_first == o.true_effect
     assert o.rms_before / o.rms_after >= 5
     assert o.rms_after <= 2 * hidden_effect.NOISE

@@ -2,7 +2,7 @@
 
 Every key is optional::
 
-    materials = ["brass", "aluminium"]   # spec materials or built-in stock (designer.stock)
+    materials = ["brass", "aluminium"]   # spec materials or built-in stock (fem.stock)
     thicknesses_mm = [0.5, 1.0, 2.0]     # the stock thicknesses the lab can get
     placements = ["top", "bottom"]
     adhesive = { material = "adhesive", thickness_mm = 0.05 }
@@ -19,18 +19,21 @@ always means the stock one (e.g. ``steel_stock`` next to an identified ``steel``
 """
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
-from fem.errors import DesignError
-from fem.laminate import Layer
-from fem.material import Material
-from fem.spec import Spec, load_spec, parse_spec
-
+from .errors import DesignError
+from .laminate import Layer
 from .limits import Limits
-from .stock import DEFAULT_ADHESIVE, STOCK, STOCK_SUFFIX, STOCK_THICKNESSES_MM, stock_name
+from .material import Material
+from .stock import (
+    DEFAULT_ADHESIVE,
+    STOCK,
+    STOCK_SUFFIX,
+    STOCK_THICKNESSES_MM,
+    stock_name,
+)
+from .validation import check_keys, did_you_mean, number
 
 MM = 1e-3
 PLACEMENTS = ("top", "bottom")
@@ -72,41 +75,10 @@ class DesignSpace:
         """A known material by name: one the spec defines, else built-in stock."""
         return resolve_material(name, {m.name: m for m in self.defined}, where)
 
-    @classmethod
-    def from_spec(cls, spec: Spec, materials: dict[str, Material] | None = None) -> "DesignSpace":
-        """Validate ``spec.design``; ``materials``: every material the spec defines (the
-        specimen only keeps those its layers use; ``load`` reads them all)."""
-        return parse_design(spec.design, materials if materials is not None else spec.specimen.materials,
-                            len(spec.specimen.identified_materials))
-
-
-def load(path: str | Path) -> tuple[Spec, DesignSpace]:
-    """Read a spec and its design space (with every material the file defines)."""
-    spec = load_spec(path)
-    return spec, design_space(spec)
-
-
-def from_data(data: dict, source: str = "<spec>") -> tuple[Spec, DesignSpace]:
-    """A spec and its design space from a parsed TOML document."""
-    spec = parse_spec(data, source)
-    return spec, design_space(spec)
-
-
-def design_space(spec: Spec) -> DesignSpace:
-    """The spec's design space, knowing every material the spec defines."""
-    return DesignSpace.from_spec(spec, dict(spec.materials))
-
 
 def _number(design: dict, key: str, default, low: float, high: float, what: str, *, zero: bool = False):
-    if key not in design:
-        return default
-    value = design[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise DesignError(f"[design].{key} = {value!r}: need a finite number ({what})")
-    if not (low <= value if zero else low < value) or value > high:
-        relation = "<=" if zero else "<"
-        raise DesignError(f"[design].{key} = {value:g}: need {low:g} {relation} {key} <= {high:g} ({what})")
-    return float(value)
+    return number(design, key, "[design]", required=False, default=default, low=low, high=high, low_inclusive=zero,
+                  hint=what, error=DesignError)
 
 
 def _list(design: dict, key: str, default, example: str) -> list:
@@ -133,8 +105,7 @@ def resolve_material(name, defined: dict[str, Material], where: str) -> Material
     stock = stock_name(name)
     if stock is None:
         known = sorted(defined) + sorted(STOCK)
-        close = difflib.get_close_matches(name, known, n=1)
-        hint = f"did you mean '{close[0]}'? " if close else ""
+        hint = (did_you_mean(name, known) + " ").lstrip()
         raise DesignError(f"{where} = '{name}' is neither a spec material nor built-in stock; {hint}"
                           f"spec: {', '.join(sorted(defined)) or 'none'}; stock: {', '.join(STOCK)}")
     return STOCK[stock].material(name)
@@ -143,11 +114,9 @@ def resolve_material(name, defined: dict[str, Material], where: str) -> Material
 def parse_design(design: dict, defined: dict[str, Material], n_identified: int) -> DesignSpace:
     """A validated ``DesignSpace`` from a ``[design]`` table; errors in one line naming
     the key, the value, what is allowed and a fix."""
-    for key in design:
-        if key not in KEYS:
-            close = difflib.get_close_matches(key, KEYS, n=1)
-            hint = f"did you mean '{close[0]}'?" if close else f"allowed: {', '.join(KEYS)}"
-            raise DesignError(f"[design]: unknown key '{key}'; {hint}")
+    if not isinstance(design, dict):
+        raise DesignError("[design]: must be a table")
+    check_keys(design, KEYS, "[design]", DesignError)
     if "materials" in design:
         names = _list(design, "materials", None, '["brass", "aluminium"]')
         materials = [resolve_material(n, defined, f"[design].materials[{i}]") for i, n in enumerate(names)]

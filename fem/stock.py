@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fem.material import Material
+from .material import Material
 
 GPA = 1e9
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.specimen import Configuration
+from .specimen import Configuration
 
 #: Modes closer than this (relative) are flagged: with the loss factors of bonded
 #: plates (0.2-1 %, the adhesive adds damping) their resonance peaks overlap.

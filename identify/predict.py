@@ -1,0 +1,56 @@
+"""``predict``: the elastic frequencies of every configuration of a model."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fem.io import html_pre
+from fem.model import MAX_MODES, SpecimenModel
+from fem.validation import whole
+
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Per configuration the first elastic frequencies [Hz] and the modes' nodal-line
+    labels, computed with ``model`` (its options: mesh, plate theory, effects)."""
+
+    model: SpecimenModel
+    frequencies_hz: dict[str, np.ndarray]
+    labels: dict[str, tuple[str, ...]]
+
+    def to_dict(self) -> dict:
+        """The ``predict --json`` document."""
+        return {"configurations": [{"name": name, "frequencies_hz": f.round(4), "labels": list(self.labels[name])}
+                                   for name, f in self.frequencies_hz.items()]}
+
+    def report(self) -> str:
+        model, mesh = self.model, self.model.mesh
+        theory = ("first-order shear deformation" if model.options.transverse_shear else "Kirchhoff") + " plate" + (
+            " with rotary inertia" if model.options.rotary_inertia else "")
+        lines = [f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} elements)"]
+        if model.effects:
+            lines.append(f"with the spec's effects: {', '.join(model.effects)}")
+        lines += [f"note: {n}" for n in model.notes]
+        lines.append("mode  " + "".join(f"{name:>24s}" for name in self.frequencies_hz))
+        for i in range(model.options.modes):
+            cells = "".join(f"{f[i]:>14.3f} Hz {self.labels[n][i]:>6s}" for n, f in self.frequencies_hz.items())
+            lines.append(f"{i + 1:>4d}  {cells}")
+        return "\n".join(lines)
+
+    def _repr_html_(self) -> str:
+        return html_pre(self.report())
+
+
+def predict(model: SpecimenModel, modes: int | None = None) -> Prediction:
+    """The first ``modes`` (default: the model's) elastic frequencies of every
+    configuration, with the spec's fixed effects."""
+    if modes is not None:
+        model = model.with_options(modes=whole(modes, "--modes", 1, MAX_MODES, ""))
+    solutions = {c.name: model.solve(c.name) for c in model.specimen.configurations}
+    return Prediction(model, {n: s.frequencies_hz for n, s in solutions.items()},
+                      {n: s.modes.labels for n, s in solutions.items()})
+
+
+__all__ = ["Prediction", "predict"]
