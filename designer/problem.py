@@ -54,7 +54,7 @@ def solve_chunk(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_mo
             specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
             rotary_inertia=options.rotary_inertia, attachments=specimen.attachments)
         f = solution.frequencies_hz
-        out.append((f, solution.modes.labels, normalised(f, solution.derivatives(list(parameters)), values)))
+        out.append((f, solution.labels, normalised(f, solution.derivatives(list(parameters)), values)))
     return out
 
 

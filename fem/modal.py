@@ -23,12 +23,11 @@ class Modes:
     """Elastic modes of a free plate, lowest first.
 
     eigenvalues: omega^2 [rad^2/s^2]; shapes: (n_dofs, m), mass-normalised
-    (phi^T M phi = 1); labels: nodal-line counts "(nx,ny)" or "in-plane".
+    (phi^T M phi = 1).  Their nodal-pattern labels are in ``fem.mode_shapes``.
     """
 
     eigenvalues: np.ndarray
     shapes: np.ndarray
-    labels: tuple[str, ...]
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -137,27 +136,5 @@ def solve_modes(
             f"an elastic mode has near-zero frequency (omega^2 = {lam[0]:.3g}): the model has a mechanism; "
             "check for a zero modulus or a disconnected layer"
         )
-    return Modes(lam, phi, tuple(mode_label(units, s) for s in phi.T))
+    return Modes(lam, phi)
 
-
-def mode_label(units: UnitMatrices, shape: np.ndarray) -> str:
-    """A readable label: the numbers of nodal lines crossed along x and along y,
-    e.g. "(2,0)" for the first bending mode along x, or "in-plane"."""
-    nodal = shape.reshape(units.mesh.n_nodes, -1)
-    names = units.element_type.NODE_DOFS
-    w = nodal[:, names.index("w")]
-    uv = nodal[:, [names.index("u"), names.index("v")]]
-    scale = np.ptp(units.mesh.node_xy)  # make translations comparable
-    if np.sum(uv**2) > np.sum(w**2) and np.abs(uv).max() * scale > 0:
-        return "in-plane"
-    grid = w.reshape(units.mesh.ny + 1, units.mesh.nx + 1)
-    significant = np.where(np.abs(grid) > 0.05 * np.abs(grid).max(), np.sign(grid), 0)
-
-    def crossings(rows: np.ndarray) -> int:
-        counts = []
-        for row in rows:
-            signs = row[row != 0]
-            counts.append(int(np.sum(signs[1:] != signs[:-1])))
-        return int(np.median(counts))
-
-    return f"({crossings(significant)},{crossings(significant.T)})"

@@ -17,6 +17,7 @@ from .laminate import Laminate
 from .material import Material
 from .mesh import PlateMesh
 from .modal import Modes, _first_bending_estimate, solve_modes
+from .mode_shapes import beam_coefficients, in_plane, label_of
 from .sensitivity import (
     ModalEnergies,
     eigenvalue_derivatives,
@@ -87,6 +88,18 @@ class LaminateSolution:
     @cached_property
     def energies(self) -> ModalEnergies:
         return ModalEnergies.of(self.units, self.modes)
+
+    @cached_property
+    def shape_coefficients(self) -> np.ndarray:
+        """Each mode's deflection on products of free-free beam functions (modes, i, j)."""
+        return beam_coefficients(self.units, self.modes.shapes)
+
+    @cached_property
+    def labels(self) -> tuple[str, ...]:
+        """Nodal-pattern labels, e.g. '(1,2)' or '(0,2)+(2,0)' (``fem.mode_shapes``);
+        computed when first asked for, not on every solve."""
+        return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
+                     for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:
         """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""

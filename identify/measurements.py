@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from fem.errors import MeasurementError
+from fem.mode_shapes import pattern
 from fem.model import SpecimenModel
 from fem.validation import suggestion
 
@@ -102,6 +103,10 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
     else:
         frame["mode"] = frame.groupby("configuration")["frequency_hz"].rank(method="first").astype(int)
     frame["label"] = frame["label"].fillna("").astype(str).str.strip() if "label" in frame.columns else ""
+    for i, label in enumerate(frame["label"]):
+        if label and pattern(label) is None:
+            raise _fail(source, f"line {line[i]}: label = {label!r} is not a nodal pattern; write it as predict "
+                        "prints it, e.g. \"(1,2)\" or \"(0,2)+(2,0)\" (quoted in the CSV), or leave it empty")
 
     duplicated = frame.duplicated(["configuration", "mode"], keep=False)
     if duplicated.any():

@@ -75,7 +75,7 @@ class Objective:
             rows = self.rows[name]
             group = self.measurements.table.iloc[rows]
             if pairings is None:
-                pairing = ModePairing.initial(name, solution.modes, group["mode"].to_numpy(), group["label"].tolist())
+                pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist())
             else:
                 if weight is None:
                     units = solution.units

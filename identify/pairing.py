@@ -16,9 +16,15 @@ from scipy.optimize import linear_sum_assignment
 
 from fem.errors import MeasurementError
 from fem.modal import Modes
+from fem.mode_shapes import affinity, pattern
 
 #: Below this MAC a tracked mode is reported as lost (its shape changed too much).
 MAC_LOST = 0.8
+#: A labelled measured mode is paired with a model mode showing its nodal pattern with at
+#: least this affinity (squared cosine on the beam-function basis).
+LABEL_AFFINITY = 0.5
+#: Weight of the rank distance that breaks ties between equally affine model modes.
+LABEL_TIE = 1e-3
 
 
 def mac_matrix(a: np.ndarray, b: np.ndarray, weight: sp.spmatrix) -> np.ndarray:
@@ -40,32 +46,36 @@ class ModePairing:
     note: str = ""
 
     @classmethod
-    def initial(cls, configuration: str, modes: Modes, measured_modes, labels) -> "ModePairing":
-        """By rank (``mode`` numbers), or by nodal-line label where one is given."""
+    def initial(cls, configuration: str, solution, measured_modes, labels) -> "ModePairing":
+        """By rank (``mode`` numbers: measured mode k with model mode k, so ranks with a
+        gap skip the unmeasured mode), or by nodal pattern where a label is given: the
+        labelled modes go to the model modes that show their pattern best (an optimal
+        assignment on the beam-function affinity, ties to the nearer rank)."""
+        modes = solution.modes
         n_model = len(modes.eigenvalues)
         ranks = np.asarray(measured_modes, dtype=int) - 1
         if np.any(ranks >= n_model):
             raise MeasurementError(f"configuration {configuration!r}: mode {ranks.max() + 1} is beyond the "
                                    f"{n_model} model modes computed")
         indices = np.full(len(ranks), -1)
-        used: set[int] = set()
+        labelled = [k for k, label in enumerate(labels) if label]
         unmatched = []
-        for k, label in enumerate(labels):
-            if not label:
-                continue
-            # the unused model mode with this label, closest in rank to the measured one
-            candidates = [i for i, l in enumerate(modes.labels) if l == label and i not in used]
-            if not candidates:
-                unmatched.append(f"mode {measured_modes[k]} {label}")
-                continue  # paired by rank below: a label is a hint, the start model may differ
-            indices[k] = min(candidates, key=lambda i: abs(i - ranks[k]))
-            used.add(int(indices[k]))
-        # Unlabelled modes take the remaining model modes in rank order.
-        free = iter(i for i in range(n_model) if i not in used)
+        if labelled:
+            affinities = np.array([affinity(solution.shape_coefficients, pattern(labels[k])) for k in labelled])
+            nearness = np.abs(np.arange(n_model)[None, :] - ranks[labelled][:, None]) / n_model
+            rows, cols = linear_sum_assignment(-(affinities - LABEL_TIE * nearness))
+            for r, c in zip(rows, cols):
+                if affinities[r, c] >= LABEL_AFFINITY:
+                    indices[labelled[r]] = c
+                else:
+                    unmatched.append(f"mode {measured_modes[labelled[r]]} {labels[labelled[r]]}")
+        used = set(indices[indices >= 0].tolist())
         for k in np.argsort(ranks, kind="stable"):
-            if indices[k] < 0:
-                indices[k] = next(free)
-        note = (f"{configuration}: no start-model mode has the label of {', '.join(unmatched)}; paired by rank"
+            if indices[k] < 0:  # its own rank, or the nearest free one when a label took it
+                free = [i for i in range(n_model) if i not in used]
+                indices[k] = min(free, key=lambda i: (abs(i - ranks[k]), i))
+                used.add(int(indices[k]))
+        note = (f"{configuration}: no start-model mode shows the pattern of {', '.join(unmatched)}; paired by rank"
                 if unmatched else "")
         return cls(configuration, indices, modes.shapes[:, indices], note=note)
 

@@ -50,7 +50,7 @@ def predict(model: SpecimenModel, modes: int | None = None) -> Prediction:
         model = model.with_options(modes=whole(modes, "--modes", 1, MAX_MODES, ""))
     solutions = {c.name: model.solve(c.name) for c in model.specimen.configurations}
     return Prediction(model, {n: s.frequencies_hz for n, s in solutions.items()},
-                      {n: s.modes.labels for n, s in solutions.items()})
+                      {n: s.labels for n, s in solutions.items()})
 
 
 __all__ = ["Prediction", "predict"]

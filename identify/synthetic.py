@@ -43,7 +43,7 @@ def synthetic_measurements(
             if noise_rel > 0:
                 row["std_hz"] = noise_rel * f[i]
             if labels == "all" or (labels == "close" and close[i]):
-                row["label"] = solution.modes.labels[i]
+                row["label"] = solution.labels[i]
             rows.append(row)
     frame = pd.DataFrame(rows)
     if labels != "none" and "label" not in frame:
