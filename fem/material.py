@@ -22,6 +22,10 @@ class Material:
     nu12 [-]: major Poisson ratio.  density [kg/m^3].
     G13, G23 [Pa]: transverse shear moduli (None = not given; used only by the
     transverse-shear effect, which then states its default).
+    identify: the properties an identification finds (empty = a known material); True
+    means the in-plane elastic constants ``ELASTIC_CONSTANTS``.  A soft core's in-plane
+    constants hardly enter bending: identify its shear moduli instead, e.g.
+    ("G13", "G23").
     """
 
     name: str
@@ -32,9 +36,15 @@ class Material:
     density: float
     G13: float | None = None
     G23: float | None = None
-    identify: bool = False
+    identify: tuple[str, ...] = ()
 
     def __post_init__(self):
+        kinds = ELASTIC_CONSTANTS if self.identify is True else () if self.identify is False else tuple(self.identify)
+        unknown = [k for k in kinds if k not in MATERIAL_PARAMETERS]
+        if unknown:
+            raise SpecError(f"material '{self.name}': identify = {list(kinds)!r}: {unknown[0]!r} is not a material "
+                            f"property; use true, false or a list of {', '.join(MATERIAL_PARAMETERS)}")
+        object.__setattr__(self, "identify", kinds)
         for field in ("E1", "E2", "G12", "density"):
             value = getattr(self, field)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):

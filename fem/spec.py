@@ -58,8 +58,10 @@ def _material(name: str, table: dict) -> Material:
         )
     nu12 = number(table, "nu12", where)
     identify = table.get("identify", False)
-    if not isinstance(identify, bool):
-        raise SpecError(f"{where}.identify = {identify!r}: need true or false")
+    if not isinstance(identify, bool) and not (isinstance(identify, list) and identify
+                                               and all(isinstance(k, str) for k in identify)):
+        raise SpecError(f"{where}.identify = {identify!r}: need true, false or a list of properties, "
+                        'e.g. ["G13", "G23"]')
     try:
         return Material(name, values["E1"], values["E2"], values["G12"], nu12, density,
                         values["G13"], values["G23"], identify)

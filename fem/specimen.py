@@ -152,6 +152,7 @@ class Specimen:
         """A copy with these attachments (validated)."""
         return replace(self, attachments=tuple(attachments))
 
-    def material_parameters(self, kinds=("E1", "E2", "G12", "nu12")) -> list[Parameter]:
-        """The parameters of every identified material, material by material."""
-        return [Parameter(kind, m.name) for m in self.identified_materials for kind in kinds]
+    def material_parameters(self) -> list[Parameter]:
+        """The parameters every identified material's ``identify`` names (by default E1,
+        E2, G12, nu12), material by material."""
+        return [Parameter(kind, m.name) for m in self.identified_materials for kind in m.identify]

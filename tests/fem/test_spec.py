@@ -55,6 +55,10 @@ CASES = [
     ("length in metres", lambda d: d["specimen"].update(length_mm=0.15), ["length_mm = 0.15", "in mm"]),
     ("modes not a count", lambda d: d["model"].update(modes=0), ["[model].modes = 0", "1 to"]),
     ("NaN thickness", set_layer(1, thickness_mm=float("nan")), ["thickness_mm", "finite"]),
+    ("identify an unknown property", lambda d: d["materials"]["steel"].update(identify=["G13", "G99"]),
+     ["[materials.steel]", "'G99' is not a material property", "G23"]),
+    ("identify not a list of names", lambda d: d["materials"]["steel"].update(identify="yes"),
+     ["[materials.steel].identify = 'yes'", "true, false or a list"]),
 ]
 
 
@@ -75,3 +79,11 @@ def test_unreadable_and_invalid_toml(tmp_path):
     bad.write_text("[specimen\nname = 1")
     with pytest.raises(SpecError, match="not valid TOML"):
         load_spec(bad)
+
+
+def test_identify_names_the_properties_to_find():
+    """identify = true means E1, E2, G12, nu12; a list names others (a core's shear moduli)."""
+    data = edited(lambda d: d["materials"]["steel"].update(identify=["G13", "G23", "density"]))
+    names = [p.name for p in parse_spec(data).specimen.material_parameters()]
+    assert names[4:7] == ["steel.G13", "steel.G23", "steel.density"]
+    assert names[:4] == ["bottom_coating.E1", "bottom_coating.E2", "bottom_coating.G12", "bottom_coating.nu12"]
