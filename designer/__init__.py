@@ -5,19 +5,25 @@ The public API takes the model a spec file loads into (``fem.load_spec``)::
 
     import designer, fem
     model = fem.load_spec("plate.toml")
-    designer.check(model)        # is the spec's own set identifiable?
-    designer.recommend(model)    # the best sets of added plates from its [design] space
+    designer.check(model)        # is the spec's own set identifiable? (.test_sheet: how to test it)
+    result = designer.recommend(model)    # the best sets of added plates from its [design] space
+    designer.write_spec(designer.Problem.of(model), result.best, "plan.toml")
     designer.sweep(model, ["thickness=0.5:3:6", "material"])
 
 ``fem.design_space`` reads the [design] table, ``candidates`` builds the configurations,
-``problem`` solves them once each, ``scoring``/``design`` score a set, ``search``
-recommends sets (exhaustive or ``relaxation``), ``refine`` tunes thicknesses,
-``check`` and ``sweep`` judge and explore the spec's own design; ``cli`` is plan-tests.
+``problem`` solves them once each (at the prior's points too: ``robust``),
+``scoring``/``design`` score a set, ``search`` recommends sets (exhaustive or
+``relaxation``; ``mirror`` collapses mirror designs), ``refine`` tunes thicknesses to
+stock, ``check`` and ``sweep`` judge and explore the spec's own design, ``sheet`` says
+how to carry out the test, ``spec_file`` writes a design as a spec; ``cli`` is plan-tests.
 """
 from .check import CheckResult, check
 from .problem import Problem
 from .refine import refine
 from .search import Recommendation, recommend
+from .sheet import TestSheet
+from .spec_file import write_spec
 from .sweep import SweepResult, sweep
 
-__all__ = ["check", "recommend", "sweep", "refine", "Problem", "CheckResult", "Recommendation", "SweepResult"]
+__all__ = ["check", "recommend", "sweep", "refine", "write_spec", "Problem", "CheckResult", "Recommendation",
+           "SweepResult", "TestSheet"]

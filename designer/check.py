@@ -1,49 +1,77 @@
 """``check``: is the spec's own set of configurations a feasible test (paper section 4.6)?"""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 from fem.io import html_pre
-from fem.limits import CLOSE_MODES_WARNING
+from fem.limits import CLOSE_MODES_WARNING, Limits
 from fem.model import SpecimenModel
 
 from .design import Design
 from .poisson import PoissonPlate, poisson_plate
-from .problem import Problem, Solved, unmeasurable
+from .problem import Problem, Solved, solve_points, unmeasurable
 from .progress import Progress
+from .sheet import TestSheet, test_sheet
 
 
 @dataclass(frozen=True)
 class CheckResult:
     """The scored spec design, the Poisson-plate rule, warnings (close modes, modes
-    outside the band, too few frequencies) and violations of the lab's limits."""
+    outside the band, too few frequencies), violations of the lab's limits, the limits
+    themselves and the test sheet (computed when first asked for: ``test_sheet``)."""
 
     design: Design
     poisson: PoissonPlate
     warnings: tuple[str, ...]
     violations: tuple[str, ...]
+    limits: Limits | None = None
+    problem: Problem | None = field(default=None, repr=False, compare=False)
+    prior: tuple = field(default=(), repr=False, compare=False)
 
     @property
     def feasible(self) -> bool:
-        """Not singular and within every limit."""
-        return self.design.scores.verdict != "singular" and not self.violations
+        """Not singular, within every limit, and every parameter meets its target std."""
+        return self.design.scores.verdict != "singular" and not self.violations and self.design.meets_targets
+
+    @cached_property
+    def test_sheet(self) -> TestSheet | None:
+        """Supports, sensor and tap points, frequencies to expect, close pairs and the
+        sensor's shift for every configuration (``designer.sheet``)."""
+        if self.problem is None:
+            return None
+        return test_sheet(self.problem, list(self.design.solved), list(self.prior) or None)
 
     def _repr_html_(self) -> str:
         return html_pre(self.report())
 
     def to_dict(self) -> dict:
+        sheet = self.test_sheet
         return {**self.design.to_dict(), "feasible": self.feasible, "warnings": list(self.warnings),
-                "violations": list(self.violations), "poisson_plate": self.poisson.to_dict()}
+                "violations": list(self.violations), "poisson_plate": self.poisson.to_dict(),
+                "limits": self.limits.to_dict() if self.limits is not None else None,
+                "test_sheet": sheet.to_dict() if sheet is not None else None}
 
     def report(self) -> str:
         lines = [self.design.report(), "", self.poisson.report()]
+        if self.limits is not None:
+            lines += ["", self.limits.describe()]
         if self.warnings:
             lines += ["", "warnings:"] + [f"  - {w}" for w in self.warnings]
         if self.violations:
             lines += ["", "limits broken:"] + [f"  - {v}" for v in self.violations]
-        lines += ["", "feasible: " + ("yes" if self.feasible else "NO (" + (
-            "singular: the layers cannot be told apart" if self.design.scores.verdict == "singular"
-            else "a limit is broken") + ")")]
+        if self.test_sheet is not None:
+            lines += ["", self.test_sheet.report()]
+        reasons = []
+        if self.design.scores.verdict == "singular":
+            reasons.append("singular: the layers cannot be told apart")
+        if self.violations:
+            reasons.append("a limit is broken")
+        if not self.design.meets_targets:
+            misses = self.design.target_misses()
+            reasons.append(f"{len(misses)} parameter(s) miss their target std: "
+                           + ", ".join(p.name for p, _, _ in misses[:4]) + (" ..." if len(misses) > 4 else ""))
+        lines += ["", "feasible: " + ("yes" if self.feasible else "NO (" + "; ".join(reasons) + ")")]
         return "\n".join(lines)
 
 
@@ -74,11 +102,14 @@ def mode_warnings(problem: Problem, solved: Solved) -> list[str]:
 
 def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
           progress: Progress | None = None) -> CheckResult:
-    """Score the spec's configurations (or the given ones) as one test set.  ``problem``:
-    a planning problem, or a model (its ``[design]`` table makes the problem)."""
+    """Score the spec's configurations (or the given ones) as one test set (over the
+    prior range too when ``[design] prior_range_rel`` is set).  ``problem``: a planning
+    problem, or a model (its ``[design]`` table makes the problem).  The result's
+    ``test_sheet`` tells how to carry out the test."""
     problem = Problem.of(problem)
     configurations = tuple(configurations or problem.specimen.configurations)
-    solved = problem.solve(configurations, pool=pool, progress=progress)
+    at_points = solve_points(problem.points(), configurations, pool=pool, progress=progress)
+    solved, prior = at_points[0], at_points[1:]
     warnings, violations = [], []
     for s in solved:
         if not problem.measured(s).any():
@@ -86,8 +117,9 @@ def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
         warnings += mode_warnings(problem, s)
         violations += [f"'{s.configuration.name}' {v}" for v in problem.space.limits.violations(s.configuration,
                                                                                              problem.area)]
-    design = Design.of(problem, solved)
+    design = Design.of(problem, solved, prior or None)
     if design.n_measured < len(design.parameters):
         warnings.append(f"{design.n_measured} measured frequencies for {len(design.parameters)} parameters: "
                         "singular whatever the plates; measure more modes ([model] modes) or add configurations")
-    return CheckResult(design, poisson_plate(problem.specimen), tuple(warnings), tuple(violations))
+    return CheckResult(design, poisson_plate(problem.specimen), tuple(warnings), tuple(violations),
+                       problem.space.limits, problem, tuple(prior))

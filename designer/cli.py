@@ -19,12 +19,13 @@ from .problem import Problem
 from .progress import Progress
 from .refine import refine
 from .search import METHODS, recommend
+from .spec_file import write_spec
 from .sweep import parse_variable, sweep
 
 DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
 
   recommend  the best sets of added plates from the spec's [design] space
-  check      is the spec's own set of configurations identifiable? (exit 1 if not)
+  check      is the spec's own set of configurations identifiable, and how to test it (exit 1 if not)
   sweep      how the scores change with each design variable (a report folder)
 
 Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 bad input."""
@@ -35,7 +36,7 @@ def _problem(args) -> Problem:
     for note in model.notes:
         print(f"note: {note}", file=sys.stderr)
     modes = None if args.modes is None else whole(args.modes, "--modes", 1, MAX_MODES, "", DesignError)
-    return Problem.of(model, modes, getattr(args, "criterion", None))
+    return Problem.of(model, modes, getattr(args, "criterion", None), getattr(args, "prior_range", None))
 
 
 def _progress(args) -> Progress:
@@ -50,15 +51,22 @@ def run_recommend(args) -> int:
     with executor(args.workers, args.scheduler, tasks) as pool:
         result = recommend(problem, args.top, args.method, pool, _progress(args))
     refined = refine(problem, result.best) if args.refine else None
+    best = refined.design if refined is not None and refined.improved else result.best
+    written = write_spec(problem, best, args.write_spec) if args.write_spec else None
     if args.json:
         out = result.to_dict()
         if refined is not None:
             out["refined"] = refined.to_dict()
+        if written is not None:
+            out["written_spec"] = str(written)
         print(to_json(out))
         return 0
     print(result.report())
     if refined is not None:
         print("\n" + refined.report())
+    if written is not None:
+        print(f"\nwritten: {written} ({'the refined' if best is not result.best else 'the best'} design as a spec; "
+              "check it with plan-tests check, fit it with identify-layers fit)")
     return 0
 
 
@@ -69,7 +77,16 @@ def run_check(args) -> int:
     if args.configurations:
         configurations = [problem.specimen.configuration(n.strip()) for n in args.configurations.split(",")]
     result = check(problem, configurations, progress=_progress(args))
-    print(to_json(result.to_dict()) if args.json else result.report())
+    figures = result.test_sheet.write(args.out) if args.out else []
+    if args.json:
+        out = result.to_dict()
+        if args.out:
+            out["figures"] = [str(f) for f in figures]
+        print(to_json(out))
+    else:
+        print(result.report())
+        if figures:
+            print(f"\nwritten: {', '.join(str(f) for f in figures)}")
     return 0 if result.feasible else 1
 
 
@@ -89,11 +106,15 @@ def run_sweep(args) -> int:
     return 0
 
 
-def _common(p: argparse.ArgumentParser, parallel: bool = True) -> None:
+def _common(p: argparse.ArgumentParser, parallel: bool = True, prior: bool = True) -> None:
     add_common_arguments(p)
     p.add_argument("--modes", type=int, help="modes measured per plate (default: [model] modes)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr (default: when stderr is a terminal)")
+    if prior:
+        p.add_argument("--prior-range", type=float, metavar="REL",
+                       help="score over +-REL of the identified properties (default: [design] prior_range_rel; 0: "
+                            "the nominal values only)")
     if parallel:
         p.add_argument("--workers", type=int, default=0,
                        help="processes (default 0: all cores when there are enough solves to pay for them)")
@@ -110,14 +131,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="exhaustive, relaxation (cvxpy) or auto (exhaustive up to 50 000 sets)")
     p.add_argument("--criterion", choices=list(CRITERIA), help="rank by (default: [design] criterion)")
-    p.add_argument("--refine", action="store_true", help="also refine the best set's thicknesses (nlopt)")
+    p.add_argument("--refine", action="store_true",
+                   help="also try the stock thicknesses next to the best set's continuous optimum (nlopt)")
+    p.add_argument("--write-spec", metavar="OUT.toml",
+                   help="write the best (or refined) design as a complete spec, for check and fit")
     p.set_defaults(run=run_recommend)
     p = sub.add_parser("check", help="feasibility of the spec's configurations (exit 1 if infeasible)")
     _common(p, parallel=False)
     p.add_argument("--configurations", help="comma-separated names to check (default: all in the spec)")
+    p.add_argument("--out", metavar="DIR", help="write the test sheet's figures (one per configuration) to DIR")
     p.set_defaults(run=run_check)
     p = sub.add_parser("sweep", help="scores against each design variable: CSV, plots, summary")
-    _common(p)
+    _common(p, prior=False)  # a sweep scores at the nominal values
     p.add_argument("--vary", action="append", metavar="VAR[=VALUES]",
                    help="thickness, adhesive_thickness, material, placement or modes, optionally CONFIG.VAR; "
                         "values 0.5,1,2 or START:STOP:COUNT (repeatable; default: thickness and material)")

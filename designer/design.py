@@ -11,7 +11,8 @@ from fem.limits import added_mass
 from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration, Parameter
 
-from .problem import Problem, Solved
+from .problem import Problem, Solved, solve_points
+from .robust import RobustScores
 from .scoring import WEAK_STD_REL, Scores, score
 
 GPA = 1e9
@@ -43,13 +44,16 @@ def finite_or_none(value: float) -> float | None:
 
 @dataclass(frozen=True)
 class Design:
-    """A test set at the nominal properties.
+    """A test set, scored at the nominal properties and, with a prior range, over it.
 
     solved: each configuration's frequencies and relative sensitivities (original first);
     measured: per configuration, which of its first ``modes`` modes are measured;
     parameters, values: the identified parameters and their nominal values (SI);
     scores: condition number, Fisher information and predicted std of the stacked
-    measured rows; frequency_std_rel: the scatter the std assumes; added_mass [kg].
+    measured rows; frequency_std_rel: the scatter the std assumes; added_mass [kg];
+    robust: the scores at the nominal point and every prior sample (None without a prior
+    range); targets: each parameter's target relative std (None = none);
+    targets_default: the targets are the defaults, not the spec's.
     """
 
     solved: tuple[Solved, ...]
@@ -59,14 +63,76 @@ class Design:
     scores: Scores
     frequency_std_rel: float
     added_mass: tuple[float, ...]
+    robust: RobustScores | None = None
+    targets: tuple[float | None, ...] = ()
+    targets_default: bool = True
 
     @classmethod
-    def of(cls, problem: Problem, solved: list[Solved]) -> "Design":
+    def of(cls, problem: Problem, solved: list[Solved], prior: list[list[Solved]] | None = None) -> "Design":
+        """The set ``solved`` at the nominal values; ``prior``: the same configurations
+        solved at each prior sample (``problem.prior``), for the robust scores."""
         measured = tuple(problem.measured(s) for s in solved)
-        rows = np.vstack([problem.rows(s) for s in solved])
         sigma = problem.space.frequency_std_rel
-        return cls(tuple(solved), measured, problem.parameters, problem.values, score(rows, sigma), sigma,
-                   tuple(added_mass(s.configuration, problem.area) for s in solved))
+
+        def scored(points: list[Solved]) -> Scores:
+            return score(np.vstack([problem.rows(s) for s in points]), sigma)
+
+        nominal = scored(solved)
+        robust = None
+        if prior:
+            robust = RobustScores(problem.space.prior_range, (nominal,) + tuple(scored(p) for p in prior))
+        targets = tuple(problem.space.target(p.kind) for p in problem.parameters)
+        return cls(tuple(solved), measured, problem.parameters, problem.values, nominal, sigma,
+                   tuple(added_mass(s.configuration, problem.area) for s in solved), robust, targets,
+                   not problem.space.targets_given)
+
+    def loss(self, criterion: str) -> float:
+        """What sets are ranked by: the criterion's worst case over the prior when the
+        design has robust scores, else its nominal value (as a number to minimise)."""
+        return self.robust.worst_loss(criterion) if self.robust is not None else self.scores.loss(criterion)
+
+    @property
+    def judged_std_rel(self) -> np.ndarray:
+        """The relative std the targets are judged on: the worst over the prior when
+        scored over it, else the nominal."""
+        return self.robust.worst_std_rel if self.robust is not None else self.scores.std_rel
+
+    def target_misses(self) -> list[tuple[Parameter, float, float]]:
+        """(parameter, predicted relative std, target) of every parameter over its target."""
+        return [(p, float(s), t) for p, s, t in zip(self.parameters, self.judged_std_rel, self.targets)
+                if t is not None and not s <= t]
+
+    @property
+    def meets_targets(self) -> bool:
+        return not self.target_misses()
+
+    def targets_dict(self) -> dict:
+        kinds = {}
+        for p, t in zip(self.parameters, self.targets):
+            kinds.setdefault(p.kind, t)
+        return {"std_rel": kinds, "default": self.targets_default,
+                "basis": "worst over the prior" if self.robust is not None else "nominal",
+                "met": self.meets_targets,
+                "missed": [{"parameter": p.name, "predicted_std_rel": finite_or_none(s), "target_std_rel": t}
+                           for p, s, t in self.target_misses()]}
+
+    def targets_report(self) -> str:
+        """One line: the targets and which parameters miss them."""
+        kinds = {}
+        for p, t in zip(self.parameters, self.targets):
+            if t is not None:
+                kinds.setdefault(p.kind, t)
+        if "E1" in kinds and kinds.get("E2") == kinds["E1"]:  # one modulus target: "E"
+            kinds = {("E" if k == "E1" else k): t for k, t in kinds.items() if k != "E2"}
+        stated = ", ".join(f"{k} {100 * t:g} %" for k, t in kinds.items())
+        where = "default; set [design] target_std_rel" if self.targets_default else "[design] target_std_rel"
+        basis = " (worst over the prior)" if self.robust is not None else ""
+        misses = self.target_misses()
+        if not misses:
+            return f"target std ({stated}; {where}): met by all {len(self.parameters)} parameters{basis}"
+        listed = ", ".join(f"{p.name} {100 * s:.3g} %" for p, s, _ in misses[:6]) + (" ..." if len(misses) > 6 else "")
+        return (f"target std ({stated}; {where}): MISSED by {len(misses)} of {len(self.parameters)} "
+                f"parameters{basis}: {listed}")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -115,6 +181,8 @@ class Design:
             "frequency_std_rel": self.frequency_std_rel,
             "predicted_std": self.predicted_std(),
             "predicted_std_rel": self.predicted_std(relative=True),
+            "targets": self.targets_dict(),
+            "robust": self.robust.to_dict(self.parameters) if self.robust is not None else None,
         }
 
     def summary(self) -> str:
@@ -131,11 +199,16 @@ class Design:
             f"{self.n_measured} measured frequencies, {p} parameters)",
             f"condition number {sc.condition_number:.4g}: {sc.verdict} (good below {power(GOOD_BELOW)}, "
             f"ill-conditioned up to {power(SINGULAR_ABOVE)}, singular above; paper section 4.6)",
+            self.targets_report(),
             f"Fisher information for {100 * self.frequency_std_rel:.3g} % frequency scatter: "
             f"log det {sc.logdet_fisher:.5g}, smallest eigenvalue {sc.min_eigenvalue_fisher:.4g}",
-            "",
-            "configurations: added layers, added mass, frequencies to expect [Hz] ([not measured])",
         ]
+        if self.robust is not None:
+            r = self.robust
+            lines.append(f"over the prior range (identified properties x 1/{1 + r.range_rel:g}..{1 + r.range_rel:g}, "
+                         f"{len(r.scores) - 1} samples + nominal): condition number worst {r.worst('condition'):.4g}, "
+                         f"mean {r.mean('condition'):.4g}; log det F worst {r.worst('d'):.5g}, mean {r.mean('d'):.5g}")
+        lines += ["", "configurations: added layers, added mass, frequencies to expect [Hz] ([not measured])"]
         width = max(len(n) for n in self.names)
         added = [describe(s.configuration) for s in self.solved]
         added_width = max(len(a) for a in added)
@@ -143,13 +216,21 @@ class Design:
             freqs = " ".join(f"{f:.1f}" if m else f"[{f:.1f}]" for f, m in zip(s.frequencies_hz, measured))
             lines.append(f"  {s.configuration.name:<{width}s}  {what:<{added_width}s}  {mass * 1e3:6.1f} g  {freqs}")
         width = max(len(par.name) for par in self.parameters)
-        lines += ["", f"  {'parameter':<{width}s}  {'nominal':>13s}  {'predicted std':>13s}  {'relative':>9s}"]
-        for par, value, std, rel in zip(self.parameters, self.values, self.std, sc.std_rel):
+        worst = self.robust.worst_std_rel if self.robust is not None else None
+        lines += ["", f"  {'parameter':<{width}s}  {'nominal':>13s}  {'predicted std':>13s}  {'relative':>9s}"
+                  + (f"  {'worst':>9s}" if worst is not None else "") + f"  {'target':>7s}"]
+        for j, (par, value, std, rel) in enumerate(zip(self.parameters, self.values, self.std, sc.std_rel)):
             key, v = display(par, value)
             _, s_ = display(par, std)
             unit = " GPa" if key.endswith("GPa") else "    "
+            target = self.targets[j] if self.targets else None
+            judged = self.judged_std_rel[j]
             flag = "  singular" if not np.isfinite(rel) else ("  weakly identifiable" if rel > WEAK_STD_REL else "")
-            lines.append(f"  {par.name:<{width}s}  {v:>9.4g}{unit}  {s_:>9.3g}{unit}  {100 * rel:>7.3g} %{flag}")
+            if target is not None and not judged <= target:
+                flag += "  misses target"
+            lines.append(f"  {par.name:<{width}s}  {v:>9.4g}{unit}  {s_:>9.3g}{unit}  {100 * rel:>7.3g} %"
+                         + (f"  {100 * worst[j]:>7.3g} %" if worst is not None else "")
+                         + (f"  {100 * target:>5.3g} %" if target is not None else f"  {'-':>7s}") + flag)
         if np.all(np.isfinite(sc.correlation)):
             i, j = np.triu_indices(p, 1)
             strong = sorted(((abs(sc.correlation[a, b]), a, b) for a, b in zip(i, j)
@@ -164,3 +245,11 @@ class Design:
 def power(x: float) -> str:
     """1000.0 -> '1e3'."""
     return f"1e{round(math.log10(x))}"
+
+
+def score_design(problem: Problem, configurations, pool=None, progress=None) -> Design:
+    """The configurations solved at the nominal values and, with a prior range, at every
+    prior sample (one batch), scored as a ``Design``."""
+    points = problem.points()
+    solved = solve_points(points, configurations, pool, progress)
+    return Design.of(problem, solved[0], solved[1:] or None)

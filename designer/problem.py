@@ -7,6 +7,7 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
@@ -23,13 +24,16 @@ CACHE_SIZE = 8192
 _CACHE: OrderedDict = OrderedDict()
 #: Work split into at most this many tasks per pool (load balance against task overhead).
 MAX_TASKS = 64
+#: Model options that choose the plate theory, passed on to the solve when the model has them.
+THEORY_OPTIONS = ("theory", "layer_groups")
 
 
 @dataclass(frozen=True)
 class Solved:
-    """One configuration at the nominal properties: the elastic frequencies [Hz] of the
-    modes solved, their labels, and the relative sensitivities (p/f) df/dp
-    (modes x parameters, paper eq. 13)."""
+    """One configuration at one parameter point (the nominal one unless scored over a
+    prior): the elastic frequencies [Hz] of the modes solved, their labels (empty at a
+    prior sample: nothing reads them there, and they cost a sixth of a solve), and the
+    relative sensitivities (p/f) df/dp (modes x parameters, paper eq. 13)."""
 
     configuration: Configuration
     frequencies_hz: np.ndarray
@@ -42,19 +46,32 @@ def content_key(specimen: Specimen, configuration: Configuration) -> tuple:
     return tuple((l.material, l.thickness, l.angle) for l in specimen.laminate(configuration).layers)
 
 
-def solve_chunk(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_modes: int,
-                parameters: tuple[Parameter, ...], configurations: list[Configuration]) -> list[tuple]:
-    """(frequencies, labels, relative sensitivities) of each configuration: the task run
-    by workers (a module-level function, so it pickles to processes and Dask workers).
-    Parallelism comes from processes: each solve runs BLAS on one thread (``fem.model``)."""
-    values = np.array([specimen.value(p) for p in parameters])
+def _solution(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_modes: int, configuration: Configuration,
+              attachments: tuple = ()):
+    """The model ``SpecimenModel`` solves (effects, attachments, plate theory), cached by
+    content."""
+    theory = {key: getattr(options, key) for key in THEORY_OPTIONS if hasattr(options, key)}
+    return solve_laminate(specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
+                          rotary_inertia=options.rotary_inertia, attachments=specimen.attachments + tuple(attachments),
+                          **theory)
+
+
+def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters: tuple[Parameter, ...],
+                pairs: list[tuple[Specimen, Configuration, bool]]) -> list[tuple]:
+    """(frequencies, labels, relative sensitivities) of each (specimen, configuration,
+    with labels): the task run by workers (a module-level function, so it pickles to
+    processes and Dask workers); the specimens may differ in their material values
+    (prior samples); labels are None where not asked for.  Parallelism comes from
+    processes: each solve, its assembly and its sensitivities run BLAS on one thread (on
+    busy cores a second BLAS thread made them 3x slower)."""
     out = []
-    for configuration in configurations:
-        solution = solve_laminate(  # the model SpecimenModel solves (effects, attachments)
-            specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
-            rotary_inertia=options.rotary_inertia, attachments=specimen.attachments)
-        f = solution.frequencies_hz
-        out.append((f, solution.labels, normalised(f, solution.derivatives(list(parameters)), values)))
+    with threadpool_limits(limits=1, user_api="blas"):
+        for specimen, configuration, labelled in pairs:
+            values = np.array([specimen.value(p) for p in parameters])
+            solution = _solution(specimen, options, mesh, n_modes, configuration)
+            f = solution.frequencies_hz
+            out.append((f, solution.labels if labelled else None,
+                        normalised(f, solution.derivatives(list(parameters)), values)))
     return out
 
 
@@ -71,11 +88,27 @@ class Problem:
         if not self.specimen.identified_materials:
             raise DesignError("spec: no material has identify = true, so there is nothing to identify and no "
                               "test to plan; set identify = true on the layer materials to find")
+        # the mass and thickness limits [design] leaves open: the defaults relative to the specimen
+        limits = self.space.limits.with_defaults(self.specimen_mass, self.specimen_thickness)
+        if limits != self.space.limits:
+            object.__setattr__(self, "space", replace(self.space, limits=limits))
+
+    @property
+    def specimen_mass(self) -> float:
+        """Mass [kg] of the original plate."""
+        return self.area * sum(layer.material.density * layer.thickness for layer in self.specimen.layers)
+
+    @property
+    def specimen_thickness(self) -> float:
+        """Thickness [m] of the original plate."""
+        return sum(layer.thickness for layer in self.specimen.layers)
 
     @classmethod
-    def of(cls, model: "SpecimenModel | Problem", modes: int | None = None, criterion: str | None = None) -> "Problem":
+    def of(cls, model: "SpecimenModel | Problem", modes: int | None = None, criterion: str | None = None,
+           prior_range: float | None = None) -> "Problem":
         """The planning problem of a model (its ``[design]`` table, or the defaults);
-        ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion."""
+        ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion,
+        ``prior_range`` its ``prior_range_rel``."""
         if isinstance(model, Problem):
             problem = model
         else:
@@ -85,6 +118,12 @@ class Problem:
             problem = problem.with_options(modes=modes)
         if criterion is not None:
             problem = replace(problem, space=replace(problem.space, criterion=criterion))
+        if prior_range is not None:
+            if isinstance(prior_range, bool) or not isinstance(prior_range, (int, float)) \
+                    or not 0.0 <= prior_range <= 0.9:
+                raise DesignError(f"--prior-range {prior_range!r}: need 0..0.9, relative (e.g. 0.3 for +-30 % of the "
+                                  "identified properties; 0 for the nominal values only)")
+            problem = replace(problem, space=replace(problem.space, prior_range=float(prior_range)))
         return problem
 
     @property
@@ -125,25 +164,37 @@ class Problem:
               label: str = "solving configurations") -> list[Solved]:
         """Each configuration solved once (cached by content in this process); the rest
         on ``pool`` (a ``concurrent.futures`` executor) when given."""
-        n_solve = self.modes + self.space.limits.extra_modes()
-        model = (self.mesh, replace(self.options, modes=n_solve), self.specimen.attachments, self.parameters)
-        keys = [(content_key(self.specimen, c),) + model for c in configurations]
-        found = {key: _CACHE[key] for key in keys if key in _CACHE}
-        todo = {}
-        for key, configuration in zip(keys, configurations):
-            if key not in found:
-                todo.setdefault(key, configuration)
-        if todo:
-            pieces = 1 if pool is None else min(len(todo), MAX_TASKS)
-            results = run_chunks(solve_chunk, chunked(list(todo.values()), pieces), self.specimen, self.options,
-                                 self.mesh, n_solve, self.parameters, pool=pool, progress=progress, label=label)
-            found.update(zip(todo, results))
-        for key, result in found.items():
-            _CACHE[key] = result
-            _CACHE.move_to_end(key)
-        while len(_CACHE) > CACHE_SIZE:
-            _CACHE.popitem(last=False)
-        return [Solved(c, found[k][0], tuple(found[k][1]), found[k][2]) for k, c in zip(keys, configurations)]
+        return solve_points([self], configurations, pool, progress, label)[0]
+
+    @property
+    def solved_modes(self) -> int:
+        """Modes solved per configuration: the measured ones and, with a separation limit,
+        one more (to judge the last measured mode's neighbour)."""
+        return self.modes + self.space.limits.extra_modes()
+
+    def solution(self, configuration: Configuration, attachments: tuple = ()):
+        """The full solution (mode shapes included) of a configuration at the nominal
+        values: the very solve ``solve`` ran (``fem.model.solve_laminate`` keeps it in
+        this process), so it costs nothing after ``solve`` here.  ``attachments``: more
+        point masses or springs than the spec's (e.g. a sensor), a new solve."""
+        return _solution(self.specimen, self.options, self.mesh, self.solved_modes,
+                         configuration_at(self, configuration), attachments)
+
+    def at(self, values: dict[Parameter, float]) -> "Problem":
+        """The same problem with the identified parameters at other values (SI)."""
+        return replace(self, model=self.model.with_values(values))
+
+    @cached_property
+    def prior(self):
+        """The prior parameter points robust scores use (``designer.robust.Prior``), or
+        None when ``[design] prior_range_rel`` is 0 (scores at the nominal values only)."""
+        from .robust import Prior  # robust imports this module
+
+        return Prior.of(self) if self.space.prior_range > 0 else None
+
+    def points(self) -> list["Problem"]:
+        """The problems a design is scored at: the nominal one, then each prior sample."""
+        return [self] if self.prior is None else list(self.prior.problems)
 
     def measured(self, solved: Solved) -> np.ndarray:
         """Which of the first ``modes`` modes the lab measures (band, separation)."""
@@ -152,6 +203,54 @@ class Problem:
     def rows(self, solved: Solved) -> np.ndarray:
         """The measured rows of a configuration's relative sensitivity matrix."""
         return solved.sensitivities[: self.modes][self.measured(solved)]
+
+
+def configuration_at(problem: Problem, configuration: Configuration) -> Configuration:
+    """``configuration`` with any added layer of an identified material at ``problem``'s
+    values (added plates are known materials, so this rarely changes anything)."""
+    materials = problem.specimen.materials
+
+    def at(layers):
+        return tuple(replace(l, material=materials[l.material.name]) if l.material.identify
+                     and l.material.name in materials else l for l in layers)
+
+    if not any(l.material.identify for l in configuration.bottom + configuration.top):
+        return configuration
+    return replace(configuration, bottom=at(configuration.bottom), top=at(configuration.top))
+
+
+def solve_points(problems: list[Problem], configurations, pool=None, progress: Progress | None = None,
+                 label: str = "solving configurations") -> list[list[Solved]]:
+    """The configurations solved at every problem's parameter values (problems that share
+    the specimen's geometry, model options and design: the nominal one and its prior
+    samples), in one batch: cached by content in this process, the rest on ``pool``.
+    Returns one list of ``Solved`` per problem; only the first problem's have labels."""
+    first = problems[0]
+    n_solve = first.solved_modes
+    model = (first.mesh, replace(first.options, modes=n_solve), first.specimen.attachments, first.parameters)
+    configurations = list(configurations)
+    at = [[configuration_at(p, c) for c in configurations] for p in problems]
+    keys = [[(content_key(p.specimen, c),) + model for c in cs] for p, cs in zip(problems, at)]
+    labelled = set(keys[0])
+    found = {key: _CACHE[key] for row in keys for key in row
+             if key in _CACHE and (_CACHE[key][1] is not None or key not in labelled)}
+    todo = {}
+    for p, row, cs in zip(problems, keys, at):
+        for key, configuration in zip(row, cs):
+            if key not in found:
+                todo.setdefault(key, (p.specimen, configuration, key in labelled))
+    if todo:
+        pieces = 1 if pool is None else min(len(todo), MAX_TASKS)
+        results = run_chunks(solve_pairs, chunked(list(todo.values()), pieces), first.options, first.mesh, n_solve,
+                             first.parameters, pool=pool, progress=progress, label=label)
+        found.update(zip(todo, results))
+    for key, result in found.items():
+        _CACHE[key] = result
+        _CACHE.move_to_end(key)
+    while len(_CACHE) > CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return [[Solved(c, found[k][0], tuple(found[k][1] or ()), found[k][2]) for k, c in zip(row, configurations)]
+            for row in keys]
 
 
 def unmeasurable(problem: Problem, solved: Solved) -> DesignError:

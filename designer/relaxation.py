@@ -72,16 +72,25 @@ def relax(info0: np.ndarray, infos: np.ndarray, n: int, criterion: str) -> Relax
 def swap_search(info0: np.ndarray, infos: np.ndarray, start, criterion: str) -> dict[tuple[int, ...], float]:
     """Best-improvement exchange from the set ``start``: replace one member by one
     non-member while that lowers the loss.  Returns every set looked at -> its loss
-    (the final set is the best of them)."""
-    m = len(infos)
+    (the final set is the best of them).
+
+    With a leading axis of parameter points (``info0`` (k, p, p), ``infos`` (k, m, p, p))
+    the loss of a set is its worst over the points (the robust score)."""
+    if info0.ndim == 2:
+        info0, infos = info0[None], infos[None]
+    m = infos.shape[1]
+
+    def worst(total: np.ndarray) -> np.ndarray:
+        return information_loss(total, criterion).max(axis=0)
+
     current = tuple(sorted(start))
-    seen = {current: float(information_loss(info0 + infos[list(current)].sum(axis=0), criterion))}
+    seen = {current: float(worst(info0 + infos[:, list(current)].sum(axis=1)))}
     while True:
-        total = info0 + infos[list(current)].sum(axis=0)
+        total = info0 + infos[:, list(current)].sum(axis=1)
         others = np.setdiff1d(np.arange(m), current)
         best, best_loss = current, seen[current]
         for i in current:
-            losses = information_loss(total - infos[i] + infos[others], criterion)
+            losses = worst((total - infos[:, i])[:, None] + infos[:, others])
             for j, value in zip(others, losses):
                 key = tuple(sorted(set(current) - {i} | {int(j)}))
                 seen[key] = float(value)

@@ -21,9 +21,10 @@ from fem.model import SpecimenModel
 from fem.specimen import Configuration
 
 from .candidates import candidates
-from .design import Design
+from .design import Design, score_design
+from .mirror import collapse, is_mirror_symmetric
 from .poisson import PoissonPlate, poisson_plate
-from .problem import Problem, Solved, unmeasurable
+from .problem import Problem, Solved, solve_points, unmeasurable
 from .progress import Bar, Progress
 from .relaxation import information_loss, relax, swap_search
 from .scoring import loss, singular_values
@@ -45,17 +46,19 @@ class Bound:
     criterion: str
     relaxed: float
     chosen: float
+    basis: str = "nominal"
 
     def report(self) -> str:
+        of = "" if self.basis == "nominal" else " (of the Fisher information averaged over the prior samples)"
         if self.criterion == "d":
             gap = max(self.relaxed - self.chosen, 0.0)
-            return (f"relaxation bound: log det F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} (gap {gap:.3g}): "
+            return (f"relaxation bound{of}: log det F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} (gap {gap:.3g}): "
                     f"its confidence ellipsoid is at most {math.exp(gap / 2):.4f} x the volume of the best set's")
-        return (f"relaxation bound: smallest eigenvalue of F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} "
+        return (f"relaxation bound{of}: smallest eigenvalue of F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} "
                 f"({100 * self.chosen / self.relaxed:.3g} % of the bound)")
 
     def to_dict(self) -> dict:
-        return {"criterion": self.criterion, "relaxed": self.relaxed, "chosen": self.chosen}
+        return {"criterion": self.criterion, "relaxed": self.relaxed, "chosen": self.chosen, "basis": self.basis}
 
 
 @dataclass(frozen=True)
@@ -65,7 +68,10 @@ class Recommendation:
     method: 'exhaustive' or 'relaxation'; candidates: configurations solved; sets:
     sets scored; excluded: candidates left out (name -> reason); bound: the relaxation's
     (None when exhaustive); baseline: the spec's own set scored alike (None without
-    added configurations); seconds: wall time.
+    added configurations); seconds: wall time; mirrors: per design, the added
+    configurations of its mirror left out of the ranking (None when none); limits: the
+    lab's limits used (``fem.limits.Limits``); prior_samples: parameter points besides
+    the nominal one each set was scored at (0: nominal only).
     """
 
     designs: tuple[Design, ...]
@@ -78,17 +84,28 @@ class Recommendation:
     baseline: Design | None
     poisson: PoissonPlate
     seconds: float
+    mirrors: tuple = ()
+    limits: object = None
+    prior_samples: int = 0
 
     @property
     def best(self) -> Design:
         return self.designs[0]
 
     def to_dict(self) -> dict:
+        designs = []
+        for d, mirror in zip(self.designs, self.mirrors or [None] * len(self.designs)):
+            designs.append({**d.to_dict(), "mirror": None if mirror is None else
+                            [c.name for c in mirror if not c.is_original]})
         return {
-            "designs": [d.to_dict() for d in self.designs],
+            "designs": designs,
             "search": {"criterion": self.criterion, "method": self.method, "candidates": self.candidates,
                        "sets": self.sets, "excluded": self.excluded, "seconds": round(self.seconds, 3),
-                       "bound": self.bound.to_dict() if self.bound else None},
+                       "bound": self.bound.to_dict() if self.bound else None,
+                       "ranked_by": "worst over the prior" if self.prior_samples else "nominal",
+                       "prior_samples": self.prior_samples,
+                       "mirrors_collapsed": sum(m is not None for m in self.mirrors)},
+            "limits": self.limits.to_dict() if self.limits is not None else None,
             "baseline": self.baseline.to_dict() if self.baseline else None,
             "poisson_plate": self.poisson.to_dict(),
         }
@@ -97,23 +114,44 @@ class Recommendation:
         return html_pre(self.report())
 
     def report(self) -> str:
+        robust = self.best.robust
+        how = (f"scored at the nominal properties and {self.prior_samples} prior samples (+-"
+               f"{100 * robust.range_rel:g} %), ranked by the worst case of" if robust is not None else
+               "scored at the spec's nominal properties, ranked by")
         lines = [f"searched {self.sets} sets of {len(self.best.solved) - 1} added plates from {self.candidates} "
-                 f"candidates ({self.method}, {self.seconds:.1f} s), scored at the spec's nominal properties, "
-                 f"ranked by {CRITERIA[self.criterion]}"]
+                 f"candidates ({self.method}, {self.seconds:.1f} s), {how} {CRITERIA[self.criterion]}"]
+        if robust is None:
+            lines.append("(the start values are what is unknown: set [design] prior_range_rel, e.g. 0.3, to score "
+                         "every set over that range)")
+        if self.limits is not None:
+            lines.append(self.limits.describe())
         if self.excluded:
             lines.append(f"left out {len(self.excluded)} candidates: " + "; ".join(
                 f"{name} ({why})" for name, why in list(self.excluded.items())[:5])
                 + (" ..." if len(self.excluded) > 5 else ""))
         if self.bound:
             lines.append(self.bound.report())
-        lines += ["", f"{'rank':>4s}  {'condition':>10s}  {'log det F':>10s}  {'verdict':<15s} added plates"]
-        for rank, d in enumerate(self.designs, 1):
-            lines.append(f"{rank:>4d}  {d.scores.condition_number:>10.4g}  {d.scores.logdet_fisher:>10.5g}  "
-                         f"{d.scores.verdict:<15s} {', '.join(d.names[1:])}")
+        worst = f"  {'worst ' + {'condition': 'cond', 'd': 'log det', 'e': 'min eig'}[self.criterion]:>12s}" \
+            if robust is not None else ""
+        lines += ["", f"{'rank':>4s}  {'condition':>10s}  {'log det F':>10s}{worst}  {'verdict':<15s} "
+                      f"{'targets':<9s} added plates"]
+
+        def row(label: str, d: Design) -> str:
+            w = f"  {d.robust.worst(self.criterion):>12.5g}" if d.robust is not None else ""
+            met = "met" if d.meets_targets else f"{len(d.target_misses())} miss"
+            return (f"{label:>4s}  {d.scores.condition_number:>10.4g}  {d.scores.logdet_fisher:>10.5g}{w}  "
+                    f"{d.scores.verdict:<15s} {met:<9s} {', '.join(d.names[1:])}")
+
+        notes = []
+        for rank, (d, mirror) in enumerate(zip(self.designs, self.mirrors or [None] * len(self.designs)), 1):
+            lines.append(row(str(rank), d))
+            if mirror is not None:
+                notes.append(f"rank {rank} stands for its mirror too: {', '.join(c.name for c in mirror if not c.is_original)}")
         if self.baseline is not None:
-            b = self.baseline.scores
-            lines.append(f"{'spec':>4s}  {b.condition_number:>10.4g}  {b.logdet_fisher:>10.5g}  {b.verdict:<15s} "
-                         f"{', '.join(self.baseline.names[1:])} (the spec's configurations)")
+            lines.append(row("spec", self.baseline) + " (the spec's configurations)")
+        if notes:
+            lines += ["", "mirror designs (top and bottom swapped) score alike on this mid-plane symmetric specimen; "
+                          "each is shown once:"] + [f"  {n}" for n in notes]
         lines += ["", "best design", self.best.report(), "", self.poisson.report()]
         return "\n".join(lines)
 
@@ -131,21 +169,28 @@ def stacked_rows(problem: Problem, solved: list[Solved]) -> np.ndarray:
 def exhaustive(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int, top: int,
                progress: Progress | None = None) -> tuple[list[tuple[int, ...]], int]:
     """Every set of ``n`` of the candidate ``blocks``: the ``top`` best by the criterion
-    (ties broken by enumeration order), and the number of sets scored."""
-    m, r, p = blocks.shape
+    (ties broken by enumeration order), and the number of sets scored.
+
+    ``original`` (r0, p) and ``blocks`` (m, r, p) are the rows at the nominal point; with
+    a leading axis of parameter points ((k, r0, p), (k, m, r, p)) a set's loss is its
+    worst over the points."""
+    if original.ndim == 2:
+        original, blocks = original[None], blocks[None]
+    k, m, r, p = blocks.shape
     total = math.comb(m, n)
     combos = itertools.combinations(range(m), n)
     best_loss, best_sets = np.empty(0), np.empty((0, n), dtype=int)
+    batch = max(64, BATCH // k)
     with Bar(progress, total, "scoring sets") as bar:
         while True:
-            chunk = np.fromiter(itertools.chain.from_iterable(itertools.islice(combos, BATCH)), dtype=int)
+            chunk = np.fromiter(itertools.chain.from_iterable(itertools.islice(combos, batch)), dtype=int)
             if chunk.size == 0:
                 break
             sets = chunk.reshape(-1, n)
-            stacks = np.concatenate([np.broadcast_to(original, (len(sets),) + original.shape),
-                                     blocks[sets].reshape(len(sets), n * r, p)], axis=1)
+            stacks = np.concatenate([np.broadcast_to(original[:, None], (k, len(sets)) + original.shape[1:]),
+                                     blocks[:, sets].reshape(k, len(sets), n * r, p)], axis=2)
             losses = loss(singular_values(stacks), problem.space.frequency_std_rel, problem.space.criterion)
-            best_loss = np.concatenate([best_loss, losses])
+            best_loss = np.concatenate([best_loss, losses.max(axis=0)])
             best_sets = np.concatenate([best_sets, sets])
             keep = np.argsort(best_loss, kind="stable")[:top]
             best_loss, best_sets = best_loss[keep], best_sets[keep]
@@ -156,27 +201,39 @@ def exhaustive(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: in
 def relaxed(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int,
             top: int) -> tuple[list[tuple[int, ...]], int, Bound]:
     """The convex relaxation, rounded and improved by swaps: the ``top`` best sets seen,
-    the number of sets scored, and the relaxation's bound (in Fisher-information units)."""
+    the number of sets scored, and the relaxation's bound (in Fisher-information units).
+
+    With a leading axis of parameter points (as ``exhaustive``) the relaxation works on
+    the Fisher information averaged over them (a pseudo-Bayesian design) and the swaps on
+    the worst case; the bound then applies to the averaged information."""
     space = problem.space
-    p = original.shape[1]
-    info0 = original.T @ original
-    infos = np.einsum("mrp,mrq->mpq", blocks, blocks)
-    relaxation = relax(info0, infos, n, space.criterion)
+    if original.ndim == 2:
+        original, blocks = original[None], blocks[None]
+    p = original.shape[-1]
+    info0 = np.einsum("krp,krq->kpq", original, original)
+    infos = np.einsum("kmrp,kmrq->kmpq", blocks, blocks)
+    mean0, means = info0.mean(axis=0), infos.mean(axis=0)
+    relaxation = relax(mean0, means, n, space.criterion)
     seen = swap_search(info0, infos, np.argsort(-relaxation.weights, kind="stable")[:n], space.criterion)
     best = sorted(seen, key=seen.get)[:top]
-    chosen = float(-information_loss(info0 + infos[list(best[0])].sum(axis=0), relaxation.criterion))
+    chosen = float(-information_loss(mean0 + means[list(best[0])].sum(axis=0), relaxation.criterion))
     sigma2 = space.frequency_std_rel**2
+    basis = "nominal" if len(info0) == 1 else "prior mean"
     if relaxation.criterion == "d":  # log det (I / sigma^2) = log det I - p log sigma^2
-        bound = Bound("d", relaxation.bound - p * math.log(sigma2), chosen - p * math.log(sigma2))
+        bound = Bound("d", relaxation.bound - p * math.log(sigma2), chosen - p * math.log(sigma2), basis)
     else:  # lambda_min (I / sigma^2); the loss was -log lambda_min
-        bound = Bound("e", relaxation.bound / sigma2, math.exp(chosen) / sigma2)
+        bound = Bound("e", relaxation.bound / sigma2, math.exp(chosen) / sigma2, basis)
     return best, len(seen), bound
 
 
 def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "auto", pool=None,
               progress: Progress | None = None) -> Recommendation:
     """The ``top`` best sets of ``space.size - 1`` candidates for the original plate.
-    ``problem``: a planning problem, or a model (its ``[design]`` table makes the problem)."""
+    ``problem``: a planning problem, or a model (its ``[design]`` table makes the problem).
+
+    With ``[design] prior_range_rel`` every set is scored over the prior samples too and
+    ranked by its worst case; mirror designs of a mid-plane symmetric specimen are shown
+    once."""
     problem = Problem.of(problem)
     start = time.perf_counter()
     space = problem.space
@@ -190,15 +247,16 @@ def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "aut
                           f"{space.size * problem.modes} frequencies for {p} parameters: every set is singular; "
                           f"measure at least {math.ceil(p / space.size)} modes per plate or add configurations")
     offered = candidates(space, problem.specimen)
-    solved = problem.solve((ORIGINAL,) + offered.configurations, pool=pool, progress=progress)
-    original, solved = solved[0], solved[1:]
+    points = problem.points()
+    at_points = solve_points(points, (ORIGINAL,) + offered.configurations, pool=pool, progress=progress)
+    original, solved = at_points[0][0], at_points[0][1:]
     if not problem.measured(original).any():
         raise unmeasurable(problem, original)
     excluded = dict(offered.excluded)
     usable = []
-    for s in solved:
+    for i, s in enumerate(solved):
         if problem.measured(s).any():
-            usable.append(s)
+            usable.append(i)
         else:
             excluded[s.configuration.name] = "no mode inside band_hz" if space.limits.band else "no separable mode"
     if len(usable) < n:
@@ -207,17 +265,27 @@ def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "aut
             f"{len(usable)} candidate(s) ({len(space.materials)} materials x {len(space.thicknesses)} thicknesses x "
             f"{len(space.placements)} placements, {len(excluded)} left out by the limits); lower configurations "
             "or add materials, thicknesses or placements")
-    blocks, rows0 = stacked_rows(problem, usable), problem.rows(original)
+    rows0 = np.stack([stacked_rows(problem, [row[0]])[0] for row in at_points])
+    blocks = np.stack([stacked_rows(problem, [row[1 + i] for i in usable]) for row in at_points])
+    symmetric = is_mirror_symmetric(problem.specimen)
+    wanted = 2 * top if symmetric else top  # a set has at most one mirror
     if method == "auto":
         method = "exhaustive" if math.comb(len(usable), n) <= EXHAUSTIVE_LIMIT else "relaxation"
     if method == "exhaustive":
-        (best, sets), bound = exhaustive(problem, rows0, blocks, n, top, progress), None
+        (best, sets), bound = exhaustive(problem, rows0, blocks, n, wanted, progress), None
     else:
-        best, sets, bound = relaxed(problem, rows0, blocks, n, top)
-    designs = sorted((Design.of(problem, [original] + [usable[i] for i in s]) for s in best),
-                     key=lambda d: d.scores.loss(space.criterion))
+        best, sets, bound = relaxed(problem, rows0, blocks, n, wanted)
+
+    def design(s: tuple[int, ...]) -> Design:
+        chosen = [1 + usable[i] for i in s]
+        prior = [[row[0]] + [row[j] for j in chosen] for row in at_points[1:]]
+        return Design.of(problem, [original] + [solved[j - 1] for j in chosen], prior or None)
+
+    designs = sorted((design(s) for s in best), key=lambda d: d.loss(space.criterion))
+    designs, mirrors = collapse(designs, lambda d: [s.configuration for s in d.solved], symmetric)
     baseline = None
     if len(problem.specimen.configurations) > 1:
-        baseline = Design.of(problem, problem.solve(problem.specimen.configurations))
-    return Recommendation(tuple(designs), space.criterion, method, len(usable), sets, excluded, bound, baseline,
-                          poisson_plate(problem.specimen), time.perf_counter() - start)
+        baseline = score_design(problem, problem.specimen.configurations, pool=pool)
+    return Recommendation(tuple(designs[:top]), space.criterion, method, len(usable), sets, excluded, bound, baseline,
+                          poisson_plate(problem.specimen), time.perf_counter() - start, tuple(mirrors[:top]),
+                          space.limits, len(points) - 1)

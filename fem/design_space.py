@@ -13,6 +13,13 @@ Every key is optional::
     max_added_thickness_mm = 3.0         # per configuration, adhesive included
     band_hz = [20.0, 5000.0]             # what the measurement chain covers
     min_separation_rel = 0.005           # closer modes cannot be told apart
+    prior_range_rel = 0.3                # score over +-30 % of the identified properties (0: nominal only)
+    prior_samples = 16                   # parameter points sampled over that range
+    target_std_rel = { E = 0.02, G = 0.02, nu = 0.05 }   # predicted std the lab needs
+    sensor_mass_g = 2.0                  # the accelerometer (the test sheet gives its shift)
+
+Without ``max_added_mass_g`` / ``max_added_thickness_mm`` the planner limits an added
+configuration to 3 x the specimen's mass and thickness (``fem.limits``).
 
 A spec material takes precedence over a stock one of the same name; ``NAME_stock``
 always means the stock one (e.g. ``steel_stock`` next to an identified ``steel``).
@@ -33,7 +40,7 @@ from .stock import (
     STOCK_THICKNESSES_MM,
     stock_name,
 )
-from .validation import check_keys, did_you_mean, number
+from .validation import check_keys, did_you_mean, number, whole
 
 MM = 1e-3
 PLACEMENTS = ("top", "bottom")
@@ -43,11 +50,20 @@ CRITERIA = {
     "e": "E-optimality: smallest eigenvalue of the Fisher information (larger is better)",
 }
 KEYS = ("materials", "thicknesses_mm", "placements", "adhesive", "configurations", "frequency_std_rel",
-        "criterion", "max_added_mass_g", "max_added_thickness_mm", "band_hz", "min_separation_rel")
+        "criterion", "max_added_mass_g", "max_added_thickness_mm", "band_hz", "min_separation_rel",
+        "prior_range_rel", "prior_samples", "target_std_rel", "sensor_mass_g")
 DEFAULT_MATERIALS = ("brass", "aluminium", "steel")
 DEFAULT_FREQUENCY_STD_REL = 1e-3
 #: Added plates thinner than this are foils, not plates; thicker than this are blocks.
 THICKNESS_RANGE_MM = (0.01, 50.0)
+#: Prior parameter points a robust score uses by default (besides the nominal one).
+DEFAULT_PRIOR_SAMPLES = 16
+#: Target predicted std per property kind (relative) when [design] gives none: moduli to
+#: 2 %, Poisson ratios to 5 % (a Poisson ratio is read from small frequency differences).
+DEFAULT_TARGETS = {"E": 0.02, "G": 0.02, "nu": 0.05}
+#: Keys of target_std_rel: a kind ("E": E1 and E2, "G": G12, "nu": nu12) or one parameter kind.
+TARGET_KEYS = {"E": ("E1", "E2"), "G": ("G12",), "nu": ("nu12",), "E1": ("E1",), "E2": ("E2",),
+               "G12": ("G12",), "nu12": ("nu12",)}
 
 
 @dataclass(frozen=True)
@@ -70,6 +86,16 @@ class DesignSpace:
     criterion: str = "condition"
     limits: Limits = field(default_factory=Limits)
     defined: tuple[Material, ...] = ()
+    prior_range: float = 0.0
+    prior_samples: int = DEFAULT_PRIOR_SAMPLES
+    targets: tuple[tuple[str, float], ...] = tuple(
+        (k, DEFAULT_TARGETS[g]) for g, kinds in TARGET_KEYS.items() if g in DEFAULT_TARGETS for k in kinds)
+    targets_given: bool = False
+    sensor_mass: float | None = None
+
+    def target(self, kind: str) -> float | None:
+        """The target relative std of a parameter kind (E1, E2, G12, nu12), or None."""
+        return dict(self.targets).get(kind)
 
     def material(self, name, where: str) -> Material:
         """A known material by name: one the spec defines, else built-in stock."""
@@ -181,5 +207,31 @@ def parse_design(design: dict, defined: dict[str, Material], n_identified: int) 
                               "e.g. [20, 5000]")
         band = (float(band[0]), float(band[1]))
     limits = Limits(None if mass is None else mass * 1e-3, None if thick is None else thick * MM, band, separation)
+    prior = _number(design, "prior_range_rel", 0.0, 0.0, 0.9,
+                    "relative half-range of the unknown properties, e.g. 0.3 for +-30 %; 0 scores at the "
+                    "nominal values only", zero=True)
+    samples = whole(design.get("prior_samples", DEFAULT_PRIOR_SAMPLES), "[design].prior_samples", 2, 256,
+                    "of parameter points ", DesignError)
+    sensor = _number(design, "sensor_mass_g", None, 0.0, 1000.0, "the accelerometer's mass in grams, e.g. 2.0")
+    targets = _targets(design.get("target_std_rel"))
     return DesignSpace(tuple(materials), thicknesses, placements, bond, size, std, criterion, limits,
-                       tuple(defined.values()))
+                       tuple(defined.values()), prior, samples, targets, "target_std_rel" in design,
+                       None if sensor is None else sensor * 1e-3)
+
+
+def _targets(table) -> tuple[tuple[str, float], ...]:
+    """(kind, relative std) for E1, E2, G12, nu12 from ``target_std_rel`` (defaults where
+    not given; a parameter kind's key overrides its group's)."""
+    if table is None:
+        table = {}
+    elif not isinstance(table, dict) or not table:
+        raise DesignError(f"[design].target_std_rel = {table!r}: need a table of relative std per property kind, "
+                          "e.g. { E = 0.02, G = 0.02, nu = 0.05 }")
+    check_keys(table, TARGET_KEYS, "[design].target_std_rel", DesignError)
+    out = {k: DEFAULT_TARGETS[g] for g, kinds in TARGET_KEYS.items() if g in DEFAULT_TARGETS for k in kinds}
+    for key in sorted(table, key=lambda k: k not in DEFAULT_TARGETS):  # groups first, then single kinds
+        value = number(table, key, "[design].target_std_rel", low=0.0, high=1.0,
+                       hint="relative, e.g. 0.02 for 2 %", error=DesignError)
+        for kind in TARGET_KEYS[key]:
+            out[kind] = value
+    return tuple(out.items())

@@ -2,7 +2,7 @@
 measurement chain and the separation two modes need to be told apart."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -11,6 +11,16 @@ from .specimen import Configuration
 #: Modes closer than this (relative) are flagged: with the loss factors of bonded
 #: plates (0.2-1 %, the adhesive adds damping) their resonance peaks overlap.
 CLOSE_MODES_WARNING = 0.01
+#: Default limits relative to the specimen, used where ``[design]`` gives none: an added
+#: configuration may add at most 3 x the specimen's mass and 3 x its thickness (adhesive
+#: included).  Why: the paper's design adds 1.3 x the mass and 0.95 x the thickness; 3 x
+#: leaves room for denser or thicker stock, while beyond it the known plate carries most
+#: of the bending stiffness and mass of the bonded plate, so its own property errors
+#: (stock values are good to a few per cent) are read as errors of the specimen's layers,
+#: the bond line carries a plate far heavier than the specimen (peel, creep, handling),
+#: and a thick stack leaves the thin-plate (Kirchhoff) range the model assumes.
+DEFAULT_MASS_RATIO = 3.0
+DEFAULT_THICKNESS_RATIO = 3.0
 
 
 def added_layers(configuration: Configuration):
@@ -47,6 +57,40 @@ class Limits:
     max_added_thickness: float | None = None
     band: tuple[float, float] | None = None
     min_separation: float = 0.0
+    #: which of the two limits are the defaults relative to the specimen ("mass", "thickness")
+    defaults: tuple[str, ...] = ()
+
+    def with_defaults(self, specimen_mass: float, specimen_thickness: float) -> "Limits":
+        """The limits with the mass and thickness limits not given set to the defaults
+        relative to the specimen (``DEFAULT_MASS_RATIO``, ``DEFAULT_THICKNESS_RATIO``)."""
+        mass, thickness, defaults = self.max_added_mass, self.max_added_thickness, list(self.defaults)
+        if mass is None:
+            mass = DEFAULT_MASS_RATIO * specimen_mass
+            defaults.append("mass")
+        if thickness is None:
+            thickness = DEFAULT_THICKNESS_RATIO * specimen_thickness
+            defaults.append("thickness")
+        return replace(self, max_added_mass=mass, max_added_thickness=thickness, defaults=tuple(defaults))
+
+    def describe(self) -> str:
+        """One line stating the mass and thickness limits and where they come from."""
+        parts = []
+        if self.max_added_mass is not None:
+            parts.append(f"added mass <= {self.max_added_mass * 1e3:.4g} g" + (
+                f" (default: {DEFAULT_MASS_RATIO:g} x the specimen's mass; set [design] max_added_mass_g)"
+                if "mass" in self.defaults else " ([design] max_added_mass_g)"))
+        if self.max_added_thickness is not None:
+            parts.append(f"added thickness <= {self.max_added_thickness * 1e3:.4g} mm" + (
+                f" (default: {DEFAULT_THICKNESS_RATIO:g} x the specimen's thickness; set [design] "
+                "max_added_thickness_mm)" if "thickness" in self.defaults else " ([design] max_added_thickness_mm)"))
+        return "limits per configuration: " + ("; ".join(parts) if parts else "none")
+
+    def to_dict(self) -> dict:
+        return {"max_added_mass_g": None if self.max_added_mass is None else round(self.max_added_mass * 1e3, 6),
+                "max_added_thickness_mm": (None if self.max_added_thickness is None
+                                           else round(self.max_added_thickness * 1e3, 6)),
+                "defaults": list(self.defaults), "band_hz": list(self.band) if self.band else None,
+                "min_separation_rel": self.min_separation}
 
     def extra_modes(self) -> int:
         """Modes to solve beyond the measured ones: one, to see whether the last

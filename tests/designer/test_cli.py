@@ -55,7 +55,11 @@ def test_recommend_json_best_first(capsys):
     assert conds[0] <= data["baseline"]["condition_number"]
     first = data["designs"][0]
     assert first["configurations"][0]["name"] == "original" and len(first["configurations"]) == 3
-    assert data["search"]["method"] == "exhaustive" and data["search"]["sets"] == 276  # C(24, 2)
+    # 24 candidates, of which the default mass limit (3 x the specimen's 148.7 g = 446.2 g) leaves out
+    # the 3 mm brass (575.1 g) and steel (531.2 g) plates on either face: C(20, 2) sets
+    assert data["search"]["method"] == "exhaustive" and data["search"]["sets"] == 190
+    assert data["limits"]["max_added_mass_g"] == pytest.approx(3 * 0.0225 * (2 * 2700 * 0.2 + 7900 * 0.7), rel=1e-12)
+    assert data["limits"]["defaults"] == ["mass", "thickness"] and len(data["search"]["excluded"]) == 4
 
 
 def test_recommend_default_example(capsys):
