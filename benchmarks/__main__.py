@@ -1,6 +1,7 @@
 """Run every benchmark: ``python -m benchmarks``."""
-from . import core, designer, identification
+from . import core, designer, identification, peaks
 
 core.main()
 designer.main()
 identification.main()
+peaks.main()

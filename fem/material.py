@@ -12,6 +12,14 @@ ELASTIC_CONSTANTS = ("E1", "E2", "G12", "nu12")
 SHEAR_MODULI = ("G13", "G23")
 #: Material parameters with exact sensitivities (elastic constants, density, shear moduli).
 MATERIAL_PARAMETERS = ELASTIC_CONSTANTS + ("density",) + SHEAR_MODULI
+#: Plausible ranges that catch unit slips and bound identifications [SI]: soft elastomer
+#: (0.1 MPa) to above diamond (~1050 GPa); foams (10 kg/m^3) to above osmium (22 590).
+MODULUS_RANGE = (1e5, 2e12)
+DENSITY_RANGE = (10.0, 25000.0)
+#: Default bounds of an identified property [SI]; nu12 within 0..0.5 unless the spec widens
+#: it (fibre laminates at +-45 deg or some woods exceed 0.5: give `bounds` then).
+DEFAULT_BOUNDS = {"E1": MODULUS_RANGE, "E2": MODULUS_RANGE, "G12": MODULUS_RANGE, "G13": MODULUS_RANGE,
+                  "G23": MODULUS_RANGE, "nu12": (0.0, 0.5), "density": DENSITY_RANGE}
 
 
 @dataclass(frozen=True)
@@ -37,6 +45,7 @@ class Material:
     G13: float | None = None
     G23: float | None = None
     identify: tuple[str, ...] = ()
+    bounds: tuple[tuple[str, float, float], ...] = ()   # (kind, lower, upper) [SI] set in the spec
 
     def __post_init__(self):
         kinds = ELASTIC_CONSTANTS if self.identify is True else () if self.identify is False else tuple(self.identify)
@@ -78,6 +87,14 @@ class Material:
     def defaulted_shear_moduli(self) -> tuple[str, ...]:
         """Names of the transverse shear moduli not given, hence set to G12."""
         return tuple(name for name in SHEAR_MODULI if getattr(self, name) is None)
+
+    def bound(self, parameter: str) -> tuple[float, float]:
+        """(lower, upper) [SI] an identification keeps the property within: the spec's
+        ``bounds`` or ``DEFAULT_BOUNDS``."""
+        for kind, low, high in self.bounds:
+            if kind == parameter:
+                return low, high
+        return DEFAULT_BOUNDS.get(parameter, (-math.inf, math.inf))
 
     def value(self, parameter: str) -> float:
         """The value of a named material parameter (SI units; G13, G23 with their default)."""

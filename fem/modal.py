@@ -68,6 +68,11 @@ def solve_modes(
     """
     n_dofs = units.n_dofs
     stiffness, mass = units.matrix(stiffness_data), units.matrix(mass_data)
+    # M shares K's pattern, but without rotary inertia only u-u, v-v and w-w entries are
+    # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.  (A copy:
+    # the pattern's index arrays are shared by every matrix of the mesh.)
+    mass = mass.copy()
+    mass.eliminate_zeros()
     all_rigid = units.rigid_body_modes
     n_suspension = 0
     if suspended:

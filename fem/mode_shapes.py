@@ -70,30 +70,35 @@ def _gauss() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return xi, weight, phi
 
 
-@lru_cache(maxsize=16)
-def deflection_sampler(units: UnitMatrices) -> sp.csr_matrix:
-    """Sparse (POINTS^2, n_dofs) operator giving w at the Gauss grid of the plate from a
-    mode's DOFs (Hermite interpolation in the element holding each point)."""
-    xi, _, _ = _gauss()
+def deflection_operator(units: UnitMatrices, x: np.ndarray, y: np.ndarray) -> sp.csr_matrix:
+    """Sparse (points, n_dofs) operator giving w at the points (x, y) [m] from a mode's
+    DOFs (Hermite interpolation in the element holding each point)."""
+    x, y = np.atleast_1d(np.asarray(x, dtype=float)), np.atleast_1d(np.asarray(y, dtype=float))
     mesh = units.mesh
     hx, hy = mesh.element_size
     names = units.element_type.NODE_DOFS
-    w_first = names.index("w")
-    ex = np.minimum((xi * mesh.nx).astype(int), mesh.nx - 1)
-    ey = np.minimum((xi * mesh.ny).astype(int), mesh.ny - 1)
-    vx = _hermite_1d(xi * mesh.nx - ex, hx)[0]  # (4, POINTS)
-    vy = _hermite_1d(xi * mesh.ny - ey, hy)[0]
+    w_first, per_node = names.index("w"), len(names)
+    ex = np.clip((x / hx).astype(int), 0, mesh.nx - 1)
+    ey = np.clip((y / hy).astype(int), 0, mesh.ny - 1)
+    vx = _hermite_1d(x / hx - ex, hx)[0]  # (4, points)
+    vy = _hermite_1d(y / hy - ey, hy)[0]
     rows, cols, data = [], [], []
-    per_node = len(names)
-    for corner, (i, j) in enumerate(units.element_type.CORNERS):
-        node = (ey[None, :] + j) * (mesh.nx + 1) + (ex[:, None] + i)  # (x point, y point)
+    for i, j in units.element_type.CORNERS:
+        node = (ey + j) * (mesh.nx + 1) + ex + i
         for d, (ax, ay) in enumerate(((0, 0), (1, 0), (0, 1), (1, 1))):
-            weight = np.outer(vx[2 * i + ax], vy[2 * j + ay])
-            rows.append(np.arange(POINTS * POINTS))
-            cols.append((node * per_node + w_first + d).ravel())
-            data.append(weight.ravel())
+            rows.append(np.arange(x.size))
+            cols.append(node * per_node + w_first + d)
+            data.append(vx[2 * i + ax] * vy[2 * j + ay])
     return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(POINTS * POINTS, units.n_dofs))
+                         shape=(x.size, units.n_dofs))
+
+
+@lru_cache(maxsize=16)
+def deflection_sampler(units: UnitMatrices) -> sp.csr_matrix:
+    """w at the Gauss grid of the plate (x fastest outer, y inner: (POINTS^2, n_dofs))."""
+    xi, _, _ = _gauss()
+    x, y = np.meshgrid(xi * units.mesh.length, xi * units.mesh.width, indexing="ij")
+    return deflection_operator(units, x.ravel(), y.ravel())
 
 
 def beam_coefficients(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
@@ -154,4 +159,4 @@ def affinity(coefficients: np.ndarray, label_pattern: np.ndarray) -> np.ndarray:
     return np.einsum("mij,ij->m", coefficients, label_pattern) ** 2
 
 
-__all__ = ["beam_functions", "beam_coefficients", "in_plane", "label_of", "pattern", "affinity", "ORDER"]
+__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "ORDER"]

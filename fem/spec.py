@@ -16,7 +16,7 @@ from .design_space import parse_design
 from .effects import apply_fixed
 from .errors import SpecError
 from .laminate import Layer
-from .material import Material
+from .material import DENSITY_RANGE, MODULUS_RANGE, Material
 from .model import MAX_MODES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
 from .stock import STOCK, stock_name
@@ -25,11 +25,13 @@ from .validation import check_keys, number, suggestion, whole
 GPA, MM = 1e9, 1e-3
 MATERIAL_KEYS = {
     "E1_GPa": True, "E2_GPa": True, "G12_GPa": True, "nu12": True, "density_kg_m3": True,
-    "identify": False, "G13_GPa": False, "G23_GPa": False, "note": False,
+    "identify": False, "G13_GPa": False, "G23_GPa": False, "note": False, "bounds": False,
 }
 #: Plausible ranges that catch unit slips (a modulus in MPa, a density in g/cm^3).
-MODULUS_RANGE_GPA = (1e-4, 2000.0)   # soft elastomer .. above diamond (~1050 GPa)
-DENSITY_RANGE = (10.0, 25000.0)      # foams .. above osmium (22 590 kg/m^3)
+MODULUS_RANGE_GPA = tuple(x / GPA for x in MODULUS_RANGE)
+#: Keys of a material's ``bounds`` table and their factor to SI.
+BOUND_KEYS = {"E1_GPa": ("E1", GPA), "E2_GPa": ("E2", GPA), "G12_GPa": ("G12", GPA), "G13_GPa": ("G13", GPA),
+              "G23_GPa": ("G23", GPA), "nu12": ("nu12", 1.0), "density_kg_m3": ("density", 1.0)}
 
 
 def _positive(table: dict, key: str, where: str, **kw) -> float | None:
@@ -62,11 +64,29 @@ def _material(name: str, table: dict) -> Material:
                                                and all(isinstance(k, str) for k in identify)):
         raise SpecError(f"{where}.identify = {identify!r}: need true, false or a list of properties, "
                         'e.g. ["G13", "G23"]')
+    bounds = _bounds(table.get("bounds", {}), where)
     try:
         return Material(name, values["E1"], values["E2"], values["G12"], nu12, density,
-                        values["G13"], values["G23"], identify)
+                        values["G13"], values["G23"], identify, bounds)
     except SpecError as exc:
         raise SpecError(f"{where}: {exc}".replace(f"material '{name}': ", "")) from None
+
+
+def _bounds(table, where: str) -> tuple[tuple[str, float, float], ...]:
+    """A material's ``bounds = { nu12 = [0, 0.6], E1_GPa = [50, 300] }`` in SI."""
+    here = f"{where}.bounds"
+    if not isinstance(table, dict):
+        raise SpecError(f"{here} = {table!r}: need a table like {{ nu12 = [0.0, 0.6], E1_GPa = [50, 300] }}")
+    check_keys(table, BOUND_KEYS, here)
+    out = []
+    for key, pair in table.items():
+        ok = (isinstance(pair, list) and len(pair) == 2
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in pair))
+        if not ok or not pair[0] < pair[1]:
+            raise SpecError(f"{here}.{key} = {pair!r}: need [lower, upper] with lower < upper, e.g. [0.0, 0.6]")
+        kind, factor = BOUND_KEYS[key]
+        out.append((kind, pair[0] * factor, pair[1] * factor))
+    return tuple(out)
 
 
 def _layer_material(name, where: str, materials: dict) -> Material:

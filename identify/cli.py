@@ -14,6 +14,7 @@ from .compare import compare
 from .diagnose import diagnose
 from .examples import COATED_PLATE_MEASURED, spec_or_example
 from .fitting import fit
+from .peaks import extract_peaks
 from .measurements import Measurements, load_measurements
 from .plots import plot_before_after, plot_comparison, plot_point_map
 from .predict import predict
@@ -22,6 +23,7 @@ from .report import write_report
 DESCRIPTION = """identify-layers: the stiffness of every layer of a laminated plate from its resonances.
 
   predict   elastic frequencies of every configuration in a spec
+  peaks     modal peaks of one configuration from tap recordings (a peak-list CSV)
   fit       identify the layer properties from measured frequencies
   compare   where the model fails: residual patterns and plots
   diagnose  which physical effect is the model missing?
@@ -63,6 +65,31 @@ def run_predict(args) -> int:
     prediction = predict(_model(args), args.modes)
     print(to_json(prediction.to_dict()) if args.json else prediction.report())
     return 0
+
+
+def run_peaks(args) -> int:
+    """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
+    guide = None
+    if args.spec is not None:
+        model = load_spec(args.spec)
+        if args.configuration not in [c.name for c in model.specimen.configurations]:
+            model.specimen.configuration(args.configuration)  # the one-line error naming the known ones
+        guide = predict(model).frequencies_hz[args.configuration]
+        _say(f"guided by the predicted modes of '{args.configuration}': {', '.join(f'{f:.1f}' for f in guide)} Hz")
+    band = None if args.band is None else tuple(args.band)
+    result = extract_peaks(args.recordings, args.configuration, args.sample_rate, band, guide)
+    if args.out:
+        result.write_csv(args.out)
+        _say(f"peak list written to {args.out}")
+    if args.report:
+        folder = Path(args.report)
+        folder.mkdir(parents=True, exist_ok=True)
+        write_text(folder / "peaks.txt", result.report() + "\n")
+        result.write_csv(folder / "peaks.csv")
+        result.plot(folder)
+        _say(f"report written to {folder}/")
+    print(to_json(result.to_dict()) if args.json else result.report())
+    return 0 if len(result) else 1
 
 
 def run_fit(args) -> int:
@@ -125,6 +152,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_common_arguments(p)
     p.add_argument("--modes", type=int, help="elastic modes per configuration (default: [model] modes)")
     p.set_defaults(run=run_predict)
+    p = sub.add_parser("peaks", help="modal peaks of one configuration from tap recordings")
+    p.add_argument("recordings", nargs="+", metavar="REC",
+                   help="impact-test recordings of one configuration: CSV (time_s, force, a response column), WAV or "
+                        "UFF58; several files are several hits")
+    p.add_argument("--configuration", default="original", help="the configuration recorded (default: original)")
+    p.add_argument("--sample-rate", type=float, metavar="HZ", help="for CSV files without a time_s column")
+    p.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="frequency band searched [Hz]")
+    p.add_argument("--spec", help="a spec: its predicted frequencies of the configuration guide the search")
+    p.add_argument("--out", metavar="CSV", help="write the peak list (configuration,frequency_hz,std_hz,damping_ratio)")
+    p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
+    p.add_argument("--report", metavar="DIR", help="write a report folder (text, CSV, FRF and stabilisation plots)")
+    p.set_defaults(run=run_peaks)
     for name, run, text in (("fit", run_fit, "identify the layer properties from measured frequencies"),
                             ("compare", run_compare, "where the model fails: residual patterns and plots"),
                             ("diagnose", run_diagnose, "which physical effect is the model missing?")):

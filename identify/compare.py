@@ -32,7 +32,8 @@ from .objective import Objective, solving_model
 from .report import residual_table
 from .result import FitResult
 from .statistics import FitStatistics
-from .updating import update
+from .fitting import fit_layers
+from .peak_lists import matched_at
 
 #: A signature explaining more than this share of the misfit is reported as present.
 PATTERN_SHARE = 0.5
@@ -197,11 +198,14 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
 
 def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
     """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
-    fitted = update(model, measurements) if refit else None
+    fitted = fit_layers(model, measurements, explain=False) if refit else None
     if fitted is not None:
         now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
         pairings, jacobian = fitted.pairings, fitted.jacobian
+        measurements = fitted.measurements  # a peak list: the peaks matched to modes
     else:
+        if not measurements.ranked:
+            measurements = matched_at(model, measurements)
         objective = Objective(model, measurements, [])
         evaluation = objective.evaluate(np.zeros(0), None)
         now, model_hz, pairings, jacobian = model, evaluation.model_hz, evaluation.pairings, None

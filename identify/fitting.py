@@ -10,7 +10,9 @@ from fem.model import SpecimenModel
 
 from .measurements import Measurements
 from .parameters import display
-from .result import FitResult, Iteration
+from .peak_lists import fit_peak_list
+from .causes import likely_causes
+from .result import FitResult, FitStatus, Iteration
 from .updating import FitOptions, update
 
 #: Iterations per point-mass start (the best start is then continued).
@@ -35,7 +37,25 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
         return fit_with_effects(model, measurements, list(effects), progress=progress)
-    return update(model, measurements, parameters, options, progress)
+    return fit_layers(model, measurements, parameters, options, progress)
+
+
+def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions = FitOptions(),
+               progress: Callable[[Iteration], None] | None = None, effect_of: dict | None = None,
+               like: FitResult | None = None, explain: bool = True) -> FitResult:
+    """The multi-model updating of ranked measurements, or of a peak list (matched to the
+    model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
+    starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
+    poor fit its likely causes (``causes``)."""
+    if measurements.ranked:
+        result = update(model, measurements, parameters, options, progress, effect_of)
+    else:
+        start = like.peaks.matches() if like is not None and like.peaks is not None else None
+        result = fit_peak_list(model, measurements, parameters, options, progress, effect_of, start)
+    if explain and result.status is FitStatus.POOR_FIT:
+        causes = likely_causes(result)
+        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
+    return result
 
 
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
@@ -65,15 +85,16 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
             for on in variants:
                 if progress:
                     progress(f"fitting with {kind} {on.note}".strip())
-                trial = update(on.model, measurements, list(baseline.parameters) + free + list(on.free),
-                               FitOptions(max_iterations=POINT_MASS_ITERATIONS if kind == "point_mass" else 40),
-                               effect_of={**effect_of, **{p: kind for p in on.free}})
+                trial = fit_layers(on.model, measurements, list(baseline.parameters) + free + list(on.free),
+                                   FitOptions(max_iterations=POINT_MASS_ITERATIONS if kind == "point_mass" else 40),
+                                   effect_of={**effect_of, **{p: kind for p in on.free}}, like=baseline,
+                                   explain=False)
                 trials.append((trial, on))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
-        if not result.converged:  # the best start was still moving: let it finish
-            result = update(result.model, measurements, list(result.parameters), FitOptions(max_iterations=80),
-                            effect_of=result.effect_of)
-        rivals = [t for t, o in trials if t is not result and t.converged
+        if not result.finished:  # the best start was still moving: let it finish
+            result = fit_layers(result.model, measurements, list(result.parameters), FitOptions(max_iterations=80),
+                                effect_of=result.effect_of, like=result, explain=False)
+        rivals = [t for t, o in trials if t is not result and t.finished
                   and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
                   and _differs(t, result, o.free)]
         if rivals:
@@ -84,6 +105,9 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         start = result.model
         free += list(on.free)
         effect_of.update({p: kind for p in on.free})
+    if result.status is FitStatus.POOR_FIT:
+        causes = likely_causes(result)
+        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
     return replace(result, warnings=result.warnings + tuple(text for _, text in notes), effect_notes=tuple(notes),
                    baseline=baseline)
 

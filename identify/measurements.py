@@ -2,8 +2,13 @@
 
 Format (DESIGN.md): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
 rank among the elastic modes) and ``std_hz`` optional.  An optional ``label`` column
-names a mode's nodal-line pattern as the model prints it, e.g. ``(1,2)``; when given it
-fixes which model mode a measured one is paired with at the start.
+names a mode's nodal pattern as the model prints it, e.g. ``(1,2)``; when given it fixes
+which model mode a measured one is paired with.  ``damping_ratio`` may be given (as
+``identify-layers peaks`` writes it); it is kept for reports.
+
+Without ``mode`` the file is a peak list, as recordings give it: some modes missing,
+some peaks spurious.  Its rows get mode 0 (no rank) and the fit matches them to model
+modes itself (``identify.matching``).
 """
 from __future__ import annotations
 
@@ -19,15 +24,18 @@ from fem.model import SpecimenModel
 from fem.validation import suggestion
 
 REQUIRED = ("configuration", "frequency_hz")
-OPTIONAL = ("mode", "std_hz", "label")
+OPTIONAL = ("mode", "std_hz", "label", "damping_ratio")
+#: The mode number of a peak that has no rank yet (a peak list).
+UNRANKED = 0
 MAX_MODE = 60
 
 
 @dataclass(frozen=True)
 class Measurements:
     """A validated table: one row per measured frequency, sorted by configuration
-    (spec order) and mode.  Columns: configuration, mode, frequency_hz, std_hz (NaN when
-    not given), label (empty when not given)."""
+    (spec order) and mode (peak lists: by frequency).  Columns: configuration, mode
+    (``UNRANKED`` in a peak list), frequency_hz, std_hz (NaN when not given), label
+    (empty when not given), damping_ratio (NaN when not given)."""
 
     table: pd.DataFrame
     source: str = "<measurements>"
@@ -35,6 +43,15 @@ class Measurements:
     @property
     def has_std(self) -> bool:
         return bool(self.table["std_hz"].notna().all())
+
+    @property
+    def ranked(self) -> bool:
+        """Every row has its mode number (else a peak list the fit matches itself)."""
+        return bool((self.table["mode"] != UNRANKED).all())
+
+    def rows(self, index) -> "Measurements":
+        """The measurements of these rows (positions), renumbered."""
+        return Measurements(self.table.iloc[list(index)].reset_index(drop=True), self.source)
 
     @property
     def configurations(self) -> list[str]:
@@ -101,20 +118,30 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
                 raise _fail(source, f"line {line[i]}: mode = {raw!r}: need the elastic mode's rank, 1 to {MAX_MODE}")
         frame["mode"] = mode.astype(int)
     else:
-        frame["mode"] = frame.groupby("configuration")["frequency_hz"].rank(method="first").astype(int)
+        frame["mode"] = UNRANKED
+    if "damping_ratio" in frame.columns:
+        damping = pd.to_numeric(frame["damping_ratio"], errors="coerce")
+        for i, (raw, d) in enumerate(zip(frame["damping_ratio"], damping)):
+            if not pd.isna(raw) and not (np.isfinite(d) and 0 <= d < 0.5):
+                raise _fail(source, f"line {line[i]}: damping_ratio = {raw!r}: need a ratio 0..0.5 (0.01 for 1 %), "
+                            "or leave it empty")
+        frame["damping_ratio"] = damping.astype(float)
+    else:
+        frame["damping_ratio"] = np.nan
     frame["label"] = frame["label"].fillna("").astype(str).str.strip() if "label" in frame.columns else ""
     for i, label in enumerate(frame["label"]):
         if label and pattern(label) is None:
             raise _fail(source, f"line {line[i]}: label = {label!r} is not a nodal pattern; write it as predict "
                         "prints it, e.g. \"(1,2)\" or \"(0,2)+(2,0)\" (quoted in the CSV), or leave it empty")
 
-    duplicated = frame.duplicated(["configuration", "mode"], keep=False)
+    duplicated = frame.duplicated(["configuration", "mode"], keep=False) & (frame["mode"] != UNRANKED)
     if duplicated.any():
         rows = frame[duplicated]
         raise _fail(source, f"lines {', '.join(map(str, line[duplicated.to_numpy()]))}: configuration "
                     f"{rows['configuration'].iloc[0]!r} mode {rows['mode'].iloc[0]} is given more than once")
     frame["_order"] = frame["configuration"].map({name: i for i, name in enumerate(known)})
-    frame = frame.sort_values(["_order", "mode"]).drop(columns="_order").reset_index(drop=True)
+    frame = frame.sort_values(["_order", "mode", "frequency_hz"], kind="stable").drop(columns="_order")
+    frame = frame.reset_index(drop=True)
     for name, group in frame.groupby("configuration", sort=False):
         f = group["frequency_hz"].to_numpy()
         bad = np.flatnonzero(np.diff(f) < 0)
@@ -122,7 +149,7 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
             a, b = group.iloc[bad[0]], group.iloc[bad[0] + 1]
             raise _fail(source, f"configuration {name!r}: mode {b['mode']} ({b['frequency_hz']:g} Hz) is below mode "
                         f"{a['mode']} ({a['frequency_hz']:g} Hz); mode numbers are ranks, so frequencies must rise")
-    return Measurements(frame[["configuration", "mode", "frequency_hz", "std_hz", "label"]], source)
+    return Measurements(frame[["configuration", "mode", "frequency_hz", "std_hz", "label", "damping_ratio"]], source)
 
 
 def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:

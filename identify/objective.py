@@ -62,9 +62,10 @@ class Objective:
     def parameters(self) -> tuple[Parameter, ...]:
         return self.space.parameters
 
-    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None) -> Evaluation:
+    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True) -> Evaluation:
         """The model at ``values``; modes paired afresh (``pairings`` None: by rank or
-        label) or followed from the previous pairings by their shapes."""
+        label), followed from the previous pairings by their shapes, or (``track``
+        False) paired with the same model modes as ``pairings`` say."""
         model = self.solved.with_specimen(self.space.apply(self.model.specimen, values))
         weight = None
         model_hz = np.empty(len(self.measured_hz))
@@ -76,6 +77,9 @@ class Objective:
             group = self.measurements.table.iloc[rows]
             if pairings is None:
                 pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist())
+            elif not track:
+                indices = pairings[name].indices
+                pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])
             else:
                 if weight is None:
                     units = solution.units

@@ -34,6 +34,24 @@ def mac_matrix(a: np.ndarray, b: np.ndarray, weight: sp.spmatrix) -> np.ndarray:
     return cross**2 / np.outer(np.einsum("ij,ij->j", a, weight @ a), np.einsum("ij,ij->j", b, wb))
 
 
+def monotone_assignment(targets: np.ndarray, slots: np.ndarray) -> np.ndarray:
+    """Slots for targets (both ascending), in order, minimising sum |slot - target|: the
+    unlabelled measured modes keep their order and their ranks' gaps among the model modes
+    the labelled ones left free (dynamic programming, O(targets x slots))."""
+    n, m = len(targets), len(slots)
+    cost = np.full((n + 1, m + 1), np.inf)
+    cost[0, :] = 0.0
+    for i in range(1, n + 1):
+        for j in range(i, m + 1):
+            cost[i, j] = min(cost[i, j - 1], cost[i - 1, j - 1] + abs(slots[j - 1] - targets[i - 1]))
+    out, j = np.empty(n, dtype=int), m
+    for i in range(n, 0, -1):
+        while cost[i, j] == cost[i, j - 1]:
+            j -= 1
+        out[i - 1], j = slots[j - 1], j - 1
+    return out
+
+
 @dataclass
 class ModePairing:
     """For one configuration: which model mode (0-based index) each measured mode is
@@ -47,10 +65,11 @@ class ModePairing:
 
     @classmethod
     def initial(cls, configuration: str, solution, measured_modes, labels) -> "ModePairing":
-        """By rank (``mode`` numbers: measured mode k with model mode k, so ranks with a
-        gap skip the unmeasured mode), or by nodal pattern where a label is given: the
-        labelled modes go to the model modes that show their pattern best (an optimal
-        assignment on the beam-function affinity, ties to the nearer rank)."""
+        """By nodal pattern where a label is given: the labelled modes go to the model modes
+        that show their pattern best (an optimal assignment on the beam-function affinity,
+        ties to the nearer rank).  The others by rank (``mode`` numbers): measured mode k
+        with model mode k, so ranks with a gap skip the unmeasured mode; where labels took
+        modes out of order, the rest keep their order among the modes left free."""
         modes = solution.modes
         n_model = len(modes.eigenvalues)
         ranks = np.asarray(measured_modes, dtype=int) - 1
@@ -69,12 +88,10 @@ class ModePairing:
                     indices[labelled[r]] = c
                 else:
                     unmatched.append(f"mode {measured_modes[labelled[r]]} {labels[labelled[r]]}")
+        unpaired = [k for k in np.argsort(ranks, kind="stable") if indices[k] < 0]
         used = set(indices[indices >= 0].tolist())
-        for k in np.argsort(ranks, kind="stable"):
-            if indices[k] < 0:  # its own rank, or the nearest free one when a label took it
-                free = [i for i in range(n_model) if i not in used]
-                indices[k] = min(free, key=lambda i: (abs(i - ranks[k]), i))
-                used.add(int(indices[k]))
+        free = [i for i in range(n_model) if i not in used]
+        indices[unpaired] = monotone_assignment(ranks[unpaired], np.array(free))
         note = (f"{configuration}: no start-model mode shows the pattern of {', '.join(unmatched)}; paired by rank"
                 if unmatched else "")
         return cls(configuration, indices, modes.shapes[:, indices], note=note)

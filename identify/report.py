@@ -30,6 +30,27 @@ def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataF
     return out
 
 
+def fit_residuals(result: FitResult) -> pd.DataFrame:
+    """The residual rows of a fit (DESIGN.md): every measured frequency with the model
+    mode it is paired with (1-based; None for a peak left out), measured and model (or,
+    left out, the nearest mode's) frequency, relative error, matched; ranked data also
+    keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
+    if result.peaks is not None:
+        from .peak_lists import peak_table
+
+        return peak_table(result.peaks)
+    table = result.measurements.table
+    configs = table["configuration"].to_numpy()
+    modes = np.zeros(len(table), dtype=int)
+    for name, pairing in result.pairings.items():
+        modes[configs == name] = pairing.indices + 1
+    out = residual_table(result.measurements, result.model_hz)
+    out.insert(1, "measured_mode", out.pop("mode"))
+    out.insert(1, "mode", modes)
+    out["matched"] = True
+    return out
+
+
 def history_table(result: FitResult) -> pd.DataFrame:
     """One row per iteration: parameter values (display units), RMS error, step, damping."""
     rows = []
@@ -68,8 +89,8 @@ def to_dict(result: FitResult) -> dict:
         "iterations": result.iterations,
         "materials": materials,
         "effects": effects,
-        "residuals": residual_table(result.measurements, result.model_hz)[["configuration", "mode", "measured_hz", "model_hz", "rel_error"]]
-        .to_dict(orient="records"),
+        "residuals": fit_residuals(result).to_dict(orient="records"),
+        "causes": [c.to_dict() for c in result.causes],
         "rms_rel_error": result.rms_rel_error,
         "condition_number": _finite(u.condition_number),
         "verdict": u.verdict,
@@ -97,9 +118,12 @@ def report_text(result: FitResult) -> str:
     the error per mode before and after the effects (when they were free), warnings."""
     u, st = result.uncertainty, result.statistics
     before = result.baseline
-    chi2 = (f"  reduced chi^2          {st.reduced_chi2:.3g}" if st.scatter_known else
-            f"  residual variance      {st.reduced_chi2:.3g} (relative errors squared; no std_hz given)")
+    chi2 = (f"  reduced chi^2          {st.reduced_chi2:.3g} (1 = the stated scatter)" if st.scatter_known else
+            f"  misfit / scatter       {st.misfit_over_scatter:.3g} (against an assumed 0.1 %: no std_hz given)")
     lines = [f"== identification: {result.status.value} ==", f"   {result.message}"]
+    if result.causes:
+        lines += ["", "likely causes (share of the misfit each accounts for)"]
+        lines += [f"  {100 * c.score:5.0f} %  {c.kind}: {c.text}" for c in result.causes]
     lines += ["", "statistics",
               f"  measured frequencies   {len(result.measurements)} in {len(result.measurements.configurations)} "
               f"configurations",
@@ -107,6 +131,8 @@ def report_text(result: FitResult) -> str:
               f"  iterations             {result.iterations}",
               f"  RMS relative error     {100 * result.rms_rel_error:.4f} %",
               chi2,
+              f"  consistent with it     {'yes' if st.consistent else 'no'} (chi^2 test, p = {st.p_value:.2g}; "
+              f"level 0.001)",
               f"  scatter from           {st.noise_source}",
               f"  condition number       {u.condition_number:.3g} ({u.verdict}; paper: good < 1e3, singular > 1e7)"]
     lines += ["", "parameters (value +- 1 std)"]
@@ -123,7 +149,8 @@ def report_text(result: FitResult) -> str:
               for i, j in strong] or ["  none"]
     lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
-    lines += ["", "residuals", residual_table(result.measurements, result.model_hz).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+    lines += ["", "residuals (mode: the model mode each measured frequency is paired with)",
+              fit_residuals(result).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
     if before is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
         lines += ["", f"error per mode before and after adding {kinds} (RMS {100 * before.rms_rel_error:.4g} % -> "
@@ -146,7 +173,7 @@ def write_report(result: FitResult, folder: str | Path) -> Path:
         plot_before_after(result.baseline, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
                           folder / "before_after.png")
     write_text(folder / "fit.json", to_json(to_dict(result)))
-    write_text(folder / "residuals.csv", residual_table(result.measurements, result.model_hz).to_csv(index=False))
+    write_text(folder / "residuals.csv", fit_residuals(result).to_csv(index=False))
     write_text(folder / "history.csv", history_table(result).to_csv(index=False))
     plot_convergence(result, folder / "convergence.png")
     plot_residuals(result, folder / "residuals.png")

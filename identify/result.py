@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,9 @@ from fem.specimen import Parameter, Specimen
 from .measurements import Measurements
 from .statistics import FitStatistics
 from .uncertainty import Uncertainty
+
+if TYPE_CHECKING:
+    from .peak_lists import PeakAssignment
 
 
 class FitStatus(str, Enum):
@@ -50,7 +54,9 @@ class FitResult:
     solutions that fit within the scatter; pairings: configuration -> final
     ``ModePairing``; jacobian: weighted d residual / d z at the result; effect_of:
     parameter -> the effect kind it belongs to; effect_notes: (kind, text) said of an
-    effect's estimate; baseline: the fit without the effects, when effects were free.
+    effect's estimate; baseline: the fit without the effects, when effects were free;
+    peaks: for a peak list, what became of every peak (``measurements`` then holds the
+    matched ones, ranked); causes: for a poor fit, what is likely wrong, most likely first.
     """
 
     status: FitStatus
@@ -70,10 +76,19 @@ class FitResult:
     effect_of: dict = field(default_factory=dict)
     effect_notes: tuple[tuple[str, str], ...] = ()
     baseline: "FitResult | None" = None
+    peaks: "PeakAssignment | None" = None
+    causes: tuple = ()
 
     @property
     def converged(self) -> bool:
+        """The fit reached a solution whose misfit the scatter explains."""
         return self.status is FitStatus.CONVERGED
+
+    @property
+    def finished(self) -> bool:
+        """The iterations reached a solution (converged or a poor fit): its misfit can be
+        compared with other fits'."""
+        return self.status in (FitStatus.CONVERGED, FitStatus.POOR_FIT)
 
     @property
     def specimen(self) -> Specimen:

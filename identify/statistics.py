@@ -4,6 +4,10 @@ Residuals are weighted by the measurement scatter: r = (model - measured) / std_
 the measurements state it, else relative errors r = (model - measured) / measured, whose
 scale is then unknown and estimated from the residual itself.  Every report, ``compare``
 and ``diagnose`` read these numbers from a ``FitStatistics``; none recomputes them.
+
+Whether a fit may be called converged is a chi^2 test: the misfit must be consistent
+with the stated scatter (std_hz), or, without one, with ``ASSUMED_SCATTER_REL`` of every
+measured frequency, at the level ``CHI2_TEST_LEVEL``.
 """
 from __future__ import annotations
 
@@ -11,12 +15,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from .measurements import Measurements
 
 #: A reduced chi-square above this says the misfit exceeds the stated scatter: the
 #: covariance is then inflated by it (and a warning says so).
 CHI2_WARNING = 4.0
+#: Scatter assumed for measured frequencies without std_hz: 0.1 % (careful tap tests on
+#: free plates repeat to 0.01-0.1 %; a model that misses physics is off by more).
+ASSUMED_SCATTER_REL = 1e-3
+#: The misfit is inconsistent with the scatter when a chi^2 this large or larger would
+#: happen by chance less often than this (a 0.1 % test: false alarms are rare).
+CHI2_TEST_LEVEL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -53,6 +64,36 @@ class FitStatistics:
         """sum of squares / dof: chi^2 / dof with a stated scatter, else the relative
         residual variance; NaN without redundancy (dof <= 0)."""
         return self.sum_squares / self.dof if self.dof > 0 else float("nan")
+
+    @property
+    def chi2_against_scatter(self) -> float:
+        """chi^2 against the stated scatter, or against ``ASSUMED_SCATTER_REL`` of every
+        frequency when none is stated (then the sum of squared relative errors / 0.001^2)."""
+        return self.sum_squares if self.scatter_known else self.sum_squares / ASSUMED_SCATTER_REL**2
+
+    @property
+    def p_value(self) -> float:
+        """Chance of a chi^2 at least this large if the model were right and the scatter
+        as stated (or assumed); 1 without redundancy (nothing to test)."""
+        return float(stats.chi2.sf(self.chi2_against_scatter, self.dof)) if self.dof > 0 else 1.0
+
+    @property
+    def consistent(self) -> bool:
+        """The misfit is consistent with the (stated or assumed) scatter at ``CHI2_TEST_LEVEL``."""
+        return self.p_value >= CHI2_TEST_LEVEL
+
+    @property
+    def misfit_over_scatter(self) -> float:
+        """RMS of the residuals in units of the (stated or assumed) scatter."""
+        return math.sqrt(self.chi2_against_scatter / self.n)
+
+    def describe(self) -> str:
+        """One line: the misfit against the scatter, and whether they are consistent."""
+        against = "the stated std_hz" if self.scatter_known else \
+            f"an assumed {100 * ASSUMED_SCATTER_REL:g} % scatter (no std_hz given)"
+        verdict = "consistent" if self.consistent else f"not consistent (chi^2 test, p = {self.p_value:.2g})"
+        return (f"misfit {self.misfit_over_scatter:.3g}x {against}, RMS {100 * self.rms_rel_error:.4g} %: "
+                f"{verdict}")
 
     @property
     def chi2_unit(self) -> float:
@@ -99,6 +140,9 @@ class FitStatistics:
         finite = lambda x: x if x is not None and math.isfinite(x) else None  # noqa: E731
         return {"n": self.n, "k": self.k, "dof": self.dof, "chi2": finite(self.chi2),
                 "reduced_chi2": finite(self.reduced_chi2) if self.scatter_known else None,
+                "chi2_against_scatter": finite(self.chi2_against_scatter),
+                "scatter_assumed_rel": None if self.scatter_known else ASSUMED_SCATTER_REL,
+                "p_value": self.p_value, "consistent": self.consistent,
                 "noise_scale": finite(self.noise_scale), "rms_rel_error": self.rms_rel_error,
                 "bic": finite(self.bic), "scatter": self.noise_source}
 
@@ -111,4 +155,4 @@ def weighted_residuals(model_hz: np.ndarray, measurements: Measurements) -> np.n
     return (np.asarray(model_hz) - measured) / sigma
 
 
-__all__ = ["FitStatistics", "weighted_residuals", "CHI2_WARNING"]
+__all__ = ["FitStatistics", "weighted_residuals", "CHI2_WARNING", "ASSUMED_SCATTER_REL", "CHI2_TEST_LEVEL"]

@@ -8,12 +8,13 @@ be numbers without meaning.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, condition_verdict
 
+from .parameters import display
 from .statistics import FitStatistics
 
 #: Relative std above which a parameter is flagged weakly identifiable.
@@ -49,6 +50,27 @@ class Uncertainty:
     @property
     def verdict(self) -> str:
         return condition_verdict(self.condition_number)
+
+    def with_twins(self, values: np.ndarray, twins, parameters) -> "Uncertainty":
+        """The uncertainty widened by twin solutions (other mode pairings that fit within
+        the scatter): the pairing is then unknown, so the estimate is a mixture of the
+        solutions weighted by exp(-delta chi^2 / 2) (the best weighs 1), whose spread about
+        the reported one adds to the covariance.  ``twins``: (values, delta chi^2)."""
+        if not twins or not np.all(np.isfinite(self.std)):
+            return self
+        weights = np.array([np.exp(-0.5 * chi2) for _, chi2 in twins])
+        deviations = np.array([v - values for v, _ in twins])
+        spread = np.einsum("k,ki,kj->ij", weights, deviations, deviations) / (1 + weights.sum())
+        covariance = self.covariance + spread
+        std = np.sqrt(np.diag(covariance))
+        widened = np.sqrt(np.diag(spread)) > 0.5 * self.std
+        flags = tuple(f + (("pairing ambiguity (twin solutions) included in std",) if w else ())
+                      for f, w in zip(self.flags, widened))
+        warnings = self.warnings + ((f"std of {', '.join(p.name for p, w in zip(parameters, widened) if w)} "
+                                     "widened by twin solutions: label the close modes to narrow them",)
+                                    if widened.any() else ())
+        return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std),
+                       flags=flags, warnings=warnings)
 
     @classmethod
     def at(cls, objective, evaluation, statistics: FitStatistics) -> "Uncertainty":
@@ -86,15 +108,21 @@ class Uncertainty:
             covariance = dvdz[:, None] * cov_z * dvdz[None, :]
             std = np.sqrt(np.diag(covariance))
             correlation = covariance / np.outer(std, std)
-        flags = tuple(parameter_flags(parameter, value, sd, evaluation.model.specimen)
-                      for parameter, value, sd in zip(space.parameters, values, std))
+        on_bound = space.at_bound(values)
+        flags = tuple(parameter_flags(parameter, value, sd, evaluation.model.specimen,
+                                      space.bound_of(i, values) if on_bound[i] else None)
+                      for i, (parameter, value, sd) in enumerate(zip(space.parameters, values, std)))
         return cls(std, covariance, correlation, cond, s_rel / s_rel[0], weak, flags, tuple(warnings))
 
 
-def parameter_flags(parameter, value: float, std: float, specimen) -> tuple[str, ...]:
-    """Flags of one estimate: at its bound, weakly identifiable (std above
-    ``WEAK_REL_STD`` of the value; for nu12 of 0.3, its typical size), not identifiable."""
+def parameter_flags(parameter, value: float, std: float, specimen, bound: float | None = None) -> tuple[str, ...]:
+    """Flags of one estimate: on its bound (``bound``: the bound it sits on, limited by it
+    rather than by the data), at the positive-definiteness limit, weakly identifiable (std
+    above ``WEAK_REL_STD`` of the value; for nu12 of 0.3, its typical size), not
+    identifiable."""
     flags = []
+    if bound is not None:
+        flags.append(f"at bound ({parameter.kind} = {display(parameter, bound):.4g}; set bounds in the spec to widen)")
     if parameter.kind == "nu12":
         material = specimen.materials[parameter.target]
         if value**2 > 0.98 * material.E1 / material.E2:

@@ -8,7 +8,7 @@ size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import Callable
 
@@ -18,16 +18,20 @@ from fem.errors import MeasurementError
 from fem.model import SpecimenModel
 from fem.specimen import Parameter
 
-from .ambiguity import describe_pairs, explore_pairings
+from .ambiguity import settle_pairings
 from .measurements import Measurements
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
+from .parameters import display
 from .result import FitResult, FitStatus, Iteration
+from .statistics import FitStatistics
 from .uncertainty import Uncertainty
 
 #: The updating stops once the misfit has stalled (falls by less than this fraction) and
 #: no parameter moves by more than STEP_PER_STD of its std.
 STALLED = 1e-4
 STEP_PER_STD = 0.01
+#: A parameter this close to a bound in z (relative for log parameters) is on it.
+BOUND_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -67,12 +71,19 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
     r = objective.residual(current)
     damping, warnings = 0.0, []
     limit = np.where(space.is_log, options.max_log_step, options.max_linear_step)
+    z_low, z_high = space.z_bounds()
     first = history[-1].number + 1
     for number in range(first, first + options.max_iterations):
-        u, s, vt = np.linalg.svd(objective.jacobian(current), full_matrices=False)
+        jacobian = objective.jacobian(current)
+        z = space.to_z(current.values)
+        # Parameters on a bound that the misfit pushes outward are held there (active set).
+        gradient = jacobian.T @ r
+        held = ((z <= z_low + BOUND_TOLERANCE) & (gradient > 0)) | ((z >= z_high - BOUND_TOLERANCE) & (gradient < 0))
+        if held.all():
+            return current, Stop.GAUSS_NEWTON_SMALL, warnings
+        u, s, vt = np.linalg.svd(jacobian[:, ~held], full_matrices=False)
         keep = s > NULL_SINGULAR_VALUE * s[0]  # the pseudo-inverse of eq. 15 drops null directions
         ur = u.T @ r
-        z = space.to_z(current.values)
         # Converged already?  Judge by the Gauss-Newton prediction before paying for solves.
         reducible = 0.5 * float(np.sum(ur[keep] ** 2))  # misfit a Gauss-Newton step could remove
         gauss_newton = vt.T @ np.where(keep, ur / np.where(keep, s, 1.0), 0.0)
@@ -82,8 +93,10 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         accepted = None
         for _ in range(options.max_damping_tries):
             gain = np.where(keep, s / (s**2 + damping), 0.0)
-            dz = -vt.T @ (gain * ur)
+            dz = np.zeros_like(z)
+            dz[~held] = -vt.T @ (gain * ur)
             dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), 1e-300))))
+            dz = np.clip(z + dz, z_low, z_high) - z  # projected onto the bounds
             trial_values = space.to_values(z + dz)
             for _ in range(30):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
                 if space.admissible(objective.model.specimen, trial_values):
@@ -95,14 +108,14 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
                 continue
             trial = objective.evaluate(trial_values, current.pairings)
             if objective.cost(trial) <= objective.cost(current):
-                accepted = (trial, dz)
+                accepted = (trial, dz, damping)  # the damping this step was taken with
                 damping = damping / 10 if damping > 1e-9 * s[0] ** 2 else 0.0  # back to Gauss-Newton
                 break
             damping = max(10 * damping, 1e-6 * s[0] ** 2)
         if accepted is None:
             return current, Stop.NO_DESCENT, warnings
         previous_cost = objective.cost(current)
-        current, dz = accepted
+        current, dz, used = accepted
         r = objective.residual(current)
         step = float(np.max(np.abs(dz)))
         history.append(Iteration(number, current.values, current.model_hz, objective.rms(current),
@@ -116,7 +129,8 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         if step < options.parameter_tolerance:
             return current, Stop.STEP_SMALL, warnings
         stalled = previous_cost - objective.cost(current) <= STALLED * previous_cost
-        if stalled and np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(current)):
+        # Judged on a full Gauss-Newton step only: a damped step is short by construction.
+        if stalled and used == 0.0 and np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(current)):
             return current, Stop.WITHIN_STD, warnings
         if objective.rms(current) < 1e-11:
             return current, Stop.EXACT, warnings
@@ -127,11 +141,11 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
 
 def update(model: SpecimenModel, measurements: Measurements, parameters: list[Parameter] | None = None,
            options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
-           effect_of: dict[Parameter, str] | None = None) -> FitResult:
-    """Identify ``parameters`` (default: E1, E2, G12, nu12 of every identified material)
-    from measured frequencies of all configurations at once, then settle the ambiguous
-    pairings of close modes.  ``effect_of`` names the effect kind a parameter belongs
-    to, for reporting."""
+           effect_of: dict[Parameter, str] | None = None, settle: bool = True) -> FitResult:
+    """Identify ``parameters`` (default: the properties every identified material's
+    ``identify`` names) from measured frequencies of all configurations at once, then
+    settle the pairings frequencies cannot rule out (``settle``; an intermediate fit may
+    skip it).  ``effect_of`` names the effect kind a parameter belongs to, for reporting."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
     if not parameters:
         raise MeasurementError("nothing to identify: mark at least one material with identify = true")
@@ -141,46 +155,59 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             "measure at least as many modes as unknowns (the paper uses 5 per configuration)"
         )
     objective = Objective(model, measurements, parameters, options.extra_modes)
-    values = np.array([model.value(p) for p in parameters], dtype=float)
+    given = np.array([model.value(p) for p in parameters], dtype=float)
+    values = objective.space.clip(given)
+    warnings = [f"start {p.name} = {display(p, v):.4g} is outside its bounds "
+                f"{display(p, lo):.4g}..{display(p, hi):.4g}: started at {display(p, c):.4g} (set bounds in the spec "
+                "to widen them)" for p, v, c, lo, hi in zip(parameters, given, values, objective.space.lower,
+                                                           objective.space.upper) if v != c]
     current = objective.evaluate(values, None)
-    warnings = [p.note for p in current.pairings.values() if p.note]
+    warnings += [p.note for p in current.pairings.values() if p.note]
     history = [Iteration(0, values, current.model_hz, objective.rms(current), objective.cost(current), 0.0, 0.0)]
     if progress:
         progress(history[-1])
     current, stop, tracking = iterate(objective, current, history, options, progress)
     warnings += tracking
-    twins, repaired = [], ()
-    if stop.converged:
-        def refit(state, branch):
-            state, again, _ = iterate(objective, state, branch, options)
-            return state, again.converged
+    twins, repaired = [], ""
+    if stop.converged and settle:
+        def refit(state, branch, max_iterations):
+            state, again, _ = iterate(objective, state, branch, replace(options, max_iterations=max_iterations))
+            return state, again
 
-        current, repaired, notes, twins = explore_pairings(objective, current, history, refit)
+        current, repaired, notes, twins = settle_pairings(objective, current, history, refit)
         warnings += notes
         if progress and notes:
             progress(history[-1])
     statistics = objective.statistics(current)
-    uncertainty = Uncertainty.at(objective, current, statistics)
-    status, message = _status(stop, uncertainty, options)
+    uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
+    status, message = _status(stop, uncertainty, statistics, options)
     if repaired:
-        message += f"; close modes re-paired ({describe_pairs(objective, repaired)})"
+        message += f"; re-paired {repaired}"
     return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
                      measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
-                     tuple(twins), current.pairings, objective.jacobian(current), dict(effect_of or {}))
+                     tuple(values for values, _ in twins), current.pairings, objective.jacobian(current),
+                     dict(effect_of or {}))
 
 
-def _status(stop: Stop, uncertainty: Uncertainty, options: FitOptions) -> tuple[FitStatus, str]:
-    """The status of a finished fit and its message."""
+def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
+            options: FitOptions) -> tuple[FitStatus, str]:
+    """The status of a finished fit and its message: converged only when the misfit is
+    consistent with the scatter (``FitStatistics.consistent``)."""
     if not stop.converged:
         if stop is Stop.MAX_ITERATIONS:
             return FitStatus.NOT_CONVERGED, f"not converged in {options.max_iterations} iterations"
         return FitStatus.NOT_CONVERGED, (f"stopped: no step lowered the misfit after {options.max_damping_tries} "
                                          "damping increases")
-    if uncertainty.verdict == "singular":
+    singular = uncertainty.verdict == "singular"
+    if not statistics.consistent:
+        also = (f"; the sensitivity matrix is singular too (condition number {uncertainty.condition_number:.3g})"
+                if singular else "")
+        return FitStatus.POOR_FIT, f"poor fit: {statistics.describe()}{also}"
+    if singular:
         return FitStatus.NOT_IDENTIFIABLE, (
             f"not identifiable: the frequencies fit but the sensitivity matrix is singular (condition number "
             f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data")
-    return FitStatus.CONVERGED, f"converged: {stop.value}"
+    return FitStatus.CONVERGED, f"converged: {stop.value}; {statistics.describe()}"
 
 
 __all__ = ["FitOptions", "Stop", "iterate", "update"]

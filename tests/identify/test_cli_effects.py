@@ -38,8 +38,12 @@ def test_compare_flags_the_point_signature(sensor_csv, capsys, tmp_path):
     assert main(["compare", str(COATED_PLATE), sensor_csv, "--json", "--report", str(tmp_path)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert not out["at_noise_level"]
-    best = max(out["patterns"], key=lambda p: p["share"])
-    assert best["pattern"] == "follows one point's mode amplitude" and best["share"] > 0.5
+    shares = sorted(out["patterns"], key=lambda p: -p["share"])
+    # The point signature stands out: 47 % of the baseline misfit, 30x the next pattern.  (The
+    # labelled (0,3)/(3,0) pair is paired by its labels at the solution, which lowers the
+    # baseline misfit from 0.77 % to 0.47 % RMS; the sensor's share of the rest is 0.47.)
+    assert shares[0]["pattern"] == "follows one point's mode amplitude" and shares[0]["share"] > 0.4
+    assert shares[0]["share"] > 10 * shares[1]["share"]
     assert (tmp_path / "residuals_with_shapes.png").exists() and (tmp_path / "point_mass_map.png").exists()
 
 

@@ -16,10 +16,13 @@ def test_bundled_measurements_load(example_spec):
     assert m.of("brass_top")["label"].tolist()[3:] == ["(2,1)", "(1,2)"]
 
 
-def test_mode_numbers_default_to_rank(example_spec):
+def test_without_mode_numbers_a_peak_list(example_spec):
+    """No mode column: a peak list, rows unranked (the fit matches them), sorted by
+    frequency within each configuration."""
     frame = GOOD.drop(columns=["mode", "std_hz", "label"]).sample(frac=1, random_state=1)
     m = parse_measurements(frame, example_spec)
-    assert m.of("original")["mode"].tolist() == [1, 2, 3, 4, 5]
+    assert not m.ranked and m.of("original")["mode"].tolist() == [0] * 5
+    assert m.of("original")["frequency_hz"].is_monotonic_increasing
     assert not m.has_std
 
 
@@ -56,6 +59,8 @@ CASES = [
      ["'original'", "mode 2 (100 Hz) is below mode 1"]),
     ("misspelt column", rename_column("frequency_hz", "freq_hz"),
      ["unknown column 'freq_hz'", "did you mean 'frequency_hz'"]),
+    ("label not a pattern", set_cell(3, "label", "ring"), ["line 5", "label = 'ring'", "(1,2)"]),
+    ("damping in per cent", lambda f: f.insert(3, "damping_ratio", 0.6), ["damping_ratio = 0.6", "0.01 for 1 %"]),
 ]
 
 

@@ -22,5 +22,10 @@ def test_true_effect_ranked_first_and_error_falls(case):
         values = o.diagnosis.candidates[0].effect_values()
         assert values["mass_g"] == pytest.approx(3.0, rel=0.1)
         # With material axes along the edges the plate is symmetric about its centre lines:
-        # (x, y), (150 - x, y), (x, 150 - y) and (150 - x, 150 - y) give identical frequencies.
-        assert (abs(values["x_mm"] - 75), abs(values["y_mm"] - 75)) == pytest.approx((50, 35), abs=5)
+        # (x, y), (150 - x, y), (x, 150 - y) and (150 - x, 150 - y) give identical frequencies;
+        # the near-isotropic square plate is nearly symmetric under the 90-degree turn too, so
+        # the position is found up to that turn, and a turned answer comes with its rival.
+        folded = (abs(values["x_mm"] - 75), abs(values["y_mm"] - 75))
+        assert sorted(folded) == pytest.approx([35, 50], abs=5)
+        if folded[0] < folded[1]:
+            assert any("other solution(s) fit about as well" in w for w in o.diagnosis.candidates[0].fit.warnings)

@@ -1,0 +1,299 @@
+"""Impact-test recordings (CSV, WAV, UFF type 58) read into hits, validated at the entry.
+
+A *hit* is one tap: the force and the response sampled at one rate, in the recording's
+own (arbitrary) units.  A UFF58 FRF record (function type 4) is already averaged by the
+acquisition and is kept as a :class:`MeasuredFRF`; a UFF58 pair of time records
+(function type 1: excitation force and response) is a hit.  Several files are several
+hits on one configuration.
+
+Every problem is one line of :class:`fem.errors.MeasurementError` naming the file, the
+field and value, what is allowed and a fix.
+"""
+from __future__ import annotations
+
+import difflib
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fem.errors import MeasurementError
+
+RESPONSE_COLUMNS = ("acceleration", "velocity", "displacement", "response")
+CSV_COLUMNS = ("time_s", "force") + RESPONSE_COLUMNS
+MIN_SAMPLES = 256
+#: Relative disagreement allowed between a stated sample rate and the time column's.
+RATE_TOLERANCE = 1e-4
+#: UFF58 specific data types (ordinate): response quantity by code, and the force codes.
+UFF_RESPONSE = {8: "displacement", 11: "velocity", 12: "acceleration"}
+UFF_FORCE = (9, 13)
+UFF_TIME, UFF_FRF = 1, 4
+
+
+@dataclass(frozen=True)
+class Hit:
+    """One tap: ``force`` (None for a response-only WAV) and ``response`` samples at
+    ``sample_rate`` [Hz]; ``quantity`` names the response (acceleration, velocity,
+    displacement or response)."""
+
+    source: str
+    sample_rate: float
+    response: np.ndarray
+    force: np.ndarray | None = None
+    quantity: str = "acceleration"
+
+    @property
+    def duration_s(self) -> float:
+        return len(self.response) / self.sample_rate
+
+
+@dataclass(frozen=True)
+class MeasuredFRF:
+    """An FRF averaged by the acquisition: ``frf`` (complex, response / force) on the
+    evenly spaced ``frequency_hz`` [Hz]."""
+
+    source: str
+    frequency_hz: np.ndarray
+    frf: np.ndarray
+    quantity: str = "acceleration"
+
+
+Recording = Hit | MeasuredFRF
+
+
+def _fail(source, message: str) -> MeasurementError:
+    return MeasurementError(f"{source}: {message}")
+
+
+def _check_samples(source, name: str, values: np.ndarray, first_line: int = 0) -> np.ndarray:
+    """Finite float samples, at least MIN_SAMPLES of them; ``first_line`` > 0 numbers CSV lines."""
+    values = np.asarray(values, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        where = f"line {bad[0] + first_line}: " if first_line else f"sample {bad[0]}: "
+        raise _fail(source, f"{where}{name} = {values[bad[0]]} is not a finite number ({bad.size} such samples); "
+                    "remove or re-export the damaged samples")
+    if len(values) < MIN_SAMPLES:
+        raise _fail(source, f"{name} has {len(values)} samples, need at least {MIN_SAMPLES}; "
+                    "record the whole hit (about 2 s)")
+    return values
+
+
+def _rate_from_time(source, time: np.ndarray, stated: float | None) -> float:
+    step = np.diff(time)
+    back = np.flatnonzero(step <= 0)
+    if back.size:
+        i = back[0]
+        raise _fail(source, f"line {i + 3}: time_s = {time[i + 1]:g} is not after {time[i]:g}; time must increase "
+                    "monotonically: sort the rows or remove repeated samples")
+    dt = (time[-1] - time[0]) / (len(time) - 1)
+    uneven = np.flatnonzero(np.abs(step - dt) > 1e-3 * dt)
+    if uneven.size:
+        i = uneven[0]
+        raise _fail(source, f"line {i + 3}: time step {step[i]:g} s differs from the mean {dt:g} s; "
+                    "samples must be evenly spaced: re-export without dropped samples")
+    rate = _snap(1.0 / dt)
+    if stated is not None and abs(rate / stated - 1) > RATE_TOLERANCE:
+        raise _fail(source, f"time_s gives a sample rate of {rate:.6g} Hz but sample_rate = {stated:g} Hz; "
+                    "drop the stated rate or the time_s column")
+    return stated if stated is not None else rate
+
+
+def _snap(rate: float) -> float:
+    """A rate within 1e-5 of a whole number of Hz is that number (time columns and UFF
+    increments are written with few digits)."""
+    return float(round(rate)) if abs(rate - round(rate)) < 1e-5 * rate else rate
+
+
+def _check_rate(source, rate) -> float:
+    if rate is None or not np.isfinite(rate) or rate <= 0:
+        raise _fail(source, f"sample_rate = {rate!r} must be a positive number of Hz, e.g. 48000")
+    return float(rate)
+
+
+def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
+    """One hit from a CSV time series: ``time_s`` (or ``sample_rate`` [Hz]), ``force``
+    and one response column (acceleration, velocity, displacement or response)."""
+    source = Path(path).name
+    try:
+        frame = pd.read_csv(path)
+    except pd.errors.EmptyDataError:
+        raise _fail(source, "the file is empty; export the hit's time series with a header line") from None
+    except (OSError, UnicodeDecodeError, pd.errors.ParserError) as exc:
+        raise _fail(source, f"cannot read as CSV ({str(exc).splitlines()[0]}); "
+                    "give a comma-separated text file") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    for column in frame.columns:
+        if column not in CSV_COLUMNS:
+            close = difflib.get_close_matches(column, CSV_COLUMNS, n=1)
+            hint = f"did you mean '{close[0]}'?" if close else "rename it or remove it"
+            raise _fail(source, f"unknown column '{column}' (allowed: {', '.join(CSV_COLUMNS)}); {hint}")
+    responses = [c for c in RESPONSE_COLUMNS if c in frame.columns]
+    if "force" not in frame.columns:
+        raise _fail(source, f"missing column 'force' (columns: {', '.join(frame.columns)}); "
+                    "add the hammer's force channel")
+    if len(responses) != 1:
+        found = ", ".join(responses) or "none"
+        raise _fail(source, f"need exactly one response column of {', '.join(RESPONSE_COLUMNS)}, found {found}; "
+                    "keep one sensor per file")
+    if frame.empty:
+        raise _fail(source, "no rows: the file has a header but no samples")
+    numeric = frame.apply(pd.to_numeric, errors="coerce")
+    for column in frame.columns:
+        text = frame[column][numeric[column].isna() & frame[column].notna()]
+        if len(text):
+            raise _fail(source, f"line {text.index[0] + 2}: {column} = {text.iloc[0]!r} is not a number; "
+                        "fix or remove that row")
+    if "time_s" in frame.columns:
+        time = _check_samples(source, "time_s", numeric["time_s"], first_line=2)
+        rate = _rate_from_time(source, time, None if sample_rate is None else _check_rate(source, sample_rate))
+    elif sample_rate is None:
+        raise _fail(source, "no time_s column and no sample rate; add a time_s column or give the sample rate "
+                    "(--sample-rate HZ)")
+    else:
+        rate = _check_rate(source, sample_rate)
+    force = _check_samples(source, "force", numeric["force"], first_line=2)
+    response = _check_samples(source, responses[0], numeric[responses[0]], first_line=2)
+    return Hit(source, rate, response, force, responses[0])
+
+
+def read_wav(path: str | Path, sample_rate: float | None = None) -> Hit:
+    """One hit from a WAV file: channels (force, response), or (response) alone."""
+    from scipy.io import wavfile
+
+    source = Path(path).name
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", wavfile.WavFileWarning)  # unknown chunks (metadata) are skipped
+            rate, data = wavfile.read(path)
+    except (OSError, ValueError, EOFError) as exc:
+        raise _fail(source, f"cannot read as WAV ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+                    "give a PCM or float WAV file") from None
+    if sample_rate is not None and abs(rate / _check_rate(source, sample_rate) - 1) > RATE_TOLERANCE:
+        raise _fail(source, f"the WAV header says {rate} Hz but sample_rate = {sample_rate:g} Hz; "
+                    "drop the stated rate or re-export the file")
+    data = np.asarray(data, dtype=float)
+    data = data[:, None] if data.ndim == 1 else data
+    if data.shape[1] not in (1, 2):
+        raise _fail(source, f"{data.shape[1]} channels; allowed: 2 (force, response) or 1 (response); "
+                    "export the hammer and one sensor only")
+    response = _check_samples(source, "response channel", data[:, -1])
+    force = _check_samples(source, "force channel", data[:, 0]) if data.shape[1] == 2 else None
+    return Hit(source, float(rate), response, force, "response")
+
+
+def _uff_quantity(source, record: dict, key: str) -> str:
+    code = int(record.get(key, 0))
+    if code not in UFF_RESPONSE:
+        raise _fail(source, f"record '{record.get('id1', '')}': {key} = {code} is not a response; allowed "
+                    f"{', '.join(f'{k} ({v})' for k, v in UFF_RESPONSE.items())}; set the response's data type")
+    return UFF_RESPONSE[code]
+
+
+def read_uff(path: str | Path, sample_rate: float | None = None) -> list[Recording]:
+    """UFF type-58 records: each FRF record (function type 4) as a MeasuredFRF, or a
+    pair of time records (function type 1, force and response) as one Hit."""
+    import pyuff
+
+    source = Path(path).name
+    try:
+        records = pyuff.UFF(str(path)).read_sets() if Path(path).stat().st_size else []
+    except Exception as exc:  # noqa: BLE001 - pyuff raises bare Exception on malformed files
+        raise _fail(source, f"cannot read as UFF ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+                    "give a universal file with type-58 records") from None
+    records = [r for r in ([records] if isinstance(records, dict) else records) if r.get("type") == 58]
+    for r in records:  # pyuff returns a truncated record's points without complaint
+        if len(r["data"]) != int(r.get("num_pts", len(r["data"]))):
+            raise _fail(source, f"record '{r.get('id1', '')}' holds {len(r['data'])} of its num_pts = {r['num_pts']} "
+                        "points (truncated file); export it again")
+    if not records:
+        raise _fail(source, "no type-58 record; export the FRF or the force and response time records as UFF58")
+    frfs = [r for r in records if r["func_type"] == UFF_FRF]
+    times = [r for r in records if r["func_type"] == UFF_TIME]
+    others = sorted({int(r["func_type"]) for r in records} - {UFF_FRF, UFF_TIME})
+    if others:
+        raise _fail(source, f"function type {others[0]} is not supported; allowed: {UFF_TIME} (time response) "
+                    f"or {UFF_FRF} (FRF): export those")
+    out: list[Recording] = [_uff_frf(source, r) for r in frfs]
+    if times:
+        out.append(_uff_hit(source, times, sample_rate))
+    return out
+
+
+def _uff_frf(source: str, r: dict) -> MeasuredFRF:
+    if int(r.get("abscissa_spacing", 1)) != 1:
+        raise _fail(source, f"record '{r.get('id1', '')}': abscissa_spacing = 0 (uneven); need evenly spaced "
+                    "frequencies: export the FRF on its analysis lines")
+    frf = np.asarray(r["data"], dtype=complex)
+    bad = np.flatnonzero(~np.isfinite(frf))
+    if bad.size or len(frf) < 16:
+        raise _fail(source, f"record '{r.get('id1', '')}': FRF has {bad.size} non-finite values of {len(frf)} "
+                    "(need at least 16 finite lines); re-export the FRF")
+    quantity = _uff_quantity(source, r, "ordinate_spec_data_type")
+    return MeasuredFRF(source, np.asarray(r["x"], dtype=float), frf, quantity)
+
+
+def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
+    force = [r for r in times if int(r.get("ordinate_spec_data_type", 0)) in UFF_FORCE]
+    response = [r for r in times if int(r.get("ordinate_spec_data_type", 0)) in UFF_RESPONSE]
+    if len(force) != 1 or len(response) != 1 or len(times) != 2:
+        raise _fail(source, f"{len(times)} time records with {len(force)} force and {len(response)} response; "
+                    "need one force record (data type 13) and one response record (8, 11 or 12) per file")
+    rates = [_snap(1.0 / float(r["abscissa_inc"])) for r in (force[0], response[0])]
+    if abs(rates[0] / rates[1] - 1) > RATE_TOLERANCE:
+        raise _fail(source, f"force sampled at {rates[0]:g} Hz, response at {rates[1]:g} Hz; record both channels "
+                    "at one rate")
+    if sample_rate is not None and abs(rates[0] / _check_rate(source, sample_rate) - 1) > RATE_TOLERANCE:
+        raise _fail(source, f"the records say {rates[0]:.6g} Hz but sample_rate = {sample_rate:g} Hz; drop the "
+                    "stated rate")
+    f = _check_samples(source, "force record", force[0]["data"])
+    y = _check_samples(source, "response record", response[0]["data"])
+    if len(f) != len(y):
+        raise _fail(source, f"force has {len(f)} samples, response {len(y)}; export both over the same time")
+    return Hit(source, rates[0], y, f, _uff_quantity(source, response[0], "ordinate_spec_data_type"))
+
+
+READERS = {".csv": read_csv, ".wav": read_wav, ".uff": read_uff, ".unv": read_uff}
+
+
+def read_recordings(paths, sample_rate: float | None = None) -> list[Recording]:
+    """Read every file (CSV, WAV, UFF/UNV) of one configuration and check they belong
+    together (:func:`check_together`)."""
+    paths = [paths] if isinstance(paths, (str, Path)) else list(paths)
+    out: list[Recording] = []
+    for path in paths:
+        path = Path(path)
+        reader = READERS.get(path.suffix.lower())
+        if reader is None:
+            raise _fail(path.name, f"file type '{path.suffix}' is not supported; allowed: {', '.join(READERS)}")
+        if not path.is_file():
+            raise _fail(path.name, "no such file; check the path")
+        read = reader(path, sample_rate)
+        out.extend(read if isinstance(read, list) else [read])
+    return check_together(out)
+
+
+def check_together(records: list[Recording]) -> list[Recording]:
+    """The recordings of one configuration: one kind (time hits or FRFs), one sample
+    rate, one response quantity, a force channel in all or none."""
+    out = list(records)
+    if not out:
+        raise MeasurementError("no recordings given; pass at least one CSV, WAV or UFF file")
+    hits = [r for r in out if isinstance(r, Hit)]
+    if hits and len(hits) != len(out):
+        raise _fail(next(r for r in out if isinstance(r, MeasuredFRF)).source,
+                    "mixes an averaged FRF with time hits; give either time records or FRFs for one configuration")
+    for r in out[1:]:
+        if r.quantity != out[0].quantity:
+            raise _fail(r.source, f"response is {r.quantity} but {out[0].source} has {out[0].quantity}; "
+                        "give one sensor's recordings per configuration")
+    for h in hits[1:]:
+        if abs(h.sample_rate / hits[0].sample_rate - 1) > RATE_TOLERANCE:
+            raise _fail(h.source, f"sample rate {h.sample_rate:g} Hz differs from {hits[0].source}'s "
+                        f"{hits[0].sample_rate:g} Hz; record every hit at one rate")
+        if (h.force is None) != (hits[0].force is None):
+            raise _fail(h.source, "has a force channel where " + hits[0].source + " has none (or the reverse); "
+                        "give the force for every hit or for none")
+    return out
