@@ -3,10 +3,18 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from fem.design_space import CRITERIA
 from fem.errors import DesignError
-from fem.io import add_common_arguments, run_cli, to_json
+from fem.io import (
+    add_common_arguments,
+    add_version,
+    check_report_folder,
+    report_folder,
+    run_cli,
+    to_json,
+)
 from fem.model import MAX_MODES
 from fem.spec import load_spec
 from fem.validation import whole
@@ -15,11 +23,12 @@ from identify.examples import spec_or_example
 from .candidates import candidates
 from .check import check
 from .parallel import executor
-from .problem import Problem
+from .problem import Problem, use_store
 from .progress import Progress
 from .refine import refine
 from .search import METHODS, recommend
 from .spec_file import write_spec
+from .store import SolveStore
 from .sweep import parse_variable, sweep
 
 DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
@@ -32,6 +41,8 @@ Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 ba
 
 
 def _problem(args) -> Problem:
+    if hasattr(args, "no_cache"):
+        use_store(None if args.no_cache else SolveStore(args.cache))
     model = load_spec(spec_or_example(args.spec))
     for note in model.notes:
         print(f"note: {note}", file=sys.stderr)
@@ -72,12 +83,17 @@ def run_recommend(args) -> int:
 
 def run_check(args) -> int:
     """Feasibility of the spec's configurations; exit status 1 when infeasible."""
+    if args.out:
+        check_report_folder(args.out)
     problem = _problem(args)
     configurations = None
     if args.configurations:
         configurations = [problem.specimen.configuration(n.strip()) for n in args.configurations.split(",")]
     result = check(problem, configurations, progress=_progress(args))
-    figures = result.test_sheet.write(args.out) if args.out else []
+    figures = []
+    if args.out:
+        with report_folder(args.out) as folder:
+            figures = [Path(args.out) / Path(f).name for f in result.test_sheet.write(folder)]
     if args.json:
         out = result.to_dict()
         if args.out:
@@ -92,6 +108,7 @@ def run_check(args) -> int:
 
 def run_sweep(args) -> int:
     """A report folder: CSV, plots, summary."""
+    check_report_folder(args.out)  # refuse a bad --out before the solves, not after
     problem = _problem(args)
     variables = [parse_variable(v, problem) for v in (args.vary or ["thickness", "material"])]
     tasks = len(problem.specimen.configurations) * (1 + sum(len(v.values) for v in variables))
@@ -119,11 +136,16 @@ def _common(p: argparse.ArgumentParser, parallel: bool = True, prior: bool = Tru
         p.add_argument("--workers", type=int, default=0,
                        help="processes (default 0: all cores when there are enough solves to pay for them)")
         p.add_argument("--scheduler", help="run on the Dask cluster at this address (needs the dask extra)")
+        p.add_argument("--cache", metavar="DIR",
+                       help="keep solved configurations here, so an interrupted or repeated run resumes (default: "
+                            "$XDG_CACHE_HOME/layer-id/solves)")
+        p.add_argument("--no-cache", action="store_true", help="solve everything anew; keep nothing on disk")
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="plan-tests", description=DESCRIPTION,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("recommend", help="best sets of added plates from the [design] space")
     _common(p)

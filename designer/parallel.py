@@ -68,20 +68,25 @@ def chunked(items: list, pieces: int) -> list[list]:
 
 
 def run_chunks(function, chunks: list[list], *args, pool: cf.Executor | None = None,
-               progress: Progress | None = None, label: str = "") -> list:
+               progress: Progress | None = None, label: str = "", done=None) -> list:
     """``function(*args, chunk)`` for every chunk, results concatenated in chunk order;
-    a progress bar counts items as chunks complete."""
+    a progress bar counts items as chunks complete; ``done(i, result)`` is called as
+    each chunk completes (e.g. to store it, so an interruption loses only chunks in work)."""
     total = sum(len(c) for c in chunks)
     out: list = [None] * len(chunks)
     with Bar(progress, total, label) as bar:
         if pool is None:
             for i, chunk in enumerate(chunks):
                 out[i] = function(*args, chunk)
+                if done is not None:
+                    done(i, out[i])
                 bar.update(len(chunk))
         else:
             futures = {pool.submit(function, *args, chunk): i for i, chunk in enumerate(chunks)}
             for future in cf.as_completed(futures):
                 i = futures[future]
                 out[i] = future.result()
+                if done is not None:
+                    done(i, out[i])
                 bar.update(len(chunks[i]))
     return [item for result in out for item in result]

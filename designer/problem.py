@@ -26,6 +26,14 @@ _CACHE: OrderedDict = OrderedDict()
 MAX_TASKS = 64
 #: Model options that choose the plate theory, passed on to the solve when the model has them.
 THEORY_OPTIONS = ("theory", "layer_groups")
+#: Solved configurations kept on disk too (``store.SolveStore``), when set (``use_store``).
+_STORE: list = [None]
+
+
+def use_store(store) -> None:
+    """Keep solved configurations in ``store`` (a ``store.SolveStore``) too, or nowhere but
+    in memory (None): an interrupted sweep or search then resumes, a repeated one is fast."""
+    _STORE[0] = store
 
 
 @dataclass(frozen=True)
@@ -234,15 +242,30 @@ def solve_points(problems: list[Problem], configurations, pool=None, progress: P
     labelled = set(keys[0])
     found = {key: _CACHE[key] for row in keys for key in row
              if key in _CACHE and (_CACHE[key][1] is not None or key not in labelled)}
+    store = _STORE[0]
+    if store is not None:
+        for row in keys:
+            for key in row:
+                if key not in found:
+                    hit = store.get(key)
+                    if hit is not None and (hit[1] is not None or key not in labelled):
+                        found[key] = hit
     todo = {}
     for p, row, cs in zip(problems, keys, at):
         for key, configuration in zip(row, cs):
             if key not in found:
                 todo.setdefault(key, (p.specimen, configuration, key in labelled))
     if todo:
-        pieces = 1 if pool is None else min(len(todo), MAX_TASKS)
-        results = run_chunks(solve_pairs, chunked(list(todo.values()), pieces), first.options, first.mesh, n_solve,
-                             first.parameters, pool=pool, progress=progress, label=label)
+        pieces = min(len(todo), MAX_TASKS) if pool is not None or store is not None else 1
+        chunks = chunked(list(todo.items()), pieces)
+
+        def keep(i, results):  # on disk as each chunk completes: an interruption loses only work in progress
+            for (key, _), result in zip(chunks[i], results):
+                store.put(key, result)
+
+        results = run_chunks(solve_pairs, [[task for _, task in chunk] for chunk in chunks], first.options,
+                             first.mesh, n_solve, first.parameters, pool=pool, progress=progress, label=label,
+                             done=keep if store is not None else None)
         found.update(zip(todo, results))
     for key, result in found.items():
         _CACHE[key] = result

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from fem.errors import DesignError
-from fem.io import atomic_path, write_text
+from fem.io import report_folder, write_text
 from fem.laminate import Layer
 from fem.model import MAX_MODES, ModelOptions, SpecimenModel
 from fem.plotting import new_figure, save_figure
@@ -224,18 +224,15 @@ class SweepResult:
         return "\n".join(lines)
 
     def write(self, folder: str | Path) -> list[Path]:
-        """sweep.csv, a plot per variable and summary.md in ``folder`` (atomically)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        csv = folder / "sweep.csv"
-        with atomic_path(csv) as tmp:
-            self.table.to_csv(tmp, index=False)
-        written = [csv]
-        for variable in self.variables:
-            written.append(folder / plot_name(variable))
-            plot_variable(self.table[self.table.variable == variable.name], variable, written[-1])
-        write_text(folder / "summary.md", self.report() + "\n")
-        return written + [folder / "summary.md"]
+        """sweep.csv, a plot per variable and summary.md in a report folder written whole
+        or not at all (``fem.io.report_folder``); returns the files' final paths."""
+        names = ["sweep.csv"] + [plot_name(v) for v in self.variables] + ["summary.md"]
+        with report_folder(folder) as tmp:
+            write_text(tmp / "sweep.csv", self.table.to_csv(index=False))
+            for variable, name in zip(self.variables, names[1:-1]):
+                plot_variable(self.table[self.table.variable == variable.name], variable, tmp / name)
+            write_text(tmp / "summary.md", self.report() + "\n")
+        return [Path(folder) / name for name in names]
 
 
 def plot_name(variable: Variable) -> str:

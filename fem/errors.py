@@ -22,3 +22,7 @@ class ModelError(LayerIdError):
 
 class DesignError(LayerIdError):
     """A test design cannot be built or scored (e.g. no identified material)."""
+
+
+class OutputError(LayerIdError):
+    """An output file or report folder cannot be written where asked."""

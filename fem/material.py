@@ -64,6 +64,18 @@ class Material:
             value = getattr(self, field)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise SpecError(f"material '{self.name}': {field} = {value!r} must be positive")
+        for field in ("E1", "E2", "G12", "G13", "G23"):
+            value = getattr(self, field)
+            if value is not None and value < MODULUS_RANGE[0]:
+                raise SpecError(f"material '{self.name}': {field} = {value:g} Pa is below {MODULUS_RANGE[0]:g} Pa: a "
+                                f"unit slip? Moduli are in Pa here (e.g. {value:g}e9 for {value:g} GPa); specs give GPa")
+        if self.density < DENSITY_RANGE[0]:
+            raise SpecError(f"material '{self.name}': density = {self.density:g} kg/m^3 is below {DENSITY_RANGE[0]:g}: "
+                            "a unit slip? Densities are in kg/m^3 (7850 for steel, not 7.85)")
+        isotropic = self.E1 == self.E2 and abs(self.G12 * 2 * (1 + self.nu12) / self.E1 - 1) < 1e-6
+        if isotropic and not -1 < self.nu12 < 0.5:
+            raise SpecError(f"material '{self.name}': nu12 = {self.nu12!r} for an isotropic material "
+                            "(E1 = E2, G12 = E/2(1 + nu)): need -1 < nu < 0.5 (steel 0.3, rubber 0.499)")
         limit = self.E1 / self.E2
         if not (math.isfinite(self.nu12) and self.nu12**2 < limit):
             raise SpecError(

@@ -13,6 +13,7 @@ from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
 from .attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
+from .inputs import InputStd
 from .laminate import Laminate
 from .material import Material
 from .mesh import PlateMesh
@@ -181,6 +182,7 @@ class SpecimenModel:
     notes: tuple[str, ...] = ()
     materials: tuple[Material, ...] = ()
     source: str = "<spec>"
+    input_std: tuple[InputStd, ...] = ()  # known inputs' standard uncertainties, for the budget
 
     @cached_property
     def mesh(self) -> PlateMesh:

@@ -15,6 +15,7 @@ from typing import Any
 from .design_space import parse_design
 from .effects import apply_fixed
 from .errors import SpecError
+from .inputs import InputStd
 from .laminate import Layer
 from .material import DENSITY_RANGE, MODULUS_RANGE, Material
 from .model import MAX_MODES, ModelOptions, SpecimenModel
@@ -23,9 +24,13 @@ from .stock import STOCK, stock_name
 from .validation import check_keys, number, suggestion, whole
 
 GPA, MM = 1e9, 1e-3
+#: The thinnest layer a spec may give [mm]: 1 um, below any coating that changes a
+#: plate's frequencies measurably (a thickness typed in metres lands far below it).
+MIN_THICKNESS_MM = 1e-3
 MATERIAL_KEYS = {
     "E1_GPa": True, "E2_GPa": True, "G12_GPa": True, "nu12": True, "density_kg_m3": True,
     "identify": False, "G13_GPa": False, "G23_GPa": False, "note": False, "bounds": False,
+    **{f"{key}_std": False for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa", "nu12", "density_kg_m3")},
 }
 #: Plausible ranges that catch unit slips (a modulus in MPa, a density in g/cm^3).
 MODULUS_RANGE_GPA = tuple(x / GPA for x in MODULUS_RANGE)
@@ -89,6 +94,40 @@ def _bounds(table, where: str) -> tuple[tuple[str, float, float], ...]:
     return tuple(out)
 
 
+def _input_std(data: dict, specimen: Specimen) -> tuple[InputStd, ...]:
+    """The standard uncertainties of known inputs the spec states (``*_std`` keys), in SI.
+    A property being identified gets its std from the fit, not from the spec."""
+    out = []
+    for name, table in data.get("materials", {}).items():
+        for key, (kind, factor) in BOUND_KEYS.items():
+            std = _positive(table, f"{key}_std", f"[materials.{name}]", required=False)
+            if std is None:
+                continue
+            material = specimen.materials.get(name)
+            if material is not None and kind in material.identify:
+                raise SpecError(f"[materials.{name}].{key}_std: {kind} of {name} is identified, its std comes from "
+                                "the fit; give *_std for known inputs only")
+            out.append(InputStd(kind, name, std * factor))
+    sp = data["specimen"]
+    stacks = [("[specimen].layers", sp["layers"], lambda i: f"layer{i + 1}")]
+    for i, c in enumerate(data.get("configurations", [])):
+        for side in ("bottom", "top"):
+            stacks.append((f"[[configurations]][{i}].{side}", c.get(side, []),
+                           lambda j, n=c["name"], s=side: f"{n}.{s}{j + 1}"))
+    for where, items, label in stacks:
+        for i, item in enumerate(items):
+            std = _positive(item, "thickness_mm_std", f"{where}[{i}]", required=False)
+            if std is not None:
+                out.append(InputStd("thickness", label(i), std * MM))
+    for key, kind in (("length_mm_std", "length"), ("width_mm_std", "width"), ("mass_g_std", "mass")):
+        std = _positive(sp, key, "[specimen]", required=False)
+        if std is not None:
+            if kind == "mass" and "mass_g" not in sp:
+                raise SpecError("[specimen].mass_g_std is given without mass_g: weigh the plate and give both")
+            out.append(InputStd(kind, "specimen", std * (MM if kind != "mass" else 1e-3)))
+    return tuple(out)
+
+
 def _layer_material(name, where: str, materials: dict) -> Material:
     """A layer's material: the spec's own, else built-in stock by name (``brass`` or
     ``brass_stock``); a stock material used is added to ``materials``."""
@@ -110,7 +149,7 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
         here = f"{where}[{i}]"
         if not isinstance(item, dict):
             raise SpecError(f"{here}: need a table {{ material = ..., thickness_mm = ... }}")
-        check_keys(item, ("material", "thickness_mm", "angle_deg"), here)
+        check_keys(item, ("material", "thickness_mm", "angle_deg", "thickness_mm_std"), here)
         name = item.get("material")
         if name is None:
             raise SpecError(f"{here}: missing field 'material'")
@@ -121,9 +160,11 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
                 f"{here}.thickness_mm = {t:g} for a plate {plate_size:g} mm across is not a plate layer; "
                 "thicknesses are in mm (e.g. 0.7, not 700 or 0.0007 m)"
             )
-        if t < 1e-4:
-            raise SpecError(f"{here}.thickness_mm = {t:g} mm is below 0.1 um; thicknesses are in mm, not m")
-        angle = number(item, "angle_deg", here, required=False, default=0.0)
+        if t < MIN_THICKNESS_MM:
+            raise SpecError(f"{here}.thickness_mm = {t:g} mm is below {1e3 * MIN_THICKNESS_MM:g} um, thinner than any "
+                            "layer a vibration test can see: thicknesses are in mm (0.7, not 0.0007 m)")
+        angle = number(item, "angle_deg", here, required=False, default=0.0, low=-360.0, high=360.0,
+                       low_inclusive=True, hint="degrees from the plate's x axis")
         out.append(Layer(material, t * MM, math.radians(angle), label(i)))
     return tuple(out)
 
@@ -161,7 +202,8 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     sp = data["specimen"]
     if not isinstance(sp, dict):
         raise SpecError("[specimen]: must be a table")
-    check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g"), "[specimen]")
+    check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g", "length_mm_std", "width_mm_std",
+                    "mass_g_std"), "[specimen]")
     length = _positive(sp, "length_mm", "[specimen]")
     width = _positive(sp, "width_mm", "[specimen]")
     for key, v in (("length_mm", length), ("width_mm", width)):
@@ -227,8 +269,13 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     if not isinstance(effects, list) or not all(isinstance(e, dict) for e in effects):
         raise SpecError("[[effects]]: need a list of tables, each with a 'kind'")
     specimen = Specimen(sp.get("name", Path(source).stem), length * MM, width * MM, layers, tuple(configurations))
+    unused = [name for name, m in materials.items() if m.identify and name not in specimen.materials]
+    if unused:
+        raise SpecError(f"[materials.{unused[0]}] is marked identify = true but no layer uses it: nothing would "
+                        "find it; use it in [specimen].layers or remove the mark")
     design = parse_design(data.get("design", {}), materials, len(specimen.identified_materials))
-    base = SpecimenModel(specimen, options, design=design, materials=tuple(materials.values()), source=source)
+    base = SpecimenModel(specimen, options, design=design, materials=tuple(materials.values()), source=source,
+                         input_std=_input_std(data, specimen))
     return apply_fixed(base, effects)
 
 
@@ -236,9 +283,12 @@ def load_spec(path: str | Path) -> SpecimenModel:
     """Read and validate a spec file: the model every command and API function takes."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise SpecError(f"spec file {str(path)!r} cannot be read: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise SpecError(f"spec file {str(path)!r} is not UTF-8 text (a binary file, or saved as UTF-16?): save it "
+                        "as UTF-8 TOML") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -3,10 +3,17 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from fem.errors import MeasurementError
-from fem.io import add_common_arguments, run_cli, to_json, write_text
+from fem.io import (
+    add_common_arguments,
+    add_version,
+    check_report_folder,
+    report_folder,
+    run_cli,
+    to_json,
+    write_text,
+)
 from fem.model import SpecimenModel
 from fem.spec import load_spec
 
@@ -14,11 +21,11 @@ from .compare import compare
 from .diagnose import diagnose
 from .examples import COATED_PLATE_MEASURED, spec_or_example
 from .fitting import fit
-from .peaks import extract_peaks
 from .measurements import Measurements, load_measurements
+from .peaks import extract_peaks
 from .plots import plot_before_after, plot_comparison, plot_point_map
 from .predict import predict
-from .report import write_report
+from .report import write_analysis_report, write_report
 
 DESCRIPTION = """identify-layers: the stiffness of every layer of a laminated plate from its resonances.
 
@@ -82,18 +89,19 @@ def run_peaks(args) -> int:
         result.write_csv(args.out)
         _say(f"peak list written to {args.out}")
     if args.report:
-        folder = Path(args.report)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_text(folder / "peaks.txt", result.report() + "\n")
-        result.write_csv(folder / "peaks.csv")
-        result.plot(folder)
-        _say(f"report written to {folder}/")
+        with report_folder(args.report) as folder:
+            write_text(folder / "peaks.txt", result.report() + "\n")
+            result.write_csv(folder / "peaks.csv")
+            result.plot(folder)
+        _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
     return 0 if len(result) else 1
 
 
 def run_fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
+    if args.report:
+        check_report_folder(args.report)  # refuse a bad --report before the fit, not after
     model, measurements = _model_and_measurements(args)
     if args.effect:
         _say(f"baseline fit, then with {', '.join(args.effect)} (parameters free):")
@@ -109,37 +117,45 @@ def run_fit(args) -> int:
 
 def run_compare(args) -> int:
     """Where the model fails: residuals per mode and the patterns that point at causes."""
+    if args.report:
+        check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
     comparison = compare(model, measurements, refit=not args.no_fit)
     if args.report:
-        folder = Path(args.report)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_text(folder / "comparison.txt", comparison.report())
-        write_text(folder / "comparison.csv", comparison.table.to_csv(index=False))
         shown = comparison.fitted.model if comparison.fitted else model
-        plot_comparison(comparison, shown.with_options(modes=int(measurements.table["mode"].max()) + 3),
-                        folder / "residuals_with_shapes.png")
-        plot_point_map(comparison, model, folder / "point_mass_map.png")
-        _say(f"report written to {folder}/")
+        modes = int(comparison.table["mode"].max()) + 3
+        write_analysis_report(
+            args.report, f"Model against measurement: {model.name}", "compare (identify-layers compare)", model,
+            measurements, comparison.report(),
+            {"comparison.txt": comparison.report(), "comparison.csv": comparison.table.to_csv(index=False)},
+            [(lambda path: plot_comparison(comparison, shown.with_options(modes=modes), path),
+              "residuals_with_shapes.png", "error per measured mode with the paired mode shape above it"),
+             (lambda path: plot_point_map(comparison, model, path), "point_mass_map.png",
+              "share of the misfit a point mass would explain at each point")])
+        _say(f"report written to {args.report}/")
     print(to_json(comparison.to_dict()) if args.json else comparison.report())
     return 0
 
 
 def run_diagnose(args) -> int:
     """Rank the candidate physical effects by how much of the misfit each explains."""
+    if args.report:
+        check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
     kinds = args.effects.split(",") if args.effects else None
     result = diagnose(model, measurements, kinds, progress=_progress)
     if args.report:
-        folder = Path(args.report)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_text(folder / "diagnosis.txt", result.report())
-        write_text(folder / "diagnosis.json", to_json(result.to_dict()))
+        figures = [(lambda path: plot_point_map(result.comparison, model, path), "point_mass_map.png",
+                    "share of the misfit a point mass would explain at each point")]
         if result.candidates and result.candidates[0].fit is not None:
             best = result.candidates[0]
-            plot_before_after(result.baseline, best.fit, best.kind, folder / "before_after.png")
-        plot_point_map(result.comparison, model, folder / "point_mass_map.png")
-        _say(f"report written to {folder}/")
+            figures.insert(0, (lambda path: plot_before_after(result.baseline, best.fit, best.kind, path),
+                               "before_after.png", f"error per mode without and with {best.kind}"))
+        write_analysis_report(args.report, f"Diagnosis: {model.name}", "diagnose (identify-layers diagnose)", model,
+                              measurements, result.report(),
+                              {"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
+                              figures)
+        _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
     return 0
 
@@ -147,6 +163,7 @@ def run_diagnose(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="identify-layers", description=DESCRIPTION,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("predict", help="elastic frequencies of every configuration in a spec")
     add_common_arguments(p)

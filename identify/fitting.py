@@ -11,6 +11,7 @@ from fem.model import SpecimenModel
 from .measurements import Measurements
 from .parameters import display
 from .peak_lists import fit_peak_list
+from .budget import with_budget
 from .causes import likely_causes
 from .result import FitResult, FitStatus, Iteration
 from .updating import FitOptions, update
@@ -31,13 +32,14 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
     layers are fitted first, then again with the effects; the result's ``baseline`` is
     the fit without them.  Values are SI inside; ``report()`` and ``to_dict()`` print
     in the spec's units (GPa, mm, g).  ``progress`` is called with every accepted
-    iteration (or, with effects, a line of text per refit).
+    iteration (or, with effects, a line of text per refit).  When the spec states the
+    known inputs' std, the result carries the uncertainty budget and its std includes them.
     """
     if effects:
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
-        return fit_with_effects(model, measurements, list(effects), progress=progress)
-    return fit_layers(model, measurements, parameters, options, progress)
+        return with_budget(fit_with_effects(model, measurements, list(effects), progress=progress))
+    return with_budget(fit_layers(model, measurements, parameters, options, progress))
 
 
 def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions = FitOptions(),

@@ -12,6 +12,8 @@ modes itself (``identify.matching``).
 """
 from __future__ import annotations
 
+import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -128,7 +130,8 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         frame["damping_ratio"] = damping.astype(float)
     else:
         frame["damping_ratio"] = np.nan
-    frame["label"] = frame["label"].fillna("").astype(str).str.strip() if "label" in frame.columns else ""
+    frame["label"] = (frame["label"].map(lambda v: "" if pd.isna(v) else str(v).strip()) if "label" in frame.columns
+                      else "")
     for i, label in enumerate(frame["label"]):
         if label and pattern(label) is None:
             raise _fail(source, f"line {line[i]}: label = {label!r} is not a nodal pattern; write it as predict "
@@ -155,10 +158,35 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
 def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
     """Read a measurement CSV and validate it against the model's configurations."""
     path = Path(path)
+    where = f"measurement file {str(path)!r}"
     try:
-        frame = pd.read_csv(path, skipinitialspace=True, comment="#")
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise MeasurementError(f"measurement file {str(path)!r} does not exist") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise MeasurementError(f"measurement file {str(path)!r} is not a readable CSV: {exc}") from None
+        raise MeasurementError(f"{where} does not exist") from None
+    except IsADirectoryError:
+        raise MeasurementError(f"{where} is a folder; give the CSV file") from None
+    except OSError as exc:
+        raise MeasurementError(f"{where} cannot be read: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise MeasurementError(f"{where} is not UTF-8 text (a binary file, or saved as UTF-16?): save it as a "
+                               "UTF-8 CSV") from None
+    _check_field_counts(text, where)
+    try:
+        frame = pd.read_csv(io.StringIO(text), skipinitialspace=True, comment="#", index_col=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise MeasurementError(f"{where} is not a readable CSV: {exc}") from None
     return parse_measurements(frame, model, str(path))
+
+
+def _check_field_counts(text: str, where: str) -> None:
+    """Every data row has as many fields as the header; an unquoted label like (1,2)
+    splits in two, so say how to write it."""
+    rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), 1)
+            if row and not row[0].lstrip().startswith("#")]
+    if not rows:
+        raise MeasurementError(f"{where} is empty: give a header line and one row per measured frequency")
+    width = len(rows[0][1])
+    for n, row in rows[1:]:
+        if len(row) > width:
+            raise MeasurementError(f"{where}: line {n} has {len(row)} fields for the header's {width}; a label with a "
+                                   'comma must be quoted, e.g. "(1,2)"')

@@ -1,14 +1,15 @@
 """Reading an identification: text report, JSON (DESIGN.md shape), CSV tables and plots."""
 from __future__ import annotations
 
+import html
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 import pandas as pd
 
-from fem.io import to_json, write_text
+from fem.io import report_folder, to_json, write_text
 
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
@@ -38,17 +39,46 @@ def fit_residuals(result: FitResult) -> pd.DataFrame:
     if result.peaks is not None:
         from .peak_lists import peak_table
 
-        return peak_table(result.peaks)
-    table = result.measurements.table
-    configs = table["configuration"].to_numpy()
-    modes = np.zeros(len(table), dtype=int)
-    for name, pairing in result.pairings.items():
-        modes[configs == name] = pairing.indices + 1
-    out = residual_table(result.measurements, result.model_hz)
-    out.insert(1, "measured_mode", out.pop("mode"))
-    out.insert(1, "mode", modes)
-    out["matched"] = True
+        out = peak_table(result.peaks)
+    else:
+        table = result.measurements.table
+        configs = table["configuration"].to_numpy()
+        modes = np.zeros(len(table), dtype=int)
+        for name, pairing in result.pairings.items():
+            modes[configs == name] = pairing.indices + 1
+        out = residual_table(result.measurements, result.model_hz)
+        out.insert(1, "measured_mode", out.pop("mode"))
+        out.insert(1, "mode", modes)
+        out["matched"] = True
+    out.insert(2, "label", _model_labels(result, out))
     return out
+
+
+def _model_labels(result: FitResult, rows: pd.DataFrame) -> list[str]:
+    """The nodal pattern of the model mode each residual row is paired with ('' when
+    left out)."""
+    from .objective import solving_model
+
+    solver = solving_model(result.model, result.measurements)
+    labels = {c: solver.solve(c).labels for c in result.measurements.configurations}
+    out = []
+    for name, mode in zip(rows["configuration"], rows["mode"]):
+        known = labels.get(name, ())
+        out.append(known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else "")
+    return out
+
+
+def parameter_table(result: FitResult) -> pd.DataFrame:
+    """One row per identified parameter in display units: value, std, unit, relative
+    std [%], flags, and what it belongs to (a material, or an effect)."""
+    rows = []
+    for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
+        rows.append({"parameter": p.name, "of": result.effect_of.get(p, "material" if p.target in
+                                                                    result.specimen.materials else "layer"),
+                     "value": display(p, value), "std": display(p, sd) if math.isfinite(sd) else float("nan"),
+                     "unit": UNITS[p.kind][0], "std_percent": 100 * sd / abs(value) if value and math.isfinite(sd)
+                     else float("nan"), "flags": "; ".join(flags)})
+    return pd.DataFrame(rows)
 
 
 def history_table(result: FitResult) -> pd.DataFrame:
@@ -91,6 +121,7 @@ def to_dict(result: FitResult) -> dict:
         "effects": effects,
         "residuals": fit_residuals(result).to_dict(orient="records"),
         "causes": [c.to_dict() for c in result.causes],
+        "budget": result.budget.to_dict() if result.budget is not None else None,
         "rms_rel_error": result.rms_rel_error,
         "condition_number": _finite(u.condition_number),
         "verdict": u.verdict,
@@ -144,6 +175,9 @@ def report_text(result: FitResult) -> str:
         lines.append(f"  {p.name:28s} {shown:12.5g} +- {sd_text:>9s} {unit:7s} {rel:10s} {'; '.join(flags)}")
     strong = [(i, j) for i in range(len(result.parameters)) for j in range(i)
               if np.isfinite(u.correlation[i, j]) and abs(u.correlation[i, j]) > 0.9]
+    if result.budget is not None:
+        lines += ["", "uncertainty budget (each input's share of the std, display units; total = the std above)",
+                  result.budget.table().to_string(index=False, float_format=lambda x: f"{x:.3g}")]
     lines += ["", "correlations above 0.9"]
     lines += [f"  {result.parameters[i].name} ~ {result.parameters[j].name}: {u.correlation[i, j]:+.3f}"
               for i, j in strong] or ["  none"]
@@ -161,20 +195,80 @@ def report_text(result: FitResult) -> str:
 
 
 def write_report(result: FitResult, folder: str | Path) -> Path:
-    """A report folder: report.txt, fit.json, residuals.csv, history.csv and plots (and the
-    error per mode before and after the effects when they were free)."""
-    from .plots import plot_before_after, plot_convergence, plot_residuals
+    """A report folder (written whole or not at all, see ``fem.io.report_folder``):
+    report.html (self-contained), report.txt, parameters.csv, fit.json, residuals.csv,
+    history.csv and the figures (and the error per mode before and after the effects when
+    they were free)."""
+    with report_folder(folder) as tmp:
+        _write_report_files(result, tmp)
+    return Path(folder)
 
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+
+def _write_report_files(result: FitResult, folder: Path) -> None:
+    from . import html_report as h
+    from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
+
     write_text(folder / "report.txt", report_text(result))
-    if result.baseline is not None:
-        write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
-        plot_before_after(result.baseline, result, ", ".join(sorted(set(result.effect_of.values()))) or "effects",
-                          folder / "before_after.png")
+    parameters = parameter_table(result)
+    write_text(folder / "parameters.csv", parameters.to_csv(index=False))
+    residuals = fit_residuals(result)
     write_text(folder / "fit.json", to_json(to_dict(result)))
-    write_text(folder / "residuals.csv", fit_residuals(result).to_csv(index=False))
+    write_text(folder / "residuals.csv", residuals.to_csv(index=False))
     write_text(folder / "history.csv", history_table(result).to_csv(index=False))
-    plot_convergence(result, folder / "convergence.png")
-    plot_residuals(result, folder / "residuals.png")
-    return folder
+    figures = [(plot_residuals(result, folder / "residuals.png"), "error per measured mode (model - measured), "
+                "with the measurement std as bars"),
+               (plot_convergence(result, folder / "convergence.png"), "parameters and misfit against iteration"),
+               (plot_mode_shapes(result, folder / "mode_shapes.png"), "the model's paired mode shapes (deflection, "
+                "nodal lines in black)")]
+    if result.baseline is not None:
+        kinds = ", ".join(sorted(set(result.effect_of.values()))) or "effects"
+        write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
+        figures.append((plot_before_after(result.baseline, result, kinds, folder / "before_after.png"),
+                        f"error per mode without and with {kinds}"))
+    st, u = result.statistics, result.uncertainty
+    statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
+                                            "iterations", "RMS relative error [%]",
+                                            "misfit / scatter", "chi^2 test p-value", "scatter from",
+                                            "condition number", "verdict"],
+                               "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
+                                         str(result.iterations), f"{100 * st.rms_rel_error:.4g}",
+                                         f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
+                                         f"{u.condition_number:.3g}", u.verdict]})
+    sections = []
+    if result.causes:
+        sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
+    sections += [("Parameters (value +- 1 std)", h.table(parameters))]
+    if result.budget is not None:
+        sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
+                         "scatter's share of each parameter's std (display units); total = the std above</p>"
+                         + h.table(result.budget.table(), "{:.3g}")))
+    sections += [
+                 ("Statistics", h.table(statistics)),
+                 ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
+                  "with; label: its nodal pattern</p>" + h.table(residuals)),
+                 ("Figures", "".join(h.figure(path, caption) for path, caption in figures)),
+                 ("Warnings and notes", h.notes(result.warnings))]
+    header = h.provenance("identification (identify-layers fit)", result.specimen.name, result.model.source,
+                          result.measurements.source)
+    page = h.document(f"Layer identification: {result.specimen.name}", header,
+                      (result.status.value, result.message, result.converged), sections)
+    write_text(folder / "report.html", page)
+
+
+def write_analysis_report(folder: str | Path, title: str, analysis: str, model, measurements, text: str,
+                          files: dict[str, str], figures: list[tuple[Callable[[Path], Path], str, str]]) -> Path:
+    """A compare or diagnose report folder, written whole or not at all: ``text`` as a
+    .txt and as the body of report.html (with the provenance header and the figures
+    embedded), ``files`` (name -> content) beside it, and each figure drawn by its
+    callable into the file named (callable(path) -> path, file name, caption)."""
+    from . import html_report as h
+
+    with report_folder(folder) as tmp:
+        for name, content in files.items():
+            write_text(tmp / name, content)
+        drawn = [(draw(tmp / name), caption) for draw, name, caption in figures]
+        header = h.provenance(analysis, model.specimen.name, model.source, measurements.source)
+        sections = [("Report", f"<pre>{html.escape(text)}</pre>"),
+                    ("Figures", "".join(h.figure(path, caption) for path, caption in drawn))]
+        write_text(tmp / "report.html", h.document(title, header, None, sections))
+    return Path(folder)

@@ -18,6 +18,7 @@ from .statistics import FitStatistics
 from .uncertainty import Uncertainty
 
 if TYPE_CHECKING:
+    from .budget import Budget
     from .peak_lists import PeakAssignment
 
 
@@ -56,7 +57,9 @@ class FitResult:
     parameter -> the effect kind it belongs to; effect_notes: (kind, text) said of an
     effect's estimate; baseline: the fit without the effects, when effects were free;
     peaks: for a peak list, what became of every peak (``measurements`` then holds the
-    matched ones, ranked); causes: for a poor fit, what is likely wrong, most likely first.
+    matched ones, ranked); causes: for a poor fit, what is likely wrong, most likely first;
+    budget: each known input's and the measurements' share of the std, when the spec
+    states the known inputs' std (``uncertainty`` then includes them).
     """
 
     status: FitStatus
@@ -78,6 +81,7 @@ class FitResult:
     baseline: "FitResult | None" = None
     peaks: "PeakAssignment | None" = None
     causes: tuple = ()
+    budget: "Budget | None" = None
 
     @property
     def converged(self) -> bool:

@@ -51,6 +51,15 @@ class Uncertainty:
     def verdict(self) -> str:
         return condition_verdict(self.condition_number)
 
+    def with_covariance(self, extra: np.ndarray) -> "Uncertainty":
+        """The uncertainty with a further independent covariance added (the known
+        inputs' part of an uncertainty budget)."""
+        if not np.all(np.isfinite(self.std)):
+            return self
+        covariance = self.covariance + extra
+        std = np.sqrt(np.diag(covariance))
+        return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std))
+
     def with_twins(self, values: np.ndarray, twins, parameters) -> "Uncertainty":
         """The uncertainty widened by twin solutions (other mode pairings that fit within
         the scatter): the pairing is then unknown, so the estimate is a mixture of the

@@ -34,6 +34,24 @@ def table1_values() -> dict:
     return out
 
 
+@pytest.fixture(autouse=True, scope="session")
+def private_solve_cache(tmp_path_factory):
+    """plan-tests keeps solves in $XDG_CACHE_HOME: the tests' own, not the user's."""
+    import os
+
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("xdg_cache"))
+    yield
+
+
+@pytest.fixture(autouse=True)
+def no_solve_store_left():
+    """A command line sets the planner's disk store: each test starts without one."""
+    from designer import problem
+
+    yield
+    problem.use_store(None)
+
+
 @pytest.fixture(scope="session")
 def example_spec():
     """The bundled example as shipped (Table 6 start values)."""

@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from designer.cli import main
+from fem.io import REPORT_MARK
 from designer.progress import Bar, Progress
 
 from .conftest import PAPER_TOML
@@ -92,7 +93,7 @@ def test_sweep_report_folder(swept):
         assert (swept / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     summary = (swept / "summary.md").read_text()
     assert "## thickness" in summary and "## brass_top.material" in summary
-    assert not list(swept.glob(".*")), "no temporary files left behind"
+    assert [p.name for p in swept.glob(".*")] == [REPORT_MARK], "no temporary files left behind"
 
 
 def spec_with(tmp_path, thickness_top: float, thickness_bottom: float, top_material: str = "brass"):
