@@ -37,14 +37,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
 from fem.assembly import UnitMatrices
 from fem.attachments import PointMass, point_operators
-from fem.elements.hermite_plate import _hermite_1d
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING
+from fem.mode_shapes import deflection_operator
 from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved
@@ -65,30 +64,6 @@ AMPLITUDE_TIE = 0.02
 #: Prior half-range of the linearised frequency spread when the design has none.
 SPREAD_RANGE = 0.3
 SPREAD_SAMPLES = 64
-
-
-def w_operator(units: UnitMatrices, x: np.ndarray, y: np.ndarray) -> sp.csr_matrix:
-    """Sparse (points, n_dofs) operator giving the deflection w at the points (x, y) [m]
-    from a field's DOFs (bicubic Hermite interpolation in the element holding each)."""
-    mesh = units.mesh
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    hx, hy = mesh.element_size
-    ex = np.clip((x / hx).astype(int), 0, mesh.nx - 1)
-    ey = np.clip((y / hy).astype(int), 0, mesh.ny - 1)
-    vx = _hermite_1d(x / hx - ex, hx)[0]  # (4, points)
-    vy = _hermite_1d(y / hy - ey, hy)[0]
-    names = units.element_type.NODE_DOFS
-    per_node, w_first = len(names), names.index("w")
-    rows, cols, data = [], [], []
-    points = np.arange(x.size)
-    for i, j in units.element_type.CORNERS:
-        node = (ey + j) * (mesh.nx + 1) + ex + i
-        for d, (ax, ay) in enumerate(((0, 0), (1, 0), (0, 1), (1, 1))):
-            rows.append(points)
-            cols.append(node * per_node + w_first + d)
-            data.append(vx[2 * i + ax] * vy[2 * j + ay])
-    return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(x.size, units.n_dofs))
 
 
 def nodal_points(xs: np.ndarray, ys: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -326,7 +301,7 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
     modes = np.array([i for i in measured if i in bending], dtype=int)
     xs, ys = np.linspace(0.0, L, GRID), np.linspace(0.0, W, GRID)
     X, Y = np.meshgrid(xs, ys, indexing="ij")
-    op = w_operator(units, X.ravel(), Y.ravel())
+    op = deflection_operator(units, X.ravel(), Y.ravel())
     phi = op @ shapes  # (points, all solved modes), mass-normalised
     peak = np.abs(phi).max(axis=0)
     amplitude = np.abs(phi[:, modes]) / peak[modes]
@@ -349,7 +324,7 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
     keep = ((on_line[:, 0] >= margin[0]) & (on_line[:, 0] <= L - margin[0])
             & (on_line[:, 1] >= margin[1]) & (on_line[:, 1] <= W - margin[1]))
     on_line = on_line[keep] if keep.any() else on_line
-    at_line = np.abs(w_operator(units, *on_line.T) @ shapes) / peak
+    at_line = np.abs(deflection_operator(units, *on_line.T) @ shapes) / peak
     weights = (f[lowest] / f[modes]) ** 2
     score = (at_line[:, modes] ** 2) @ weights + at_line[:, lowest] ** 2
     chosen: list[int] = []
