@@ -1,7 +1,8 @@
 """Run every benchmark: ``python -m benchmarks``."""
-from . import core, designer, identification, peaks
+from . import core, designer, identification, layerwise, peaks
 
 core.main()
 designer.main()
 identification.main()
+layerwise.main()
 peaks.main()

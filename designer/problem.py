@@ -25,7 +25,7 @@ _CACHE: OrderedDict = OrderedDict()
 #: Work split into at most this many tasks per pool (load balance against task overhead).
 MAX_TASKS = 64
 #: Model options that choose the plate theory, passed on to the solve when the model has them.
-THEORY_OPTIONS = ("theory", "layer_groups")
+THEORY_OPTIONS = ("theory", "layer_groups", "core_stretch")
 #: Solved configurations kept on disk too (``store.SolveStore``), when set (``use_store``).
 _STORE: list = [None]
 

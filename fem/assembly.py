@@ -85,9 +85,10 @@ class UnitMatrices:
 
     @cached_property
     def mass_data(self) -> np.ndarray:
-        """(3, nnz) CSR data of the global unit mass matrices."""
+        """(n_inertia, nnz) CSR data of the global unit mass matrices (I0, I1, I2, and more
+        for elements with more inertia terms)."""
         aggregate = self._pattern[2]
-        return (aggregate @ self.element_mass.reshape(3, -1).T).T
+        return (aggregate @ self.element_mass.reshape(len(self.element_mass), -1).T).T
 
     def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray) -> np.ndarray:
         """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element

@@ -18,6 +18,7 @@ import numpy as np
 
 from .attachments import PointMass, Suspension
 from .errors import SpecError
+from .layerwise import soft_layers
 from .model import SpecimenModel
 from .specimen import Parameter
 from .validation import check_keys, number
@@ -96,6 +97,47 @@ class TransverseShear(Effect):
 
     def free(self, model, hint=None):
         return [self._on(model)]
+
+
+class Layerwise(Effect):
+    kind = "layerwise"
+    description = ("layerwise (zig-zag) shear: each soft layer (foam or honeycomb core, bond line) shears on its "
+                   "own; free: the soft specimen layers' G13, G23")
+
+    def _soft(self, model):
+        """(soft specimen layers' materials, soft added layers' materials), by name."""
+        specimen = model.specimen
+        found = {}
+        for configuration in specimen.configurations:
+            laminate = specimen.laminate(configuration)
+            for layer, soft in zip(laminate.layers, soft_layers(laminate)):
+                if soft:
+                    found.setdefault(layer.material.name, layer in specimen.layers)
+        return [n for n, own in found.items() if own], [n for n, own in found.items() if not own]
+
+    def _on(self, model, free=()):
+        own, added = self._soft(model)
+        notes = [f"soft layers shear on their own: {', '.join(own + added)}" if own or added
+                 else "no soft layer: the same as transverse_shear with rotary inertia"]
+        defaulted = [f"{' = '.join(m.defaulted_shear_moduli)} = G12 for {m.name}"
+                     for m in model.specimen.materials.values() if m.defaulted_shear_moduli]
+        if defaulted:
+            notes.append(f"assumed {', '.join(defaulted)} (exact for isotropic layers)")
+        if free:
+            notes.append(f"free: {', '.join(p.name for p in free)}")
+        return SwitchedOn(self.kind, model.with_options(theory="layerwise"), tuple(free), "; ".join(notes))
+
+    def fixed(self, model, table):
+        self._check(table)
+        return self._on(model)
+
+    def free(self, model, hint=None):
+        own, added = self._soft(model)
+        if not own and not added:
+            return []  # a single shear group: transverse_shear already is this model
+        materials = model.specimen.materials
+        free = [Parameter(kind, name) for name in own for kind in ("G13", "G23") if kind not in materials[name].identify]
+        return [self._on(model, free)]
 
 
 class RotaryInertia(Effect):
@@ -249,7 +291,7 @@ def register(effect: Effect) -> Effect:
 
 
 for _effect in (TransverseShear(), RotaryInertia(), PointMassEffect(), SuspensionEffect(), Orientation(),
-                Adhesive(), Thickness()):
+                Adhesive(), Thickness(), Layerwise()):
     register(_effect)
 
 

@@ -46,6 +46,7 @@ class Material:
     G23: float | None = None
     identify: tuple[str, ...] = ()
     bounds: tuple[tuple[str, float, float], ...] = ()   # (kind, lower, upper) [SI] set in the spec
+    E3: float | None = None  # through-thickness modulus [Pa]: a stretching core's (layerwise model); None = E2
 
     def __post_init__(self):
         kinds = ELASTIC_CONSTANTS if self.identify is True else () if self.identify is False else tuple(self.identify)
@@ -60,11 +61,11 @@ class Material:
                 raise SpecError(
                     f"material '{self.name}': {field} = {value!r} must be a positive finite number"
                 )
-        for field in ("G13", "G23"):
+        for field in ("G13", "G23", "E3"):
             value = getattr(self, field)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise SpecError(f"material '{self.name}': {field} = {value!r} must be positive")
-        for field in ("E1", "E2", "G12", "G13", "G23"):
+        for field in ("E1", "E2", "G12", "G13", "G23", "E3"):
             value = getattr(self, field)
             if value is not None and value < MODULUS_RANGE[0]:
                 raise SpecError(f"material '{self.name}': {field} = {value:g} Pa is below {MODULUS_RANGE[0]:g} Pa: a "

@@ -12,9 +12,12 @@ from .assembly import UnitMatrices, unit_matrices
 from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
 from .attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
-from .elements import ShearDifferencePlate
+from .errors import ModelError
 from .inputs import InputStd
+from .elements import ShearDifferencePlate
 from .laminate import Laminate
+from .layerwise import GROUPINGS, LayerwiseLaminate
+from .layerwise import system as layerwise_system
 from .material import Material
 from .mesh import PlateMesh
 from .modal import Modes, _first_bending_estimate, solve_modes
@@ -41,6 +44,9 @@ KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
 ROTARY_INERTIA = (1.0, 1.0, 1.0)
 #: Most elastic modes a model solves per configuration (a free-plate test rarely uses 20).
 MAX_MODES = 60
+#: Plate theories: "single_layer" (Kirchhoff, or FSDT with ``transverse_shear``) or
+#: "layerwise" (one shear strain per group of layers, ``fem.layerwise``).
+THEORIES = ("single_layer", "layerwise")
 
 
 @lru_cache(maxsize=1)
@@ -58,6 +64,17 @@ class ModelOptions:
     divisions: int | None = None  # elements along the longer side; None = the default rule
     transverse_shear: bool = False  # first-order shear deformation (ShearDifferencePlate)
     rotary_inertia: bool = False  # keep the inertia terms I1, I2
+    # "layerwise": zig-zag shear per layer group (LayerwisePlate), always with transverse
+    # shear and the full inertia of its displacement field (the two flags above are implied).
+    theory: str = "single_layer"
+    layer_groups: str = "auto"  # shear groups of the layerwise theory: "auto", "blocks" or "layers"
+    core_stretch: bool = True  # layerwise: a soft core's transverse normal strain (E3 = E2 unless given)
+
+    def __post_init__(self):
+        if self.theory not in THEORIES:
+            raise ModelError(f"theory = {self.theory!r} is unknown; use one of {', '.join(THEORIES)}")
+        if self.layer_groups not in GROUPINGS:
+            raise ModelError(f"layer_groups = {self.layer_groups!r} is unknown; use one of {', '.join(GROUPINGS)}")
 
     def mesh(self, specimen: Specimen) -> PlateMesh:
         divisions = self.divisions
@@ -81,6 +98,7 @@ class LaminateSolution:
     inertia_terms: tuple[float, float, float] = KIRCHHOFF_INERTIA
     transverse_shear: bool = False
     attachments: tuple = ()
+    layerwise: LayerwiseLaminate | None = None  # the layerwise theory's stack and groups, when solved with it
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -108,7 +126,11 @@ class LaminateSolution:
             return np.zeros((len(self.modes.eigenvalues), 0))
         d_lambda = np.zeros((len(self.modes.eigenvalues), len(parameters)))
         laminate = [j for j, p in enumerate(parameters) if p.kind not in ATTACHMENT_PARAMETERS]
-        if laminate:
+        if laminate and self.layerwise is not None:
+            dx, di = zip(*(self.layerwise.derivative(parameters[j].kind, parameters[j].target) for j in laminate))
+            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx),
+                                                           np.array(di))
+        elif laminate:
             dx, di = zip(*(self.laminate.derivative(parameters[j].kind, parameters[j].target) for j in laminate))
             if self.transverse_shear:
                 dx = [np.concatenate([x, self.laminate.shear_derivative(parameters[j].kind, parameters[j].target)])
@@ -126,19 +148,26 @@ class LaminateSolution:
 @lru_cache(maxsize=512)
 def solve_laminate(
     laminate: Laminate, mesh: PlateMesh, n_modes: int, *, transverse_shear: bool = False, rotary_inertia: bool = False,
-    attachments: tuple = (),
+    attachments: tuple = (), theory: str = "single_layer", layer_groups: str = "auto", core_stretch: bool = True,
 ) -> LaminateSolution:
     """Solve (and cache by content) the free-free modes of a laminate on a mesh.
 
     transverse_shear: first-order shear deformation theory (``ShearDifferencePlate``, the
     laminate's shear stiffness with its shear correction) instead of Kirchhoff;
     rotary_inertia: keep I1 and I2 in the kinetic energy;
-    attachments: point masses and suspension springs (``fem.attachments``).
+    attachments: point masses and suspension springs (``fem.attachments``);
+    theory "layerwise": the layerwise element (``fem.layerwise``, shear groups by
+    ``layer_groups``, soft cores stretching unless ``core_stretch`` is off) with its full
+    inertia; the two flags are then implied.
     """
+    stack = LayerwiseLaminate.of(laminate, layer_groups, core_stretch) if theory == "layerwise" else None
+    transverse_shear, rotary_inertia = (True, True) if stack is not None else (transverse_shear, rotary_inertia)
     terms = ROTARY_INERTIA if rotary_inertia else KIRCHHOFF_INERTIA
     inertia = laminate.inertia * np.array(terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
-    if transverse_shear:
+    if stack is not None:
+        units, stiffness, mass = layerwise_system(stack, mesh)
+    elif transverse_shear:
         # 80 x 80 elements: weighting the element matrices before one aggregation keeps
         # memory at one data array instead of 21.
         units = unit_matrices(mesh, ShearDifferencePlate)
@@ -157,7 +186,7 @@ def solve_laminate(
     # Limited here, where the solve happens, whatever the caller's environment.
     with _blas().limit(limits=1, user_api="blas"):
         modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
-    return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments)
+    return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments, stack)
 
 
 @dataclass(frozen=True)
@@ -222,7 +251,8 @@ class SpecimenModel:
         return solve_laminate(
             self.specimen.laminate(configuration), self.mesh, self.options.modes,
             transverse_shear=self.options.transverse_shear, rotary_inertia=self.options.rotary_inertia,
-            attachments=self.specimen.attachments,
+            attachments=self.specimen.attachments, theory=self.options.theory, layer_groups=self.options.layer_groups,
+            core_stretch=self.options.core_stretch,
         )
 
     def frequencies(self) -> dict[str, np.ndarray]:

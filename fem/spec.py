@@ -18,7 +18,8 @@ from .errors import SpecError
 from .inputs import InputStd
 from .laminate import Layer
 from .material import DENSITY_RANGE, MODULUS_RANGE, Material
-from .model import MAX_MODES, ModelOptions, SpecimenModel
+from .layerwise import GROUPINGS
+from .model import MAX_MODES, THEORIES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
 from .stock import STOCK, stock_name
 from .validation import check_keys, number, suggestion, whole
@@ -29,7 +30,7 @@ GPA, MM = 1e9, 1e-3
 MIN_THICKNESS_MM = 1e-3
 MATERIAL_KEYS = {
     "E1_GPa": True, "E2_GPa": True, "G12_GPa": True, "nu12": True, "density_kg_m3": True,
-    "identify": False, "G13_GPa": False, "G23_GPa": False, "note": False, "bounds": False,
+    "identify": False, "G13_GPa": False, "G23_GPa": False, "E3_GPa": False, "note": False, "bounds": False,
     **{f"{key}_std": False for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa", "nu12", "density_kg_m3")},
 }
 #: Plausible ranges that catch unit slips (a modulus in MPa, a density in g/cm^3).
@@ -49,7 +50,7 @@ def _material(name: str, table: dict) -> Material:
         raise SpecError(f"{where}: must be a table of properties")
     check_keys(table, MATERIAL_KEYS, where)
     values = {}
-    for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa"):
+    for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa", "E3_GPa"):
         v = _positive(table, key, where, required=MATERIAL_KEYS[key])
         if v is not None and not MODULUS_RANGE_GPA[0] <= v <= MODULUS_RANGE_GPA[1]:
             raise SpecError(
@@ -72,7 +73,7 @@ def _material(name: str, table: dict) -> Material:
     bounds = _bounds(table.get("bounds", {}), where)
     try:
         return Material(name, values["E1"], values["E2"], values["G12"], nu12, density,
-                        values["G13"], values["G23"], identify, bounds)
+                        values["G13"], values["G23"], identify, bounds, values["E3"])
     except SpecError as exc:
         raise SpecError(f"{where}: {exc}".replace(f"material '{name}': ", "")) from None
 
@@ -258,12 +259,20 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     model = data.get("model", {})
     if not isinstance(model, dict):
         raise SpecError(f"[model] = {model!r}: must be a table, e.g. [model] then modes = 5 on the next line")
-    check_keys(model, ("modes", "divisions"), "[model]")
+    check_keys(model, ("modes", "divisions", "theory", "layer_groups", "core_stretch"), "[model]")
     modes = whole(model.get("modes", 5), "[model].modes", 1, MAX_MODES, "")
     divisions = model.get("divisions")
     if divisions is not None:
         whole(divisions, "[model].divisions", 2, 64, "of elements ")
-    options = ModelOptions(modes=modes, divisions=divisions)
+    for key, allowed in (("theory", THEORIES), ("layer_groups", GROUPINGS)):
+        if key in model and model[key] not in allowed:
+            raise SpecError(f"[model].{key} = {model[key]!r} is unknown; {suggestion(model[key], allowed)} "
+                            '(e.g. theory = "layerwise" for a soft core or bond line)')
+    if not isinstance(model.get("core_stretch", True), bool):
+        raise SpecError(f"[model].core_stretch = {model['core_stretch']!r}: need true or false")
+    options = ModelOptions(modes=modes, divisions=divisions, theory=model.get("theory", "single_layer"),
+                           layer_groups=model.get("layer_groups", "auto"),
+                           core_stretch=model.get("core_stretch", True))
 
     effects = data.get("effects", [])
     if not isinstance(effects, list) or not all(isinstance(e, dict) for e in effects):

@@ -75,14 +75,16 @@ class Objective:
             solution = model.solve(name)
             rows = self.rows[name]
             group = self.measurements.table.iloc[rows]
-            if pairings is None:
+            previous = None if pairings is None else pairings[name].shapes
+            if previous is None or (track and previous.shape[0] != solution.modes.shapes.shape[0]):
+                # Afresh; also when the pairing to follow is of another model (another plate theory).
                 pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist())
             elif not track:
                 indices = pairings[name].indices
                 pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])
             else:
-                if weight is None:
-                    units = solution.units
+                units = solution.units
+                if weight is None or weight.shape[0] != units.n_dofs:  # the layerwise DOFs differ per stack
                     weight = units.matrix(units.mass_data[0])
                 pairing = pairings[name].track(solution.modes, weight)
             new_pairings[name] = pairing

@@ -27,8 +27,12 @@ class Prediction:
 
     def report(self) -> str:
         model, mesh = self.model, self.model.mesh
-        theory = ("first-order shear deformation" if model.options.transverse_shear else "Kirchhoff") + " plate" + (
-            " with rotary inertia" if model.options.rotary_inertia else "")
+        options = model.options
+        if options.theory == "layerwise":
+            theory = "layerwise (zig-zag) plate"
+        else:
+            theory = ("first-order shear deformation" if options.transverse_shear else "Kirchhoff") + " plate" + (
+                " with rotary inertia" if options.rotary_inertia else "")
         lines = [f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} elements)"]
         if model.effects:
             lines.append(f"with the spec's effects: {', '.join(model.effects)}")

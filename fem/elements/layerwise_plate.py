@@ -1,0 +1,174 @@
+"""Locking-free rectangular layerwise (zig-zag) laminate element.
+
+Kinematics: a layerwise first-order theory with one transverse shear strain per group of
+layers and continuous displacements (Reddy's layerwise theory, Mechanics of Laminated
+Composite Plates and Shells, 2nd ed. 2004, ch. 12, with one linear in-plane term per
+layer group, i.e. the zig-zag field of Di Sciuva 1986, J. Sound Vib. 105:425-442, keeping
+the layers' shear strains as the unknowns), and a transverse normal strain in a soft core
+(the core compressibility of high-order sandwich theories, e.g. Frostig et al. 1992,
+J. Eng. Mech. 118:1026-1043, here constant through the core):
+
+    U(x, y, z) = u - z w_x + sum_k Phi_k(z) gx_k - sum_s Lambda_s(z) e_s,x,
+    V(x, y, z) = v - z w_y + sum_k Phi_k(z) gy_k - sum_s Lambda_s(z) e_s,y,
+    W(x, y, z) = w + sum_s Psi_s(z) e_s,
+
+with Phi_k piecewise linear (slope 1 in the layers of group k), Psi_s piecewise linear
+(slope 1 in stretching layer s), Lambda_s = int_0^z Psi_s, all zero at z = 0 (so u, v, w
+are the mid-plane displacements; ``fem.layerwise``).  The transverse shear strains are
+gamma_xz = gx_k, gamma_yz = gy_k in the layers of group k, the normal strain eps_z = e_s in
+layer s, and the in-plane strains
+
+    eps = eps0 + z kappa + sum_k Phi_k kappa_k + sum_s Lambda_s chi_s,
+    eps0 = [u_x, v_y, u_y + v_x], kappa = [-w_xx, -w_yy, -2 w_xy],
+    kappa_k = [gx_k,x, gy_k,y, gx_k,y + gy_k,x], chi_s = [-e_s,xx, -e_s,yy, -2 e_s,xy].
+
+As in ``ShearDifferencePlate`` (the hierarchic shear-difference parametrisation of Echter,
+Oesterle and Bischoff 2013, CMAME 254:170-180), w is C1 and the shear strains are
+independent fields, so the Kirchhoff limit g = 0 (and e = 0) lies in the discrete space
+and the element cannot lock; u, v, w, every g_k and every e_s use the same bicubic Hermite
+basis (C1, as chi_s needs), so all strains converge at the Kirchhoff element's rate and
+the eigenvalues at O(h^4).  With one group and no stretching layer Phi = z and the
+element is exactly ``ShearDifferencePlate``.
+
+The energies are linear in generalised laminate coefficients (``fem.layerwise``): one unit
+stiffness matrix per pair (a <= b) of the through-thickness functions f = [1, z, Phi_k,
+Lambda_s] and Voigt pair, one per group shear term, one per stretching layer; one unit mass
+matrix per pair of f, and per pair of [1, Psi_s] beyond the first.
+"""
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+
+from .hermite_plate import HermitePlate
+
+
+def basis_pairs(n: int) -> list[tuple[int, int]]:
+    """Pairs (a <= b) of n through-thickness functions in unit-matrix order: (0, 0),
+    (0, 1), (1, 1) first (A, B, D; I0, I1, I2), then the others row by row."""
+    head = [(0, 0), (0, 1), (1, 1)][: 1 if n == 1 else 3]
+    return head + [(a, b) for a in range(n) for b in range(a, n) if (a, b) not in head]
+
+
+def _gram(weights: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    return np.einsum("q,qa,qb->ab", weights, first, second)
+
+
+class LayerwisePlate(HermitePlate):
+    """Four-node rectangle, 12 + 8 n + 4 m DOFs per node for n shear groups and m
+    stretching layers: u, v, w as in ``HermitePlate``, then per group k the Hermite fields
+    gx_k = gamma_xz, gy_k = gamma_yz, then per stretching layer s the field e_s = eps_z.
+
+    Use ``LayerwisePlate.with_groups(n, m)``: one (cached) class per (n, m), so that the
+    assembly caches see one element type per count.
+    """
+
+    GROUPS = 1
+    STRETCH = 0
+    FIELDS = ("u", "v", "w", "gx1", "gy1")
+    NODE_DOFS = HermitePlate.NODE_DOFS + tuple(f + s for f in ("gx1", "gy1") for s in ("", "_x", "_y", "_xy"))
+
+    @staticmethod
+    @cache
+    def with_groups(n: int, m: int = 0) -> type:
+        """The element class for n shear groups and m stretching layers (the same class
+        object for equal counts)."""
+        if n < 1 or m < 0:
+            raise ValueError(f"a layerwise element needs at least one shear group; got {n} groups, {m} stretching")
+        fields = tuple(f"{c}{k + 1}" for k in range(n) for c in ("gx", "gy")) + tuple(f"e{s + 1}" for s in range(m))
+        name = f"LayerwisePlate{n}" + (f"_{m}" if m else "")
+        cls = type(name, (LayerwisePlate,), {
+            "GROUPS": n,
+            "STRETCH": m,
+            "FIELDS": HermitePlate.FIELDS + fields,
+            "NODE_DOFS": HermitePlate.NODE_DOFS + tuple(f + s for f in fields for s in ("", "_x", "_y", "_xy")),
+            "__doc__": f"Layerwise plate element: {n} shear group(s), {m} stretching layer(s), "
+                       f"{12 + 8 * n + 4 * m} DOFs per node.",
+            "__module__": __name__,
+        })
+        globals()[name] = cls  # found by name, so solutions holding it pickle to worker processes
+        return cls
+
+    def zigzag_curvature(self, k: int) -> np.ndarray:
+        """kappa_k = [gx_k,x, gy_k,y, gx_k,y + gy_k,x] at the quadrature points (nq, 3, N)."""
+        gx, gy = f"gx{k + 1}", f"gy{k + 1}"
+        return np.stack([self._field("Nx", gx), self._field("Ny", gy), self._field("Ny", gx) + self._field("Nx", gy)],
+                        axis=1)
+
+    def stretch_curvature(self, s: int) -> np.ndarray:
+        """chi_s = -[e_s,xx, e_s,yy, 2 e_s,xy] at the quadrature points (nq, 3, N)."""
+        e = f"e{s + 1}"
+        return -np.stack([self._field("Nxx", e), self._field("Nyy", e), 2 * self._field("Nxy", e)], axis=1)
+
+    def shear_strain_operator(self, k: int) -> np.ndarray:
+        """[gamma_yz, gamma_xz] of group k at the quadrature points (nq, 2, N) (Voigt 4, 5)."""
+        return np.stack([self._field("N", f"gy{k + 1}"), self._field("N", f"gx{k + 1}")], axis=1)
+
+    def in_plane_strains(self) -> list[np.ndarray]:
+        """The in-plane strain operators of the functions [1, z, Phi_k, Lambda_s], each (nq, 3, N)."""
+        membrane, curvature = self.strain_operators()
+        return ([membrane, curvature] + [self.zigzag_curvature(k) for k in range(self.GROUPS)]
+                + [self.stretch_curvature(s) for s in range(self.STRETCH)])
+
+    def in_plane_displacements(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The (x, y) in-plane displacement operators of the functions [1, z, Phi_k, Lambda_s]."""
+        bx, by = HermitePlate.rotations(self)  # the Kirchhoff rotation -grad w
+        out = [(self._field("N", "u"), self._field("N", "v")), (bx, by)]
+        out += [(self._field("N", f"gx{k + 1}"), self._field("N", f"gy{k + 1}")) for k in range(self.GROUPS)]
+        out += [(-self._field("Nx", f"e{s + 1}"), -self._field("Ny", f"e{s + 1}")) for s in range(self.STRETCH)]
+        return out
+
+    def _coupling(self, first: np.ndarray, second: np.ndarray, pairs, symmetrise: bool) -> list[np.ndarray]:
+        """int first^T E_ij second dA for each Voigt pair (E_ij the symmetric unit matrix),
+        plus its transpose when the two operators differ (a cross term of the energy)."""
+        out = []
+        for i, j in pairs:
+            k = _gram(self.weights, first[:, i], second[:, j])
+            if i != j:
+                k = k + _gram(self.weights, first[:, j], second[:, i])
+            out.append(k + k.T if symmetrise else k)
+        return out
+
+    def unit_stiffness(self, pairs) -> np.ndarray:
+        """Unit stiffness matrices (n_c, N, N) in ``fem.layerwise.stiffness_names`` order."""
+        strains = self.in_plane_strains()
+        out = []
+        for a, b in basis_pairs(len(strains)):
+            out += self._coupling(strains[a], strains[b], pairs, a != b)
+        for k in range(self.GROUPS):
+            gamma = self.shear_strain_operator(k)
+            k45 = _gram(self.weights, gamma[:, 0], gamma[:, 1])
+            out += [_gram(self.weights, gamma[:, 0], gamma[:, 0]), _gram(self.weights, gamma[:, 1], gamma[:, 1]),
+                    k45 + k45.T]
+        for s in range(self.STRETCH):
+            e = self._field("N", f"e{s + 1}")
+            out.append(_gram(self.weights, e, e))
+        return np.array(out)
+
+    def unit_mass(self) -> np.ndarray:
+        """Unit mass matrices (n_i, N, N) in ``fem.layerwise.inertia_names`` order: the
+        in-plane pairs (the first, I0, also carries w^2), then the transverse pairs of
+        [w, e_s] beyond (w, w)."""
+        w = self.weights
+        displacements = self.in_plane_displacements()
+        out = []
+        for a, b in basis_pairs(len(displacements)):
+            (ax, ay), (bx, by) = displacements[a], displacements[b]
+            m = _gram(w, ax, bx) + _gram(w, ay, by)
+            out.append(m if a == b else m + m.T)
+        transverse = [self._field("N", "w")] + [self._field("N", f"e{s + 1}") for s in range(self.STRETCH)]
+        out[0] = out[0] + _gram(w, transverse[0], transverse[0])
+        for a, b in basis_pairs(len(transverse))[1:]:
+            m = _gram(w, transverse[a], transverse[b])
+            out.append(m if a == b else m + m.T)
+        return np.array(out)
+
+
+def __getattr__(name: str):
+    """``LayerwisePlateN`` / ``LayerwisePlateN_M`` made on first use (PEP 562), e.g. when a
+    worker process unpickles a solution that refers to one."""
+    counts = name[len("LayerwisePlate"):].split("_") if name.startswith("LayerwisePlate") else []
+    if counts and all(c.isdigit() for c in counts) and len(counts) <= 2:
+        return LayerwisePlate.with_groups(*map(int, counts))
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
