@@ -7,12 +7,11 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
 from fem.mesh import PlateMesh
-from fem.model import ModelOptions, SpecimenModel, solve_laminate
+from fem.model import ModelOptions, SpecimenModel, one_blas_thread, solve_laminate
 from fem.sensitivity import normalised
 from fem.specimen import Configuration, Parameter, Specimen
 
@@ -64,6 +63,7 @@ def _solution(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_mode
                           **theory)
 
 
+@one_blas_thread
 def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters: tuple[Parameter, ...],
                 pairs: list[tuple[Specimen, Configuration, bool]]) -> list[tuple]:
     """(frequencies, labels, relative sensitivities) of each (specimen, configuration,
@@ -73,13 +73,12 @@ def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters
     processes: each solve, its assembly and its sensitivities run BLAS on one thread (on
     busy cores a second BLAS thread made them 3x slower)."""
     out = []
-    with threadpool_limits(limits=1, user_api="blas"):
-        for specimen, configuration, labelled in pairs:
-            values = np.array([specimen.value(p) for p in parameters])
-            solution = _solution(specimen, options, mesh, n_modes, configuration)
-            f = solution.frequencies_hz
-            out.append((f, solution.labels if labelled else None,
-                        normalised(f, solution.derivatives(list(parameters)), values)))
+    for specimen, configuration, labelled in pairs:
+        values = np.array([specimen.value(p) for p in parameters])
+        solution = _solution(specimen, options, mesh, n_modes, configuration)
+        f = solution.frequencies_hz
+        out.append((f, solution.labels if labelled else None,
+                    normalised(f, solution.derivatives(list(parameters)), values)))
     return out
 
 

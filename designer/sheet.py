@@ -37,13 +37,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from fem.assembly import UnitMatrices
 from fem.attachments import PointMass, point_operators
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING
 from fem.mode_shapes import deflection_operator
+from fem.model import one_blas_thread
 from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved
@@ -375,14 +375,14 @@ def _distance_to_node(units: UnitMatrices, shape: np.ndarray, point: np.ndarray)
     return float(abs(w) / max(math.hypot(wx, wy), 1e-300))
 
 
+@one_blas_thread  # small systems: a second BLAS thread only slows them
 def test_sheet(problem: Problem, solved: list[Solved], prior: list[list[Solved]] | None = None) -> TestSheet:
     """The test sheet of a design's configurations (``prior``: per prior sample, the
     same configurations solved there)."""
     sheets = []
-    with threadpool_limits(limits=1, user_api="blas"):  # small systems: a second BLAS thread only slows them
-        for k, s in enumerate(solved):
-            reference = (sheets[0].sensor_point, sheets[0].excitation_point) if sheets else None
-            sheets.append(configuration_sheet(problem, s, [p[k] for p in prior] if prior else None, reference))
+    for k, s in enumerate(solved):
+        reference = (sheets[0].sensor_point, sheets[0].excitation_point) if sheets else None
+        sheets.append(configuration_sheet(problem, s, [p[k] for p in prior] if prior else None, reference))
     return TestSheet(tuple(sheets))
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import cached_property, lru_cache
+from functools import cached_property, lru_cache, wraps
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -12,9 +12,9 @@ from .assembly import UnitMatrices, unit_matrices
 from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
 from .attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
+from .elements import ShearDifferencePlate
 from .errors import ModelError
 from .inputs import InputStd
-from .elements import ShearDifferencePlate
 from .laminate import Laminate
 from .layerwise import GROUPINGS, LayerwiseLaminate
 from .layerwise import system as layerwise_system
@@ -53,6 +53,19 @@ THEORIES = ("single_layer", "layerwise")
 def _blas() -> ThreadpoolController:
     """The BLAS libraries loaded (inspected once, after scipy's are in memory)."""
     return ThreadpoolController()
+
+
+def one_blas_thread(function):
+    """``function`` run with BLAS on one thread.  The systems here are small (a few
+    thousand DOFs): BLAS threads only add overhead, and where cores are busy their
+    spinning made the assembly, the solve and the sensitivities 3-40x slower.  Limited
+    where the work happens, whatever the caller's environment."""
+    @wraps(function)
+    def limited(*args, **kwargs):
+        with _blas().limit(limits=1, user_api="blas"):
+            return function(*args, **kwargs)
+
+    return limited
 
 
 @dataclass(frozen=True)
@@ -106,7 +119,7 @@ class LaminateSolution:
 
     @cached_property
     def energies(self) -> ModalEnergies:
-        return ModalEnergies.of(self.units, self.modes)
+        return one_blas_thread(ModalEnergies.of)(self.units, self.modes)
 
     @cached_property
     def shape_coefficients(self) -> np.ndarray:
@@ -120,6 +133,7 @@ class LaminateSolution:
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
+    @one_blas_thread
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:
         """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""
         if not parameters:
@@ -146,6 +160,7 @@ class LaminateSolution:
 
 
 @lru_cache(maxsize=512)
+@one_blas_thread
 def solve_laminate(
     laminate: Laminate, mesh: PlateMesh, n_modes: int, *, transverse_shear: bool = False, rotary_inertia: bool = False,
     attachments: tuple = (), theory: str = "single_layer", layer_groups: str = "auto", core_stretch: bool = True,
@@ -181,11 +196,7 @@ def solve_laminate(
         extra_stiffness, extra_mass = attachment_data(units, attachments)
         stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
     suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
-    # These banded systems are small (a few thousand DOFs): BLAS threads only add
-    # overhead, and where cores are busy their spinning made solves 10-40x slower.
-    # Limited here, where the solve happens, whatever the caller's environment.
-    with _blas().limit(limits=1, user_api="blas"):
-        modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
+    modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
     return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments, stack)
 
 
