@@ -83,20 +83,44 @@ class Effect:
 
 class TransverseShear(Effect):
     kind = "transverse_shear"
-    description = "first-order shear deformation (G13, G23; G12 where not given)"
+    description = ("first-order shear deformation; free: G13, G23 of the identified materials (G12 where not given, "
+                   "stated)")
+    options = {"transverse_shear": True}
 
-    def _on(self, model):
-        defaulted = [m.name for m in model.specimen.materials.values() if m.G13 is None or m.G23 is None]
-        note = (f"G13 = G23 = G12 assumed for {', '.join(defaulted)} (exact for isotropic layers)"
-                if defaulted else "")
-        return SwitchedOn(self.kind, model.with_options(transverse_shear=True), (), note)
+    @staticmethod
+    def shear_parameters(model) -> list[Parameter]:
+        """G13 and G23 of every identified material that does not identify them already."""
+        return [Parameter(kind, m.name) for m in model.specimen.identified_materials
+                for kind in ("G13", "G23") if kind not in m.identify]
+
+    def _on(self, model, free=()):
+        freed = {p.target for p in free}
+        by_defaults: dict[str, list[str]] = {}
+        for m in model.specimen.materials.values():
+            if m.defaulted_shear_moduli and m.name not in freed:
+                by_defaults.setdefault(" = ".join(m.defaulted_shear_moduli), []).append(m.name)
+        notes = [f"{names} = G12 assumed for {', '.join(materials)} (exact for isotropic layers)"
+                 for names, materials in by_defaults.items()]
+        if free:
+            materials = model.specimen.materials
+            started = sorted({p.target for p in free if p.kind in materials[p.target].defaulted_shear_moduli})
+            notes.insert(0, f"free: {', '.join(p.name for p in free)}"
+                         + (f" (starting at G12 for {', '.join(started)})" if started else ""))
+        return SwitchedOn(self.kind, model.with_options(**self.options), tuple(free), "; ".join(notes))
 
     def fixed(self, model, table):
         self._check(table)
         return self._on(model)
 
     def free(self, model, hint=None):
-        return [self._on(model)]
+        return [self._on(model, self.shear_parameters(model))]
+
+
+class ThickPlate(TransverseShear):
+    kind = "thick_plate"
+    description = ("Mindlin plate: transverse shear and rotary inertia together; free: G13, G23 of the identified "
+                   "materials")
+    options = {"transverse_shear": True, "rotary_inertia": True}
 
 
 class Layerwise(Effect):
@@ -290,7 +314,7 @@ def register(effect: Effect) -> Effect:
     return effect
 
 
-for _effect in (TransverseShear(), RotaryInertia(), PointMassEffect(), SuspensionEffect(), Orientation(),
+for _effect in (TransverseShear(), RotaryInertia(), ThickPlate(), PointMassEffect(), SuspensionEffect(), Orientation(),
                 Adhesive(), Thickness(), Layerwise()):
     register(_effect)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from fem.effects import REGISTRY
 from fem.errors import MeasurementError
 from fem.io import (
     add_common_arguments,
@@ -138,7 +139,8 @@ def run_compare(args) -> int:
 
 
 def run_diagnose(args) -> int:
-    """Rank the candidate physical effects by how much of the misfit each explains."""
+    """Find the effects the model misses (forward selection); exit 0 only when the data
+    are then explained (at the noise level, or the refit with the selection converged)."""
     if args.report:
         check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
@@ -147,17 +149,17 @@ def run_diagnose(args) -> int:
     if args.report:
         figures = [(lambda path: plot_point_map(result.comparison, model, path), "point_mass_map.png",
                     "share of the misfit a point mass would explain at each point")]
-        if result.candidates and result.candidates[0].fit is not None:
-            best = result.candidates[0]
-            figures.insert(0, (lambda path: plot_before_after(result.baseline, best.fit, best.kind, path),
-                               "before_after.png", f"error per mode without and with {best.kind}"))
+        if result.final is not None:
+            chain = " + ".join(c.kind for c in result.selected)
+            figures.insert(0, (lambda path: plot_before_after(result.baseline, result.final, chain, path),
+                               "before_after.png", f"error per mode without and with {chain}"))
         write_analysis_report(args.report, f"Diagnosis: {model.name}", "diagnose (identify-layers diagnose)", model,
                               measurements, result.report(),
                               {"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
                               figures)
         _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
-    return 0
+    return 0 if result.explained else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -192,12 +194,12 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "fit":
             p.add_argument("--effect", action="append", metavar="KIND",
                            help="switch an effect on with its parameters free (repeatable): "
-                                "transverse_shear, rotary_inertia, point_mass, suspension, orientation, adhesive, "
-                                "thickness, or a registered kind")
+                                + ", ".join(REGISTRY))
         if name == "compare":
             p.add_argument("--no-fit", action="store_true", help="compare at the spec's values, without fitting")
         if name == "diagnose":
-            p.add_argument("--effects", metavar="K1,K2", help="only these candidate effects (default: all registered)")
+            p.add_argument("--effects", metavar="K1,K2",
+                           help=f"only these candidate effects (default: all registered: {', '.join(REGISTRY)})")
     return parser
 
 

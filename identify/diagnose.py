@@ -1,120 +1,517 @@
-"""Which physical effect is the model missing?
+"""Which physical effects is the model missing?  A forward selection.
 
-The baseline (layer properties fitted, no effect) is compared with one refit per
-candidate effect, its parameters free together with the layer properties.  Each is
+The baseline (layer properties fitted, no effect) is compared with refits that switch
+one more effect on, its parameters free together with everything already free.  Each is
 judged by the Bayesian information criterion, BIC = chi^2 + k ln n (chi^2 in units of the
 measurement scatter, k free parameters, n frequencies), so an effect's extra parameters
 must pay for themselves; without a stated scatter, chi^2 is replaced by n ln(RSS / n).
+
+Forward selection: the effect that lowers the criterion most is added, the others are
+tried again on top of it, and so on, until the misfit is at the noise level or nothing
+pays for itself: its gain, divided by the over-dispersion c = max(1, reduced chi^2) the
+refit leaves (a misfit made of model error, not noise, shrinks every chi^2 difference's
+weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the conditioning
+of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
+identifiable and never iterated.  An estimate that is physically unlikely
+(``plausibility``) is marked and not preferred over a plausible rival whose criterion is
+within ``PLAUSIBILITY_MARGIN`` (in units of c).  Candidates are refitted with the pairing
+re-checked at their solution (``repair``), in parallel processes when that pays; the
+selection is finally refitted in full (iterations, pairing check), and that refit's own
+status says whether the data are now explained.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import concurrent.futures as cf
+import math
+import multiprocessing as mp
+import os
+import time
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
 
-from fem.effects import REGISTRY, SwitchedOn, effect
-from fem.errors import LayerIdError
+from fem.effects import REGISTRY, effect
 from fem.io import html_pre
 from fem.model import SpecimenModel
 
+from .causes import likely_causes
 from .compare import Comparison, compare
-from .fitting import fit_with_effects
+from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, fit_layers, point_mass_hints,
+                      point_mass_starts, prepare_effect, with_determined_shear)
 from .measurements import Measurements
 from .parameters import display, json_key
-from .result import FitResult
+from .plausibility import plausible_first
+from .precheck import Precheck
+from .result import FitResult, FitStatus
+from .ties import Tied
+from .updating import FitOptions
+
+#: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
+#: strong" evidence, 2 ln B > 10).
+MIN_GAIN = 10.0
+#: An implausible estimate is ranked behind plausible rivals within this many units of c.
+PLAUSIBILITY_MARGIN = 10.0
+#: A candidate's refit: at most this many iterations, and it stops once the misfit falls by
+#: less than 0.1 chi^2 units per step (three in a row): a ranking needs the misfit, not the
+#: last digits of the parameters; the selected effects are refitted in full at the end.
+CANDIDATE_OPTIONS = FitOptions(max_iterations=20, stall_chi2=0.1)
+#: The chosen refit and the final one: to convergence, or until chi^2 falls by less than
+#: 0.01 per step (three in a row) where a weakly determined direction only creeps (its std
+#: then says so).
+FINAL_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS, stall_chi2=0.01)
+#: Effects that are the same physics as a set of others (``thick_plate``), or that include
+#: another (the layerwise model has the full inertia of its displacement field).
+SAME_AS = {"thick_plate": frozenset({"transverse_shear", "rotary_inertia"})}
+INCLUDES = {"layerwise": frozenset({"rotary_inertia"})}
+#: Effects that refine others: tried in a round only when one of those paid for itself in
+#: it and left a misfit above the noise (or is selected already).  The layerwise model
+#: refines transverse shear, and one of its solves costs 6-18 of the single-layer model's.
+REFINES = {"layerwise": ("transverse_shear", "thick_plate")}
+#: Candidate refits run in parallel processes when there are at least this many in a round
+#: and the baseline fit took at least ``PARALLEL_FROM_S`` (starting a worker costs ~1 s).
+PARALLEL_FROM = 3
+PARALLEL_FROM_S = 0.5
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """One effect refitted: its fit, the BIC gain over the baseline (positive = better)."""
+    """One effect added to a state of the selection: its refit, the BIC gain over the
+    state (positive = better) and that gain / c (``scaled_gain``, see the module doc)."""
 
     kind: str
     note: str
-    switched_on: SwitchedOn
-    fit: FitResult | None
+    added: AddedEffect
     gain: float
+    scaled_gain: float
     error: str = ""
+
+    @property
+    def fit(self) -> FitResult | None:
+        return self.added.result
+
+    @property
+    def precheck(self) -> Precheck | None:
+        return self.added.precheck
+
+    @property
+    def plausible(self) -> bool:
+        return not self.added.implausible
+
+    @property
+    def eligible(self) -> bool:
+        """Can be selected: refitted to a finished (converged or poor) fit."""
+        return self.fit is not None and self.fit.finished
 
     @property
     def rms_rel_error(self) -> float:
         return self.fit.rms_rel_error if self.fit else float("nan")
 
+    @property
+    def bic(self) -> float:
+        return self.fit.statistics.bic if self.fit else float("inf")
+
     def effect_values(self) -> dict[str, float]:
-        """The effect's own parameters in display units (e.g. mass_g, x_mm)."""
-        if not self.fit:
-            return {}
-        return {json_key(p) if p.kind not in ("angle", "thickness") else f"{p.target}.{json_key(p)}":
-                display(p, self.fit.value(p)) for p in self.switched_on.free}
+        """The effect's own parameters in display units (e.g. mass_g, x_mm; a material's
+        shear moduli as 'cfrp.G13_GPa')."""
+        return _values(self.fit, self.added.added) if self.fit else {}
+
+    def effect_std(self) -> dict[str, float | None]:
+        return _values(self.fit, self.added.added, std=True) if self.fit else {}
+
+    def to_dict(self) -> dict:
+        check = self.precheck
+        return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
+                "bic_gain": _finite(self.gain), "gain_over_c": _finite(self.scaled_gain),
+                "status": self.fit.status.value if self.fit else ("not_identifiable" if check and check.singular
+                                                                  else "not_refitted" if self.added.pruned
+                                                                  else "failed"),
+                "parameters": self.effect_values(), "std": self.effect_std(),
+                "plausible": self.plausible, "implausible": list(self.added.implausible),
+                "condition_number": _finite(check.condition_number) if check else None,
+                "note": " ".join(x for x in (self.note, self.error) if x)}
+
+
+def _finite(x):
+    return float(x) if x is not None and math.isfinite(x) else None
+
+
+def _key(p) -> str:
+    if p.kind in ("angle", "thickness", "G13", "G23"):
+        return f"{p.target}.{json_key(p)}"
+    return json_key(p)
+
+
+def _values(fit: FitResult, parameters, std: bool = False) -> dict:
+    out = {}
+    for p in parameters:
+        value = fit.std(p) if std else fit.value(p)
+        out[_key(p)] = _finite(display(p, value)) if std else display(p, value)
+        if isinstance(p, Tied):  # a follower: its ratio to the leader
+            for follower, ratio in p.followers:
+                out[_key(follower)] = _finite(display(follower, ratio * value)) if std else \
+                    display(follower, ratio * value)
+    return out
+
+
+@dataclass(frozen=True)
+class Step:
+    """One round of the forward selection: from ``start`` (the effects selected so far),
+    every remaining candidate tried (most preferred first); ``chosen`` or None, and why."""
+
+    number: int
+    selected_before: tuple[str, ...]
+    start: FitResult
+    candidates: tuple[Candidate, ...]
+    chosen: Candidate | None
+    reason: str
+    skipped: tuple[str, ...] = ()   # refinements not tried (what they refine did not pay)
+
+    def to_dict(self) -> dict:
+        return {"round": self.number, "with": list(self.selected_before), "rms_rel_error": self.start.rms_rel_error,
+                "candidates": [c.to_dict() for c in self.candidates], "not_tried": list(self.skipped),
+                "chosen": self.chosen.kind if self.chosen else None, "reason": self.reason}
 
 
 @dataclass(frozen=True)
 class Diagnosis:
+    """The baseline and its residual patterns (``comparison``), the forward selection
+    (``steps``), the first round's ranking (``candidates``: one effect at a time, most
+    preferred first) and the ``final`` refit with the selected effects (None when none)."""
+
     baseline: FitResult
     comparison: Comparison
-    candidates: tuple[Candidate, ...]        # best first
+    candidates: tuple[Candidate, ...]
+    steps: tuple[Step, ...] = ()
+    final: FitResult | None = None
+    seconds: float = float("nan")
 
     @property
     def at_noise_level(self) -> bool:
         return self.comparison.at_noise_level
 
     @property
+    def selected(self) -> tuple[Candidate, ...]:
+        return tuple(s.chosen for s in self.steps if s.chosen is not None)
+
+    @property
+    def explained(self) -> bool:
+        """The data are explained: at the noise level without effects, or the final refit
+        with the selection converged (its misfit consistent with the scatter)."""
+        return self.at_noise_level or (self.final is not None and self.final.converged)
+
+    @property
     def verdict(self) -> str:
         if self.at_noise_level:
             return "nothing beyond the measurement scatter remains: no effect is needed"
-        best = self.candidates[0] if self.candidates else None
-        if best is None or best.gain <= 0:
+        if not self.selected:
             return "no candidate effect explains the misfit well enough to pay for its parameters"
-        return (f"most likely missing: {best.kind} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
-                f"{100 * best.rms_rel_error:.3g} %)")
+        final = self.final
+        chain = " + ".join(c.kind for c in self.selected)
+        text = (f"missing: {chain} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
+                f"{100 * final.rms_rel_error:.3g} %, refit {final.status.value})")
+        odd = [c.kind for c in self.selected if not c.plausible]
+        if odd:
+            text += f"; implausible estimate of {', '.join(odd)}: read it as a sign of what is missing, not a value"
+        if not final.converged:
+            text += "; the refit still does not explain the data"
+        return text
 
     def to_dict(self) -> dict:
+        final = self.final
         return {
             "rms_rel_error": self.baseline.rms_rel_error,
             "reduced_chi2": self.baseline.statistics.reduced_chi2 if self.baseline.statistics.scatter_known else None,
             "verdict": self.verdict,
             "at_noise_level": self.at_noise_level,
-            "ranking": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error if c.fit else None,
-                         "bic_gain": c.gain if np.isfinite(c.gain) else None, "parameters": c.effect_values(),
-                         "note": " ".join(x for x in (c.note, c.error) if x)} for c in self.candidates],
+            "explained": self.explained,
+            "ranking": [c.to_dict() for c in self.candidates],
+            "selected": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error, "bic_gain": _finite(c.gain),
+                          "parameters": c.effect_values(), "plausible": c.plausible} for c in self.selected],
+            "path": [s.to_dict() for s in self.steps],
+            "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
+            "seconds": _finite(self.seconds),
         }
 
     def _repr_html_(self) -> str:
         return html_pre(self.report())
 
     def report(self) -> str:
+        base = self.baseline.statistics
         lines = ["== diagnosis ==", "", self.verdict, "",
                  f"baseline: RMS relative error {100 * self.baseline.rms_rel_error:.4f} %, "
-                 f"reduced chi^2 {self.baseline.statistics.reduced_chi2:.3g}", "",
-                 f"  {'effect':18s} {'RMS after %':>12s} {'BIC gain':>10s}  parameters"]
-        for c in self.candidates:
-            values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
-            gain = f"{c.gain:10.1f}" if np.isfinite(c.gain) else f"{'failed':>10s}"
-            lines.append(f"  {c.kind:18s} {100 * c.rms_rel_error:12.4f} {gain}  {values} {c.note} {c.error}".rstrip())
+                 f"reduced chi^2 {base.reduced_chi2:.3g}"]
+        if self.at_noise_level:
+            lines += ["no effect was refitted: the residual patterns below (a score test) show what each would "
+                      "explain"]
+        for step in self.steps:
+            start = " + ".join(step.selected_before) or "the baseline"
+            lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %)",
+                      f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s}  status / parameters"]
+            for c in step.candidates:
+                values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
+                gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
+                status = c.fit.status.value if c.fit else ("not identifiable" if c.precheck and c.precheck.singular
+                                                           else "not refitted" if c.added.pruned else "failed")
+                mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
+                lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain}  {status}  {values}{mark}".rstrip())
+                if not c.fit:
+                    lines.append(f"  {'':17s} {c.error}")
+            if step.skipped:
+                lines.append(f"  not tried: {', '.join(step.skipped)} (refines "
+                             f"{' or '.join(sorted({r for k in step.skipped for r in REFINES[k]}))}, which did not pay)")
+            lines.append(f"  -> {step.reason}")
+        final = self.final
+        if final is not None:
+            lines += ["", f"refit with {' + '.join(c.kind for c in self.selected)}: {final.status.value}",
+                      f"  {final.message}", f"  RMS relative error {100 * final.rms_rel_error:.4f} %"]
+            added = [p for p in final.parameters if p not in self.baseline.parameters]
+            for p in added:
+                sd = final.std(p)
+                lines.append(f"  {p.name:40s} {display(p, final.value(p)):12.5g} +- "
+                             + (f"{display(p, sd):.3g}" if math.isfinite(sd) else "n/a"))
+            notes = [text for _, text in final.effect_notes]
+            lines += [f"  - {text}" for text in notes]
+        if math.isfinite(self.seconds):
+            lines += ["", f"({self.seconds:.1f} s)"]
         return "\n".join(lines) + "\n\n" + self.comparison.report()
 
 
+def _canonical(kinds) -> frozenset:
+    out = set()
+    for k in kinds:
+        out |= SAME_AS.get(k, {k})
+    for k, included in INCLUDES.items():
+        if k in out:
+            out -= included
+    return frozenset(out)
+
+
+def _refine(kind: str, kinds, selected, candidates) -> bool:
+    """Is refinement ``kind`` worth a refit in this round: what it refines is not among the
+    candidates at all, or is selected already, or paid for itself in this round without
+    reaching the noise level (then nothing is left for the refinement to explain)."""
+    refined = set(REFINES[kind])
+    if not refined & set(kinds) or refined & set(selected):
+        return True
+    tried = [c for c in candidates if c.kind in refined]
+    return any(c.scaled_gain > MIN_GAIN for c in tried) and \
+        not any(c.eligible and _at_noise_level(c.fit) for c in tried)
+
+
+def _nested(a: str, b: str, selected) -> bool:
+    """The physics of one candidate contains the other's (with what is selected), e.g.
+    transverse_shear and thick_plate: not rivals but the same explanation, one with a part
+    more."""
+    x, y = _canonical(list(selected) + [a]), _canonical(list(selected) + [b])
+    return x <= y or y <= x
+
+
+def _eligible_kinds(kinds: list[str], selected: list[str], closed: set[str]) -> list[str]:
+    """The candidates worth a refit on top of ``selected``: not closed (not identifiable,
+    nothing to act on), changing the model, and not the same as an earlier one."""
+    now = _canonical(selected)
+    seen, out = set(), []
+    for k in kinds:
+        if k in selected or k in closed:
+            continue
+        then = _canonical(selected + [k])
+        if then == now or then in seen:
+            continue
+        seen.add(then)
+        out.append(k)
+    return out
+
+
+def _over_dispersion(fit: FitResult) -> float:
+    st = fit.statistics
+    return max(1.0, st.reduced_chi2) if st.scatter_known and st.dof > 0 else 1.0
+
+
+def _candidate(state: FitResult, added: AddedEffect) -> Candidate:
+    fit = added.result
+    if fit is None:
+        return Candidate(added.kind, "", added, float("-inf"), float("-inf"), added.error)
+    gain = state.statistics.bic - fit.statistics.bic
+    st, now = fit.statistics, state.statistics
+    if st.scatter_known:
+        scaled = (now.sum_squares - st.sum_squares) / _over_dispersion(fit) - (st.k - now.k) * math.log(st.n)
+    else:
+        scaled = gain
+    note = "; ".join(added.notes) if fit.finished else fit.message
+    return Candidate(added.kind, note, added, gain, scaled)
+
+
+def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
+    if requested is not None:
+        return max(1, requested)
+    if tasks < PARALLEL_FROM or baseline_seconds < PARALLEL_FROM_S:
+        return 1
+    return max(1, min(2, os.cpu_count() or 1, tasks))
+
+
+def _add(args):
+    """One candidate's refit (module level: runs in a worker process)."""
+    return add_effect(*args)
+
+
+def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal, hints, pool,
+         n_workers: int) -> list[Candidate]:
+    """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
+    (here), then refitted most promising first (by the linearised bound), each only when
+    it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
+    pool, ``n_workers`` at a time."""
+    out, ready = [], []
+    for kind in kinds:
+        prepared = prepare_effect(state, kind, hints)
+        if isinstance(prepared, AddedEffect):
+            out.append(_candidate(state, prepared))
+        else:
+            ready.append(prepared)
+    ready.sort(key=lambda r: -r.bound)
+    for i in range(0, len(ready), n_workers if pool else 1):
+        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.eligible]
+        below = max(explained) if explained else None
+        jobs = [(state, r.kind, measurements, nominal, hints, "quick", None, True, CANDIDATE_OPTIONS, below, r)
+                for r in ready[i:i + (n_workers if pool else 1)]]
+        out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
+    return out
+
+
 def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] | None = None,
-             progress: Callable[[str], None] | None = None) -> Diagnosis:
-    """Rank the candidate effects by how much of the misfit they explain (best first)."""
+             progress: Callable[[str], None] | None = None, workers: int | None = None) -> Diagnosis:
+    """Find the effects the model misses: forward selection over ``kinds`` (default: every
+    registered effect), see the module doc.  ``workers``: processes for the candidate
+    refits (None: 2 when a round has several and the fit is not trivial, 1 = here)."""
     kinds = list(kinds) if kinds is not None else list(REGISTRY)
     for kind in kinds:
         effect(kind)  # unknown kinds fail before any work
+    started = time.perf_counter()
+    say = progress or (lambda text: None)
     comparison = compare(model, measurements)
     baseline = comparison.fitted
-    layer_parameters = list(baseline.parameters)
-    candidates = []
-    for kind in kinds:
-        if progress:
-            progress(f"trying {kind}")
-        try:
-            result = fit_with_effects(model, measurements, [kind], comparison)
-        except LayerIdError as exc:
-            candidates.append(Candidate(kind, "", SwitchedOn(kind, baseline.model), None, float("-inf"),
-                                        f"failed: {exc}"))
-            continue
-        on = SwitchedOn(kind, result.model, tuple(p for p in result.parameters if p not in layer_parameters))
-        gain = baseline.statistics.bic - result.statistics.bic if result.converged else float("-inf")
-        note = "; ".join(text for k, text in result.effect_notes if k == kind) if result.converged else result.message
-        candidates.append(Candidate(kind, note, on, result, gain))
-    return Diagnosis(baseline, comparison, tuple(sorted(candidates, key=lambda c: -c.gain)))
+    baseline_seconds = time.perf_counter() - started
+    if comparison.at_noise_level:
+        say("the baseline fits at the noise level: no effect refitted")
+        return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
+    nominal = model.specimen
+    state, selected, steps, closed = baseline, [], [], set()
+    pool = None
+    try:
+        for number in range(1, len(kinds) + 1):
+            trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
+            if not trying:
+                steps.append(Step(number, tuple(c.kind for c in selected), state, (), None,
+                                  "stop: no candidate left to try"))
+                break
+            hints = point_mass_starts(model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy) \
+                if state is baseline else point_mass_hints(state)
+            n_workers = _workers(workers, len(trying), baseline_seconds)
+            if n_workers > 1 and pool is None:
+                pool = cf.ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"))
+
+            def run(batch):
+                say(f"round {number}: trying {', '.join(batch)}" + (f" in {n_workers} processes" if pool else ""))
+                return _try(state, batch, measurements, nominal, hints, pool, n_workers)
+
+            names = [c.kind for c in selected]
+            candidates = run([k for k in trying if k not in REFINES])
+            refining = [k for k in trying if k in REFINES and _refine(k, kinds, names, candidates)]
+            skipped = [k for k in trying if k in REFINES and k not in refining]
+            if refining:
+                candidates += run(refining)
+            candidates = _continue_unfinished(candidates, measurements, state, say)
+            closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
+            finished = [c for c in candidates if c.eligible]
+            c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
+            ordered = plausible_first([c for c in candidates if c.fit is not None], c_hat, PLAUSIBILITY_MARGIN,
+                                      key=lambda c: c.bic, judged=lambda c: c.plausible,
+                                      related=lambda a, b: _nested(a.kind, b.kind, names))
+            ordered += [c for c in candidates if c.fit is None]
+            best = next((c for c in ordered if c.eligible), None)
+            for c in candidates:
+                say(f"  {c.kind}: " + (f"RMS {100 * c.rms_rel_error:.4f} %, BIC gain {c.gain:.1f}" if c.fit
+                                       else c.error) + f" ({c.added.seconds:.1f} s)")
+            before = tuple(c.kind for c in selected)
+            if best is None or not best.scaled_gain > MIN_GAIN:
+                reason = ("stop: no candidate could be refitted" if best is None else
+                          f"stop: the best, {best.kind}, does not pay for itself (gain / c = {best.scaled_gain:.1f} "
+                          f"<= {MIN_GAIN:g})")
+                steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped)))
+                break
+            reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
+            lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
+            if lowest is not best:
+                reason += (f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
+                           "whose estimate is implausible")
+            if not best.plausible:
+                reason += "; its estimate is implausible, but no plausible rival fits about as well"
+            # The chosen refit is taken to convergence (the candidates stopped once their misfit
+            # settled) before the next round looks again.
+            polished = fit_layers(best.fit.model, measurements, list(best.fit.parameters), FINAL_OPTIONS,
+                                  effect_of=best.fit.effect_of, like=best.fit, explain=False, settle="quick",
+                                  pairings=best.fit.pairings)
+            polished, notes = with_determined_shear(polished, measurements, nominal, FINAL_OPTIONS)
+            if polished.finished and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares):
+                added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
+                                added=tuple(p for p in polished.parameters if p not in state.parameters))
+                best = _candidate(state, added)
+                ordered = [best if c.kind == best.kind else c for c in ordered]
+            steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped)))
+            selected.append(best)
+            state = best.fit
+            if _at_noise_level(state):
+                steps.append(Step(number + 1, tuple(c.kind for c in selected), state, (), None,
+                                  "stop: the misfit is at the noise level"))
+                break
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    final = _final(state, measurements, baseline, selected, say) if selected else None
+    first = steps[0].candidates if steps else ()
+    return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started)
+
+
+def _continue_unfinished(candidates: list[Candidate], measurements: Measurements, state: FitResult,
+                         say) -> list[Candidate]:
+    """Candidates where one that stopped at the iteration limit with a lower criterion than
+    every finished one (its misfit still falling) is continued, each at most once."""
+    candidates = list(candidates)
+    for _ in range(len(candidates)):
+        ranked = sorted((c for c in candidates if c.fit is not None), key=lambda c: c.bic)
+        if not ranked or ranked[0].fit.status is not FitStatus.NOT_CONVERGED:
+            break
+        c = ranked[0]
+        say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
+        fit = fit_layers(c.fit.model, measurements, list(c.fit.parameters),
+                         replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS), effect_of=c.fit.effect_of,
+                         like=c.fit, explain=False, settle="quick", pairings=c.fit.pairings)
+        continued = _candidate(state, replace(c.added, result=fit))
+        candidates[candidates.index(c)] = continued
+        if not continued.eligible:
+            break
+    return candidates
+
+
+def _at_noise_level(fit: FitResult) -> bool:
+    from .compare import NOISE_CHI2
+
+    st = fit.statistics
+    return bool(st.scatter_known and np.isfinite(st.reduced_chi2) and st.reduced_chi2 < NOISE_CHI2)
+
+
+def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:
+    """The selection refitted in full: iterations to convergence and the whole pairing
+    check; its status is its own (converged only when consistent with the scatter)."""
+    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
+    result = fit_layers(state.model, measurements, list(state.parameters), FINAL_OPTIONS, effect_of=state.effect_of,
+                        like=state, explain=False, settle=True, pairings=state.pairings)
+    notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
+    if result.status is FitStatus.POOR_FIT:
+        causes = likely_causes(result)
+        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
+    return replace(result, warnings=result.warnings + tuple(text for _, text in notes), effect_notes=notes,
+                   baseline=baseline)
+
+
+__all__ = ["Candidate", "Diagnosis", "Step", "diagnose", "MIN_GAIN", "PLAUSIBILITY_MARGIN"]

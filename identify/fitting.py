@@ -2,11 +2,17 @@
 parameters are estimated together with the layer properties."""
 from __future__ import annotations
 
-from dataclasses import replace
+import time
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
+import numpy as np
+
 from fem.effects import effect
+from fem.errors import LayerIdError
+from fem.material import MATERIAL_PARAMETERS, SHEAR_MODULI
 from fem.model import SpecimenModel
+from fem.specimen import Parameter, Specimen
 
 from .measurements import Measurements
 from .parameters import display
@@ -14,10 +20,26 @@ from .peak_lists import fit_peak_list
 from .budget import with_budget
 from .causes import likely_causes
 from .result import FitResult, FitStatus, Iteration
+from .plausibility import implausible
+from .precheck import Precheck, Sensitivities, precheck
+from .shear_moduli import choose_shear_moduli, reconsidered
+from .statistics import ASSUMED_SCATTER_REL
+from .ties import Tied, plain
 from .updating import FitOptions, update
 
-#: Iterations per point-mass start (the best start is then continued).
-POINT_MASS_ITERATIONS = 12
+#: Iterations of a refit with an effect (from the fit without it).
+EFFECT_ITERATIONS = 40
+#: Point-mass starts: the residual scan's best position and a 3 x 3 grid over its quarter
+#: of the plate, ranked by the share of the misfit the scan gives a mass there; the best
+#: ``POINT_MASS_STARTS`` are screened with ``POINT_MASS_SCREEN`` iterations each, and the
+#: best ``POINT_MASS_CONTINUED`` at distinct positions are continued to convergence (rivals
+#: need finished fits).
+POINT_MASS_STARTS = 4
+POINT_MASS_SCREEN = 3
+POINT_MASS_CONTINUED = 2
+#: A candidate whose refit could explain, by its linearised estimate (or a point mass by the
+#: residual scan), less than 1 / PRUNE_FACTOR of what another one explained is not refitted.
+PRUNE_FACTOR = 2.0
 #: Two effect estimates whose chi^2 differ by less than this (about 2 std) are rivals.
 RIVAL_CHI2 = 4.0
 
@@ -44,13 +66,15 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
 
 def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions = FitOptions(),
                progress: Callable[[Iteration], None] | None = None, effect_of: dict | None = None,
-               like: FitResult | None = None, explain: bool = True) -> FitResult:
+               like: FitResult | None = None, explain: bool = True, settle: bool | str = True,
+               pairings: dict | None = None) -> FitResult:
     """The multi-model updating of ranked measurements, or of a peak list (matched to the
     model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
     starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
-    poor fit its likely causes (``causes``)."""
+    poor fit its likely causes (``causes``).  ``settle``: the pairing check at the solution
+    of ranked data, ``pairings``: a fit's to follow from the start (``updating.update``)."""
     if measurements.ranked:
-        result = update(model, measurements, parameters, options, progress, effect_of)
+        result = update(model, measurements, parameters, options, progress, effect_of, settle, pairings)
     else:
         start = like.peaks.matches() if like is not None and like.peaks is not None else None
         result = fit_peak_list(model, measurements, parameters, options, progress, effect_of, start)
@@ -63,55 +87,243 @@ def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
                      progress: Callable[[str], None] | None = None) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
-    baseline fit's layer properties (``comparison.fitted``, computed when not given).
+    baseline fit's layer properties (``comparison.fitted``, computed when not given), one
+    effect after the other (``add_effect``); the last refit checks the pairing in full.
 
     A point mass starts at each of the positions the residual scan suggests and on a grid
     over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
-    well are reported.
+    well are reported.  The transverse-shear effects free the G13 and G23 that the data
+    can identify (``shear_moduli``).
     """
     from .compare import compare
 
     comparison = comparison or compare(model, measurements)
     baseline = comparison.fitted
-    start = baseline.model
-    free, effect_of = [], {}
-    result = baseline
-    notes = []
-    for kind in kinds:
-        hints = comparison.point_mass_hints if kind == "point_mass" else (None,)
-        if kind == "point_mass":
-            hints = tuple(hints[:1]) + _quadrant_grid(start, hints[0] if hints else None)
-        trials = []
-        for hint in hints or (None,):
-            variants = effect(kind).free(start, hint) if hint else [effect(kind).free_all(start)]
-            for on in variants:
-                if progress:
-                    progress(f"fitting with {kind} {on.note}".strip())
-                trial = fit_layers(on.model, measurements, list(baseline.parameters) + free + list(on.free),
-                                   FitOptions(max_iterations=POINT_MASS_ITERATIONS if kind == "point_mass" else 40),
-                                   effect_of={**effect_of, **{p: kind for p in on.free}}, like=baseline,
-                                   explain=False)
-                trials.append((trial, on))
-        result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
-        if not result.finished:  # the best start was still moving: let it finish
-            result = fit_layers(result.model, measurements, list(result.parameters), FitOptions(max_iterations=80),
-                                effect_of=result.effect_of, like=result, explain=False)
-        rivals = [t for t, o in trials if t is not result and t.finished
-                  and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
-                  and _differs(t, result, o.free)]
-        if rivals:
-            described = "; ".join(", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals)
-            notes.append((kind, f"{kind}: {len(rivals)} other solution(s) fit about as well ({described}): the "
-                                "effect's parameters are not unique with these modes; measure more modes to separate "
-                                "them"))
-        start = result.model
-        free += list(on.free)
-        effect_of.update({p: kind for p in on.free})
+    state, notes = baseline, []
+    for number, kind in enumerate(kinds):
+        last = number == len(kinds) - 1
+        hints = point_mass_starts(state.model, comparison.point_mass_hints, comparison.point_map,
+                                  comparison.node_xy) if state is baseline else point_mass_hints(state)
+        added = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
+                           progress=progress, skip_singular=False)
+        if added.result is None:
+            raise LayerIdError(f"effect '{kind}': {added.error}")
+        notes += [(kind, text) for text in added.notes]
+        state = added.result
+    result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, settle=True)
+    notes += [(kinds[-1], text) for text in reconsidered_notes]
     if result.status is FitStatus.POOR_FIT:
         causes = likely_causes(result)
         result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
     return replace(result, warnings=result.warnings + tuple(text for _, text in notes), effect_notes=tuple(notes),
                    baseline=baseline)
+
+
+@dataclass(frozen=True)
+class AddedEffect:
+    """An effect added to a fit: ``result`` the refit with it (None when not run: not
+    identifiable, or an error); ``added`` the parameters it freed (after the choice of
+    shear moduli); ``precheck`` the conditioning before the refit; ``notes`` what was
+    decided or found (shear moduli freed, rival estimates, implausible values);
+    ``implausible`` why its estimate is physically unlikely (empty: plausible)."""
+
+    kind: str
+    result: FitResult | None
+    added: tuple[Parameter, ...] = ()
+    precheck: Precheck | None = None
+    notes: tuple[str, ...] = ()
+    implausible: tuple[str, ...] = ()
+    error: str = ""
+    seconds: float = 0.0
+    pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
+
+    @property
+    def identifiable(self) -> bool:
+        return self.precheck is None or not self.precheck.singular
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """An effect ready to be refitted on top of ``state``: the model with it switched on,
+    the parameters it adds (after the choice of shear moduli), the pre-check and its notes,
+    and ``bound``: the reduction of the weighted sum of squares the refit could bring, by
+    the linearised refit from its start (for a point mass the residual scan's best share
+    if larger)."""
+
+    kind: str
+    model: SpecimenModel
+    base: tuple
+    added: tuple
+    precheck: Precheck
+    notes: tuple[str, ...]
+    bound: float
+    seconds: float = 0.0
+
+
+def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEffect:
+    """One evaluation of ``state``'s model with effect ``kind`` switched on, at the start
+    of its refit (``precheck``): the shear moduli to free, the conditioning, the bound.
+    An ``AddedEffect`` without a fit when the effect has nothing to act on or fails."""
+    started = time.perf_counter()
+    try:
+        on = effect(kind).free_all(state.model)
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, error=str(exc))
+    base = list(state.parameters)
+    covered = {plain(p) for p in base} | {f for p in base if isinstance(p, Tied) for f, _ in p.followers}
+    new = [p for p in on.free if p not in covered]
+    notes = []
+    try:
+        sensitivities = Sensitivities.at_start(on.model, state.measurements, base + new, state.pairings)
+        shear = [p for p in new if p.kind in SHEAR_MODULI]
+        if shear:
+            choice = choose_shear_moduli(sensitivities, base + [p for p in new if p not in shear], shear,
+                                         on.model.specimen)
+            new = [p for p in new if p not in shear] + list(choice.parameters)
+            notes.append(choice.describe(on.model.specimen))
+        check = precheck(sensitivities, base, new)
+        now = state.statistics.sum_squares
+        bound = now - sensitivities.predicted_sum_squares(base + new)
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, tuple(new), error=str(exc))
+    if kind == "point_mass":
+        bound = max([bound] + [h.get("share", 0.0) * now for h in hints])
+    return Prepared(kind, on.model, tuple(base), tuple(new), check, tuple(notes), float(bound),
+                    time.perf_counter() - started)
+
+
+def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(),
+               settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
+               skip_singular: bool = True, options: FitOptions | None = None,
+               prune_below: float | None = None, prepared: Prepared | None = None) -> AddedEffect:
+    """``state`` (a finished fit, its effects on) refitted with effect ``kind`` switched on
+    and its parameters free too.  First one evaluation with the effect (``prepare_effect``,
+    unless ``prepared`` is given): it decides which transverse shear moduli to free and,
+    when the augmented sensitivity matrix is singular (and ``skip_singular``), the refit is
+    not run.  ``hints``: point-mass start positions from the residual scan; ``nominal``: the
+    spec's specimen, against which the estimates' plausibility is judged; ``settle``: the
+    pairing check at the solution (True: in full, "quick": ``repair``); ``options``: of the
+    refit (default ``EFFECT_ITERATIONS`` iterations); ``prune_below``: a reduction of the
+    weighted sum of squares another candidate achieved: a refit whose bound does not come
+    within ``PRUNE_FACTOR`` of it is not run."""
+    options = options or FitOptions(max_iterations=EFFECT_ITERATIONS)
+    started = time.perf_counter()
+    ready = prepared or prepare_effect(state, kind, hints)
+    if isinstance(ready, AddedEffect):
+        return replace(ready, seconds=time.perf_counter() - started)
+    added = _refit(state, ready, measurements, nominal, hints, settle, progress, skip_singular, options, prune_below)
+    return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
+
+
+def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progress, skip_singular, options,
+           prune_below) -> AddedEffect:
+    kind, new, check, notes = ready.kind, list(ready.added), ready.precheck, list(ready.notes)
+    if check.singular and skip_singular:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}")
+    if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), pruned=True,
+                           error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
+                                 f"(linearised{', residual scan' if kind == 'point_mass' else ''}), less than 1/"
+                                 f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
+    base = list(ready.base)
+    effect_of = {**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
+    if progress:
+        progress(f"fitting with {kind}")
+    try:
+        if kind == "point_mass":
+            result, rivals = _point_mass(state, measurements, hints, base, effect_of, settle, progress, options)
+            notes += rivals
+        else:
+            result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
+                                explain=False, settle=settle, pairings=state.pairings)
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
+    first_hz = float(state.measurements.table["frequency_hz"].min())
+    reasons = implausible(new, result.specimen, nominal, first_hz)
+    notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
+    return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
+                       tuple(notes), reasons)
+
+
+def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
+                          options: FitOptions | None = None, settle: bool | str = "quick") -> tuple[FitResult, list]:
+    """The fit refitted until every transverse shear modulus an effect freed is still
+    determined at the solution (``shear_moduli.reconsidered``); with the notes saying what
+    changed."""
+    notes = []
+    scatter = 1.0 if result.measurements.has_std else ASSUMED_SCATTER_REL
+    for _ in range(2 * len(nominal.materials)):
+        change = reconsidered(result, nominal, scatter) if result.jacobian is not None else None
+        if change is None:
+            break
+        parameters, model, note = change
+        notes.append(note)
+        result = fit_layers(model, measurements, parameters, options or FitOptions(max_iterations=EFFECT_ITERATIONS),
+                            effect_of=result.effect_of, like=result, explain=False, settle=settle,
+                            pairings=result.pairings)
+    return result, notes
+
+
+def point_mass_hints(state: FitResult) -> tuple:
+    """Point-mass start positions from the residual scan of a fit (``compare``), ranked
+    (``point_mass_starts``)."""
+    from .compare import residual_patterns
+    from .objective import solving_model
+
+    _, shares, xy, hints = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
+                                             state.model_hz, state.pairings, state.jacobian)
+    return point_mass_starts(state.model, hints, shares, xy)
+
+
+def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tuple:
+    """Where a point mass's refit starts: the residual scan's best position and a 3 x 3
+    grid over its quarter of the plate (``_quadrant_grid``), ranked by the share of the
+    misfit the scan says a mass there explains (``shares`` per node at ``xy``); the best
+    ``POINT_MASS_STARTS`` (all of them without a scan)."""
+    starts = tuple(hints[:1]) + _quadrant_grid(model, hints[0] if hints else None)
+    if shares is None or xy is None or not len(shares):
+        return starts
+
+    def share(start):
+        return float(shares[int(np.argmin(np.hypot(*(xy - np.array(start["xy"])).T)))])
+
+    return tuple(sorted(starts, key=lambda start: -share(start))[:POINT_MASS_STARTS])
+
+
+def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options):
+    """The point mass from several starts: each screened with ``POINT_MASS_SCREEN``
+    iterations, the best ``POINT_MASS_CONTINUED`` distinct ones continued to convergence.
+    Returns (the best fit, notes on rivals that fit about as well)."""
+    starts = tuple(hints) if hints else point_mass_starts(state.model, ())
+    screened = []
+    for hint in starts:
+        for on in effect("point_mass").free(state.model, hint):
+            trial = fit_layers(on.model, measurements, base + list(on.free),
+                               replace(options, max_iterations=POINT_MASS_SCREEN), effect_of=effect_of, like=state,
+                               explain=False, settle=False, pairings=state.pairings)
+            screened.append((trial, on))
+    screened.sort(key=lambda t: t[0].statistics.sum_squares)
+    chosen = []
+    for trial, on in screened:
+        if all(_differs(trial, other, on.free) for other, _ in chosen):
+            chosen.append((trial, on))
+        if len(chosen) == POINT_MASS_CONTINUED:
+            break
+    if progress:
+        progress(f"point_mass: {len(screened)} starts screened, {len(chosen)} continued")
+    trials = [(fit_layers(t.model, measurements, list(t.parameters), options,
+                          effect_of=effect_of, like=t, explain=False, settle=settle, pairings=t.pairings), on)
+              for t, on in chosen]
+    result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
+    rivals = [t for t, o in trials if t is not result and t.finished
+              and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
+              and _differs(t, result, o.free)]
+    notes = []
+    if rivals:
+        described = "; ".join(", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals)
+        notes.append(f"point_mass: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
+                     "parameters are not unique with these modes; measure more modes to separate them")
+    return result, notes
 
 
 def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
@@ -144,4 +356,5 @@ def _differs(a: FitResult, b: FitResult, parameters, tolerance: float = 0.05) ->
     return False
 
 
-__all__ = ["fit", "fit_with_effects"]
+__all__ = ["fit", "fit_with_effects", "add_effect", "prepare_effect", "AddedEffect", "Prepared",
+           "with_determined_shear"]

@@ -7,7 +7,7 @@ exact derivatives, so the global sensitivity matrix is one array.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from fem.specimen import Parameter
 from .measurements import Measurements
 from .pairing import ModePairing
 from .parameters import ParameterSpace
+from . import ties
 from .statistics import FitStatistics, weighted_residuals
 
 #: Singular values of the Jacobian below this fraction of the largest span its null
@@ -30,7 +31,7 @@ class Evaluation:
 
     values: np.ndarray
     model_hz: np.ndarray            # paired model frequencies, measurement row order
-    derivatives: np.ndarray         # d f / d p of the paired modes (rows x parameters)
+    derivatives: np.ndarray | None  # d f / d p of the paired modes (rows x parameters); None: not computed
     pairings: dict[str, ModePairing]
     model: SpecimenModel
 
@@ -62,14 +63,17 @@ class Objective:
     def parameters(self) -> tuple[Parameter, ...]:
         return self.space.parameters
 
-    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True) -> Evaluation:
+    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True,
+                 differentiate: bool = True) -> Evaluation:
         """The model at ``values``; modes paired afresh (``pairings`` None: by rank or
         label), followed from the previous pairings by their shapes, or (``track``
-        False) paired with the same model modes as ``pairings`` say."""
-        model = self.solved.with_specimen(self.space.apply(self.model.specimen, values))
+        False) paired with the same model modes as ``pairings`` say.  Without
+        ``differentiate`` the sensitivities are left out (a trial step that may be
+        rejected; ``differentiated`` adds them)."""
+        model = self.solved.with_specimen(ties.apply(self.model.specimen, self.space.parameters, values))
         weight = None
         model_hz = np.empty(len(self.measured_hz))
-        derivatives = np.empty((len(self.measured_hz), len(values)))
+        derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
         new_pairings = {}
         for name in self.configurations:
             solution = model.solve(name)
@@ -89,8 +93,20 @@ class Objective:
                 pairing = pairings[name].track(solution.modes, weight)
             new_pairings[name] = pairing
             model_hz[rows] = solution.frequencies_hz[pairing.indices]
-            derivatives[rows] = solution.derivatives(list(self.space.parameters))[pairing.indices]
+            if differentiate:
+                derivatives[rows] = ties.derivatives(solution, self.space.parameters)[pairing.indices]
         return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(model.specimen))
+
+    def differentiated(self, e: Evaluation) -> Evaluation:
+        """``e`` with its sensitivities (the solves are cached: no new eigen-solve)."""
+        if e.derivatives is not None:
+            return e
+        model = self.solved.with_specimen(e.model.specimen)
+        derivatives = np.empty((len(self.measured_hz), len(e.values)))
+        for name in self.configurations:
+            solution = model.solve(name)
+            derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[e.pairings[name].indices]
+        return replace(e, derivatives=derivatives)
 
     def residual(self, e: Evaluation) -> np.ndarray:
         """Weighted residuals (model - measured) / sigma."""

@@ -19,6 +19,7 @@ from fem.model import SpecimenModel
 from fem.specimen import Parameter
 
 from .ambiguity import settle_pairings
+from .repair import quick_repair
 from .measurements import Measurements
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
 from .parameters import display
@@ -30,6 +31,8 @@ from .uncertainty import Uncertainty
 #: no parameter moves by more than STEP_PER_STD of its std.
 STALLED = 1e-4
 STEP_PER_STD = 0.01
+#: Steps the ``FitOptions.stall_chi2`` test looks back over.
+STALL_ITERATIONS = 3
 #: A parameter this close to a bound in z (relative for log parameters) is on it.
 BOUND_TOLERANCE = 1e-9
 
@@ -45,6 +48,10 @@ class FitOptions:
     max_linear_step: float = 0.1        # largest change of nu12 (or an angle in rad) per step
     extra_modes: int = 3                # model modes computed beyond the highest measured one
     max_damping_tries: int = 12
+    # > 0: also stop once each of the last STALL_ITERATIONS steps lowered chi^2 by less than
+    # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
+    # even where an ill-conditioned direction still creeps (off by default).
+    stall_chi2: float = 0.0
 
 
 class Stop(Enum):
@@ -55,6 +62,7 @@ class Stop(Enum):
     WITHIN_STD = f"every change is below {STEP_PER_STD:g} of its parameter's std"
     EXACT = "the model reproduces the measurements exactly"
     MISFIT_FLAT = "the misfit no longer falls"
+    MISFIT_STALLED = "the misfit fell by less than the stall limit in each of the last steps"
     NO_DESCENT = "no step lowered the misfit"
     MAX_ITERATIONS = "the iteration limit was reached"
 
@@ -106,9 +114,10 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             else:
                 damping = max(10 * damping, 1e-6 * s[0] ** 2)  # the step leaves the bounds: damp it
                 continue
-            trial = objective.evaluate(trial_values, current.pairings)
+            # Sensitivities only for an accepted step: a rejected trial needs none.
+            trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
-                accepted = (trial, dz, damping)  # the damping this step was taken with
+                accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
                 damping = damping / 10 if damping > 1e-9 * s[0] ** 2 else 0.0  # back to Gauss-Newton
                 break
             damping = max(10 * damping, 1e-6 * s[0] ** 2)
@@ -136,16 +145,23 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             return current, Stop.EXACT, warnings
         if previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost and step < 1e-4:
             return current, Stop.MISFIT_FLAT, warnings
+        if options.stall_chi2 > 0 and len(history) > STALL_ITERATIONS and all(
+                2 * (a.cost - b.cost) < options.stall_chi2 * objective.statistics(current).chi2_unit
+                for a, b in zip(history[-STALL_ITERATIONS - 1:-1], history[-STALL_ITERATIONS:])):
+            return current, Stop.MISFIT_STALLED, warnings
     return current, Stop.MAX_ITERATIONS, warnings
 
 
 def update(model: SpecimenModel, measurements: Measurements, parameters: list[Parameter] | None = None,
            options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
-           effect_of: dict[Parameter, str] | None = None, settle: bool = True) -> FitResult:
+           effect_of: dict[Parameter, str] | None = None, settle: bool | str = True,
+           pairings: dict | None = None) -> FitResult:
     """Identify ``parameters`` (default: the properties every identified material's
     ``identify`` names) from measured frequencies of all configurations at once, then
     settle the pairings frequencies cannot rule out (``settle``; an intermediate fit may
-    skip it).  ``effect_of`` names the effect kind a parameter belongs to, for reporting."""
+    skip it; "quick": only the re-pairings that lower the misfit at once, ``repair``).
+    ``effect_of`` names the effect kind a parameter belongs to, for reporting;
+    ``pairings``: a previous fit's, followed by shape from the start (default: afresh)."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
     if not parameters:
         raise MeasurementError("nothing to identify: mark at least one material with identify = true")
@@ -161,7 +177,7 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
                 f"{display(p, lo):.4g}..{display(p, hi):.4g}: started at {display(p, c):.4g} (set bounds in the spec "
                 "to widen them)" for p, v, c, lo, hi in zip(parameters, given, values, objective.space.lower,
                                                            objective.space.upper) if v != c]
-    current = objective.evaluate(values, None)
+    current = objective.evaluate(values, pairings)
     warnings += [p.note for p in current.pairings.values() if p.note]
     history = [Iteration(0, values, current.model_hz, objective.rms(current), objective.cost(current), 0.0, 0.0)]
     if progress:
@@ -174,7 +190,10 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             state, again, _ = iterate(objective, state, branch, replace(options, max_iterations=max_iterations))
             return state, again
 
-        current, repaired, notes, twins = settle_pairings(objective, current, history, refit)
+        if settle == "quick":  # a candidate's refit in a diagnosis: only re-pairings that pay at once
+            current, repaired, notes = quick_repair(objective, current, history, refit)
+        else:
+            current, repaired, notes, twins = settle_pairings(objective, current, history, refit)
         warnings += notes
         if progress and notes:
             progress(history[-1])

@@ -1,0 +1,153 @@
+"""The parts of the forward-selection diagnosis (issue 10), each on its own: the tied
+shear-modulus scale and its derivative, the thick_plate effect, the plausibility limits,
+the conditioning pre-check that keeps singular candidates from being iterated, and the
+short-circuit when the baseline is at the noise level."""
+import math
+
+import numpy as np
+import pytest
+
+from fem.attachments import PointMass, Suspension
+from fem.effects import effect
+from fem.specimen import Parameter
+from identify import ties
+from identify.compare import compare
+from identify.diagnose import diagnose
+from identify.fitting import add_effect, prepare_effect
+from identify.plausibility import MAX_MASS_SHARE, implausible, plate_mass
+from identify.synthetic import synthetic_measurements
+from studies.common import start_model, true_model
+from studies.hidden_effect import thick
+
+# Central differences with a relative step of 1e-5 are good to ~1e-7 of the column
+# (truncation h^2, eigenvalues to ~1e-12); 1e-4 leaves room and still catches a wrong
+# chain-rule ratio (which would be off by the order of the column).
+STEP = 1e-5
+TOLERANCE = 1e-4
+
+
+@pytest.fixture(scope="module")
+def thick_shear():
+    """The paper's stack five times thicker (a/h = 27) with transverse shear: G13 and G23
+    of the coatings act (they default to G12)."""
+    return thick(true_model()).with_options(modes=6, transverse_shear=True)
+
+
+def test_tied_scale_derivative_matches_central_differences(thick_shear):
+    """One scale for G13 and G23 of a material (G23 = r G13): its column is the chain rule
+    df/dG13 + r df/dG23 of the exact sensitivities; checked against central differences
+    of full solves with both moduli moved together."""
+    specimen = thick_shear.specimen
+    material = specimen.identified_materials[0].name
+    g13, g23 = Parameter("G13", material), Parameter("G23", material)
+    specimen = specimen.with_values({g23: 0.6 * specimen.value(g13)})  # an unequal ratio, so r matters
+    model = thick_shear.with_specimen(specimen)
+    tied = ties.Tied.scale(g13, [g23], specimen)
+    assert tied.followers[0][1] == pytest.approx(0.6)
+    value = specimen.value(g13)
+    for name in (c.name for c in specimen.configurations):
+        exact = ties.derivatives(model.solve(name), [tied])[:, 0]
+
+        def frequencies(v):
+            return model.with_specimen(ties.apply(specimen, [tied], np.array([v]))).solve(name).frequencies_hz
+
+        finite = (frequencies(value * (1 + STEP)) - frequencies(value * (1 - STEP))) / (2 * STEP * value)
+        assert np.abs(exact).max() > 0
+        assert np.abs(exact - finite).max() < TOLERANCE * np.abs(exact).max()
+
+
+def test_thick_plate_is_shear_and_rotary_inertia_with_free_shear_moduli():
+    model = start_model()
+    on = effect("thick_plate").free(model)[0]
+    assert on.model.options.transverse_shear and on.model.options.rotary_inertia
+    identified = [m.name for m in model.specimen.identified_materials]
+    assert {(p.kind, p.target) for p in on.free} == {(k, m) for m in identified for k in ("G13", "G23")}
+    assert "starting at G12" in on.note, "the defaults the refit starts from are stated"
+    shear = effect("transverse_shear").free(model)[0]
+    assert shear.model.options.transverse_shear and not shear.model.options.rotary_inertia
+    fixed = effect("transverse_shear").fixed(model, {"kind": "transverse_shear"})
+    assert "= G12 assumed" in fixed.note, "a fixed shear effect states the defaulted G13/G23"
+
+
+def test_plausibility_limits():
+    """Acceptance (issue 10): a point mass of 8 % of the plate is flagged; a 2 % sensor is
+    not.  A suspension holding the plate at half its first frequency is flagged, one at
+    1 % is not; an angle turned 12 degrees is flagged."""
+    specimen = true_model().specimen
+    plate = plate_mass(specimen)
+    assert plate == pytest.approx(specimen.length * specimen.width
+                                  * sum(layer.material.density * layer.thickness for layer in specimen.layers))
+    mass = Parameter("mass", "point_mass")
+
+    def reasons(fitted, parameter, first_hz=None):
+        return implausible([parameter], fitted, specimen, first_hz)
+
+    heavy = specimen.with_attachments([PointMass(0.08 * plate, 0.1, 0.1)])
+    light = specimen.with_attachments([PointMass(0.02 * plate, 0.1, 0.1)])
+    assert MAX_MASS_SHARE < 0.08
+    assert reasons(heavy, mass) and "8 %" in reasons(heavy, mass)[0]
+    assert reasons(light, mass) == ()
+
+    corners = ((0.02, 0.02), (0.13, 0.02), (0.02, 0.13), (0.13, 0.13))
+    total = plate  # no point mass: the bounce frequency is sqrt(4 k / m) / 2 pi
+
+    def springs(ratio, first_hz=100.0):
+        k = (2 * math.pi * ratio * first_hz) ** 2 * total / len(corners)
+        return specimen.with_attachments([Suspension(k, corners)])
+
+    stiffness = Parameter("stiffness", "suspension")
+    assert reasons(springs(0.5), stiffness, 100.0)
+    assert reasons(springs(0.01), stiffness, 100.0) == ()
+
+    layer = specimen.layers[0].label
+    angle = Parameter("angle", layer)
+    turned = specimen.with_values({angle: specimen.value(angle) + math.radians(12)})
+    assert reasons(turned, angle) and "+12 deg" in reasons(turned, angle)[0]
+    assert reasons(specimen.with_values({angle: specimen.value(angle) + math.radians(2)}), angle) == ()
+
+
+@pytest.fixture(scope="module")
+def sensor_baseline():
+    """The paper's plate with a hidden 3 g sensor, fitted without it."""
+    truth = true_model().with_attachments([PointMass(3e-3, 0.125, 0.110)]).with_options(modes=8)
+    data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=8, labels="close")
+    model = start_model().with_options(modes=8)
+    return model, data, compare(model, data).fitted
+
+
+def test_singular_candidate_is_not_iterated(sensor_baseline):
+    """A free thickness of the specimen's layers beside all their moduli and densities is
+    exactly singular (frequencies depend on E h^3 / (rho h)): the pre-check, one evaluation,
+    says so and the refit is never run."""
+    model, data, baseline = sensor_baseline
+    prepared = prepare_effect(baseline, "thickness")
+    assert prepared.precheck.singular, prepared.precheck.describe()
+    assert "not identifiable" in prepared.precheck.describe()
+    added = add_effect(baseline, "thickness", data, model.specimen, prepared=prepared)
+    assert added.result is None and "not identifiable" in added.error
+
+
+def test_point_mass_refit_finds_the_sensor_and_is_plausible(sensor_baseline):
+    """The screened multistart (4 starts x 3 iterations, the best 2 continued) finds the
+    3 g sensor (1 % of the plate: plausible) within 10 %."""
+    model, data, baseline = sensor_baseline
+    from identify.fitting import point_mass_hints
+
+    added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
+    fit = added.result
+    mass = next(p for p in fit.parameters if p.kind == "mass")
+    assert fit.value(mass) == pytest.approx(3e-3, rel=0.1)
+    assert added.implausible == ()
+
+
+def test_diagnosis_short_circuits_at_the_noise_level():
+    """Nothing missing: the baseline is at the noise level; no effect is refitted, the
+    verdict says so, and the residual patterns (the score test) are still reported."""
+    truth = true_model().with_options(modes=8)
+    data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=3, labels="close")
+    result = diagnose(start_model().with_options(modes=8), data)
+    assert result.at_noise_level and result.explained
+    assert result.steps == () and result.final is None
+    report = result.report()
+    assert "no effect is needed" in report and "residual patterns" in report
+    assert result.to_dict()["selected"] == []
