@@ -19,7 +19,7 @@ demo: $(STAMP)
 	$(BIN)/identify-layers fit --report reports/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/pytest
+	MPLBACKEND=Agg $(BIN)/pytest -n auto --dist loadfile
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m benchmarks

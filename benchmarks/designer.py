@@ -53,9 +53,9 @@ def timed(function):
     return out, time.perf_counter() - start
 
 
-def small_space() -> None:
-    problem = paper_problem(("brass", "aluminium", "steel_stock"), THICKNESSES_36)
-    print(f"-- 36 candidates, all {math.comb(36, 2)} sets of two additions (target < 10 s) --")
+def serial_and_parallel(problem: Problem):
+    """(the serial result, its time, the time with a 2-process pool) of an exhaustive
+    recommendation from a cold cache; both must rank the same designs."""
     cold()
     serial, t_serial = timed(lambda: recommend(problem, method="exhaustive"))
     cold()
@@ -66,6 +66,13 @@ def small_space() -> None:
 
     parallel, t_parallel = timed(with_pool)
     assert [d.names for d in parallel.designs] == [d.names for d in serial.designs]
+    return serial, t_serial, t_parallel
+
+
+def small_space() -> None:
+    problem = paper_problem(("brass", "aluminium", "steel_stock"), THICKNESSES_36)
+    print(f"-- 36 candidates, all {math.comb(36, 2)} sets of two additions (target < 10 s) --")
+    serial, t_serial, t_parallel = serial_and_parallel(problem)
     print(f"serial: {t_serial:.2f} s ({t_serial / 10:.2f} of the target); 2 processes (start-up included): "
           f"{t_parallel:.2f} s ({t_parallel / 10:.2f} of the target); serial / parallel {t_serial / t_parallel:.2f}")
     scored = recommend(problem, method="exhaustive")  # warm: the set scoring alone
@@ -129,16 +136,7 @@ def robust_space() -> None:
     problem = paper_problem(("brass", "aluminium", "steel_stock"), THICKNESSES_36, prior_range_rel=0.3,
                             prior_samples=16)
     print("-- 36 candidates, all 630 sets, scored over 16 prior samples of +-30 % (target < 30 s) --")
-    cold()
-    serial, t_serial = timed(lambda: recommend(problem, method="exhaustive"))
-    cold()
-
-    def with_pool():
-        with executor(2) as pool:
-            return recommend(problem, method="exhaustive", pool=pool)
-
-    parallel, t_parallel = timed(with_pool)
-    assert [d.names for d in parallel.designs] == [d.names for d in serial.designs]
+    serial, t_serial, t_parallel = serial_and_parallel(problem)
     warm = recommend(problem, method="exhaustive")
     solves = (serial.candidates + 1) * (serial.prior_samples + 1)
     print(f"serial: {t_serial:.1f} s ({t_serial / 30:.2f} of the target; {solves} solves, "
