@@ -183,7 +183,7 @@ def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEff
             notes.append(choice.describe(on.model.specimen))
         check = precheck(sensitivities, base, new)
         now = state.statistics.sum_squares
-        bound = now - sensitivities.predicted_sum_squares(base + new)
+        bound = max(0.0, now - sensitivities.predicted_sum_squares(base + new))  # linearised: may undershoot 0
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), error=str(exc))
     if kind == "point_mass":
