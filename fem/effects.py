@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .attachments import PointMass, Suspension
-from .errors import SpecError
+from .errors import NotApplicableError, SpecError
 from .layerwise import soft_layers
 from .model import SpecimenModel
 from .specimen import Parameter
@@ -55,7 +55,7 @@ class Effect:
         """All variants at once (e.g. every candidate layer's angle), for ``--effect``."""
         variants = self.free(model)
         if not variants:
-            raise SpecError(f"effect '{self.kind}' has nothing to act on in this spec")
+            raise NotApplicableError(f"effect '{self.kind}' has nothing to act on in this spec")
         if len(variants) == 1:
             return variants[0]
         starts = {p: v.model.value(p) for v in variants for p in v.free}

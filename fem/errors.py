@@ -12,6 +12,11 @@ class SpecError(LayerIdError):
     """A specimen spec (TOML) is invalid."""
 
 
+class NotApplicableError(SpecError):
+    """An effect has nothing to act on in this spec (e.g. a bond line without bonded
+    configurations)."""
+
+
 class MeasurementError(LayerIdError):
     """A measurement table is invalid or does not match the spec."""
 

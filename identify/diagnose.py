@@ -130,13 +130,20 @@ class Candidate:
         check = self.precheck
         return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
                 "bic_gain": _finite(self.gain), "gain_over_c": _finite(self.scaled_gain),
-                "status": self.fit.status.value if self.fit else ("not_identifiable" if check and check.singular
-                                                                  else "not_refitted" if self.added.pruned
-                                                                  else "failed"),
+                "status": self.fit.status.value if self.fit else _not_fitted(self),
                 "parameters": self.effect_values(), "std": self.effect_std(),
                 "plausible": self.plausible, "implausible": list(self.added.implausible),
                 "condition_number": _finite(check.condition_number) if check else None,
                 "note": " ".join(x for x in (self.note, self.error) if x)}
+
+
+def _not_fitted(c: Candidate) -> str:
+    """Why a candidate has no refit: its status word."""
+    if not c.added.applicable:
+        return "not_applicable"
+    if c.precheck is not None and c.precheck.singular:
+        return "not_identifiable"
+    return "not_refitted" if c.added.pruned else "failed"
 
 
 def _finite(x):
@@ -258,8 +265,7 @@ class Diagnosis:
             for c in step.candidates:
                 values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
                 gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
-                status = c.fit.status.value if c.fit else ("not identifiable" if c.precheck and c.precheck.singular
-                                                           else "not refitted" if c.added.pruned else "failed")
+                status = c.fit.status.value if c.fit else _not_fitted(c).replace("_", " ")
                 mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
                 lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain}  {status}  {values}{mark}".rstrip())
                 if not c.fit:

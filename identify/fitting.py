@@ -9,7 +9,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from fem.effects import effect
-from fem.errors import LayerIdError
+from fem.errors import LayerIdError, NotApplicableError
 from fem.material import MATERIAL_PARAMETERS, SHEAR_MODULI
 from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
@@ -136,6 +136,7 @@ class AddedEffect:
     error: str = ""
     seconds: float = 0.0
     pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
+    applicable: bool = True  # False: the effect has nothing to act on in this spec
 
     @property
     def identifiable(self) -> bool:
@@ -167,6 +168,8 @@ def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEff
     started = time.perf_counter()
     try:
         on = effect(kind).free_all(state.model)
+    except NotApplicableError as exc:
+        return AddedEffect(kind, None, error=str(exc), applicable=False)
     except LayerIdError as exc:
         return AddedEffect(kind, None, error=str(exc))
     base = list(state.parameters)
