@@ -138,10 +138,6 @@ class AddedEffect:
     pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
 
-    @property
-    def identifiable(self) -> bool:
-        return self.precheck is None or not self.precheck.singular
-
 
 @dataclass(frozen=True)
 class Prepared:

@@ -43,7 +43,6 @@ class Sensitivities:
     relative: np.ndarray
     jacobian: np.ndarray
     scatter: float
-    solves: int
     residual: np.ndarray | None = None   # weighted residuals at the start
 
     @classmethod
@@ -55,7 +54,7 @@ class Sensitivities:
         evaluation = objective.evaluate(values, pairings)
         scatter = 1.0 if measurements.has_std else ASSUMED_SCATTER_REL
         return cls(tuple(parameters), relative_sensitivity(evaluation), objective.jacobian(evaluation), scatter,
-                   len(objective.configurations), objective.residual(evaluation))
+                   objective.residual(evaluation))
 
     def predicted_sum_squares(self, parameters) -> float:
         """The weighted sum of squares one full Gauss-Newton step from the start would
@@ -97,7 +96,6 @@ class Precheck:
     condition_number: float
     base_condition_number: float
     weakest: str
-    solves: int
 
     @property
     def verdict(self) -> str:
@@ -122,7 +120,7 @@ def precheck(sensitivities: Sensitivities, base, added) -> Precheck:
     _, s, vt = np.linalg.svd(rel, full_matrices=False)
     weakest = describe_combination(vt[-1], [p.name for p in parameters])
     base_condition = condition_number(rel[:, :len(base)]) if base else 1.0
-    return Precheck(condition_number(rel), base_condition, weakest, sensitivities.solves)
+    return Precheck(condition_number(rel), base_condition, weakest)
 
 
 __all__ = ["Sensitivities", "Precheck", "precheck", "SINGULAR_GROWTH"]

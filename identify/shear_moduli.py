@@ -132,7 +132,7 @@ def reconsidered(result, nominal: Specimen, scatter: float):
     shear = freed_shear_moduli(result, nominal)
     if not shear:
         return None
-    sensitivities = Sensitivities(tuple(result.parameters), result.jacobian, result.jacobian, scatter, 0)
+    sensitivities = Sensitivities(tuple(result.parameters), result.jacobian, result.jacobian, scatter)
     others = [p for p in result.parameters if p not in shear]
     specimen = result.model.specimen
     choice = choose_shear_moduli(sensitivities, others, shear, specimen)
