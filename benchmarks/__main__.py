@@ -1,9 +1,11 @@
-"""Run every benchmark: ``python -m benchmarks``."""
+"""Run every benchmark: ``python -m benchmarks``.  (Guarded: the designer's and the
+diagnosis's worker processes are spawned and import the main module.)"""
 from . import core, designer, diagnosis, identification, layerwise, peaks
 
-core.main()
-designer.main()
-identification.main()
-diagnosis.main()
-layerwise.main()
-peaks.main()
+if __name__ == "__main__":
+    core.main()
+    designer.main()
+    identification.main()
+    diagnosis.main()
+    layerwise.main()
+    peaks.main()

@@ -1,6 +1,6 @@
 """Diagnosis benchmarks (issue 10): ``diagnose`` against one baseline ``fit`` of the same
 data, in the same run, with every registered effect a candidate (target: at most 10x
-the fit).  Cases: the bundled example (nothing missing: the baseline is at the noise
+the fit), with worker processes as the command line uses them.  Cases: the bundled example (nothing missing: the baseline is at the noise
 level), a hidden 3 g sensor on the paper's plate, and the thick laminate of the 3-D
 reference (issue 10's figure was 178 s).  Solutions are cached by content, so the
 cache is cleared before each timed call."""
@@ -27,7 +27,7 @@ def timed(function) -> tuple[float, object]:
 
 def compare_times(name: str, model, data) -> None:
     fitted, _ = timed(lambda: fit(model, data))
-    seconds, d = timed(lambda: diagnose(model, data))
+    seconds, d = timed(lambda: diagnose(model, data, workers=None))
     chosen = " + ".join(c.kind for c in d.selected) or ("nothing (at the noise level)" if d.at_noise_level else
                                                           "nothing")
     print(f"{name}: fit {fitted:.2f} s, diagnose {seconds:.2f} s = {seconds / fitted:.1f}x the fit (target <= 10x); "

@@ -145,7 +145,7 @@ def run_diagnose(args) -> int:
         check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
     kinds = args.effects.split(",") if args.effects else None
-    result = diagnose(model, measurements, kinds, progress=_progress)
+    result = diagnose(model, measurements, kinds, progress=_progress, workers=None)
     if args.report:
         figures = [(lambda path: plot_point_map(result.comparison, model, path), "point_mass_map.png",
                     "share of the misfit a point mass would explain at each point")]

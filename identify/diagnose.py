@@ -408,10 +408,12 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
 
 
 def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] | None = None,
-             progress: Callable[[str], None] | None = None, workers: int | None = None) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, workers: int | None = 1) -> Diagnosis:
     """Find the effects the model misses: forward selection over ``kinds`` (default: every
     registered effect), see the module doc.  ``workers``: processes for the candidate
-    refits (None: 2 when a round has several and the fit is not trivial, 1 = here)."""
+    refits (1: all here, the default; None: 2 when a round has several and the fit is not
+    trivial, as the command line does).  Workers are spawned and import the main module:
+    a script that asks for them needs the ``if __name__ == "__main__":`` guard."""
     kinds = list(kinds) if kinds is not None else list(REGISTRY)
     for kind in kinds:
         effect(kind)  # unknown kinds fail before any work
