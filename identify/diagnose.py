@@ -549,8 +549,8 @@ def _final(state: FitResult, measurements: Measurements, baseline: FitResult, se
     if result.status is FitStatus.POOR_FIT:
         causes = likely_causes(result)
         result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
-    return replace(result, warnings=result.warnings + tuple(text for _, text in notes), effect_notes=notes,
-                   baseline=baseline)
+    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+                   effect_notes=notes, baseline=baseline)
 
 
 __all__ = ["Candidate", "Diagnosis", "Step", "diagnose", "MIN_GAIN", "PLAUSIBILITY_MARGIN"]

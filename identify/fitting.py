@@ -115,8 +115,8 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
     if result.status is FitStatus.POOR_FIT:
         causes = likely_causes(result)
         result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
-    return replace(result, warnings=result.warnings + tuple(text for _, text in notes), effect_notes=tuple(notes),
-                   baseline=baseline)
+    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+                   effect_notes=tuple(notes), baseline=baseline)
 
 
 @dataclass(frozen=True)

@@ -111,6 +111,12 @@ def to_dict(result: FitResult) -> dict:
         entry["std"][key] = _finite(display(p, sd))
         if flags:
             entry["flags"][key] = list(flags)
+        for follower, ratio in getattr(p, "followers", ()):  # a tied scale (``ties``): its members too
+            entry[json_key(follower)] = display(follower, ratio * value)
+            entry["std"][json_key(follower)] = _finite(display(follower, ratio * sd))
+            entry["flags"][json_key(follower)] = [f"tied: {follower.kind} = {ratio:.4g} x {p.kind}"]
+    for kind, text in result.effect_notes:  # every effect switched on, with what was decided
+        effects.setdefault(kind, {"std": {}, "flags": {}}).setdefault("notes", []).append(text)
     u, st = result.uncertainty, result.statistics
     return {
         "converged": result.converged,

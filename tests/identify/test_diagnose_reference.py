@@ -48,6 +48,14 @@ def test_shear_moduli_are_estimated_with_their_std(outcome):
         members = [Parameter(p.kind, p.target)] + [f for f, _ in getattr(p, "followers", ())]
         true = math.exp(sum(math.log(truth[m]) for m in members) / len(members))
         assert abs(final.value(p) - true) < 3 * std, (p.name, final.value(p), true, std)
+    # The JSON gives every shear modulus with its std, a tied one flagged as such.
+    materials = final.to_dict()["materials"]
+    for p in shear:
+        entry = materials[p.target]
+        assert entry[f"{p.kind}_GPa"] == pytest.approx(final.value(p) / 1e9)
+        for follower, ratio in getattr(p, "followers", ()):
+            assert entry[f"{follower.kind}_GPa"] == pytest.approx(ratio * final.value(p) / 1e9)
+            assert entry["std"][f"{follower.kind}_GPa"] > 0 and "tied" in entry["flags"][f"{follower.kind}_GPa"][0]
 
 
 def test_layer_properties_come_back_within_their_uncertainty(outcome):
