@@ -93,7 +93,9 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
     A point mass starts at each of the positions the residual scan suggests and on a grid
     over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
     well are reported.  The transverse-shear effects free the G13 and G23 that the data
-    can identify (``shear_moduli``).
+    can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
+    determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
+    not an iteration.
     """
     from .compare import compare
 
@@ -105,9 +107,12 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         hints = point_mass_starts(state.model, comparison.point_mass_hints, comparison.point_map,
                                   comparison.node_xy) if state is baseline else point_mass_hints(state)
         added = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
-                           progress=progress, skip_singular=False)
+                           progress=progress)
         if added.result is None:
-            raise LayerIdError(f"effect '{kind}': {added.error}")
+            advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
+                      "as measured) or leave the effect out" if added.precheck is not None
+                      and added.precheck.singular else "")
+            raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
         state = added.result
     result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, settle=True)

@@ -9,10 +9,12 @@ import pytest
 
 from fem.attachments import PointMass, Suspension
 from fem.effects import effect
+from fem.errors import LayerIdError
 from fem.specimen import Parameter
 from identify import ties
 from identify.compare import compare
 from identify.diagnose import diagnose
+from identify import fit
 from identify.fitting import add_effect, prepare_effect
 from identify.plausibility import MAX_MASS_SHARE, implausible, plate_mass
 from identify.synthetic import synthetic_measurements
@@ -151,3 +153,12 @@ def test_diagnosis_short_circuits_at_the_noise_level():
     report = result.report()
     assert "no effect is needed" in report and "residual patterns" in report
     assert result.to_dict()["selected"] == []
+
+
+def test_fit_with_a_singular_effect_is_a_clear_error(sensor_baseline):
+    """``fit --effect thickness`` beside all the layers' moduli and densities: one
+    evaluation says it is singular; the fit stops with the combination the frequencies do
+    not see and what to do, instead of iterating to the limit (the issue's 40 + 80)."""
+    model, data, _ = sensor_baseline
+    with pytest.raises(LayerIdError, match="not identifiable.*fix one of the parameters"):
+        fit(model, data, ["thickness"])
