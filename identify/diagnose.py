@@ -14,10 +14,13 @@ weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the con
 of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
 identifiable and never iterated.  An estimate that is physically unlikely
 (``plausibility``) is marked and not preferred over a plausible rival whose criterion is
-within ``PLAUSIBILITY_MARGIN`` (in units of c).  Candidates are refitted with the pairing
-re-checked at their solution (``repair``), in parallel processes when that pays; the
-selection is finally refitted in full (iterations, pairing check), and that refit's own
-status says whether the data are now explained.
+within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
+parameters, the one with more of the physics every plate has (``thick_plate`` over
+``transverse_shear``) is preferred unless the other is better by ``COMPLETE_MARGIN``.
+Candidates are refitted with the pairing re-checked at their solution (``repair``), in
+parallel processes when that pays; the selection is finally refitted in full
+(iterations, pairing check), and that refit's own status says whether the data are now
+explained.
 """
 from __future__ import annotations
 
