@@ -139,7 +139,7 @@ def reconsidered(result, nominal: Specimen, scatter: float):
     if set(choice.parameters) == set(shear):
         return None
     for material in choice.kept:
-        specimen = _with_shear_moduli(specimen, nominal.materials[material])
+        specimen = with_shear_moduli(specimen, nominal.materials[material])
     changed = [m for m in choice.scaled if not any(isinstance(p, Tied) for p in shear if p.target == m)]
     parameters = list(choice.parameters)
     for material in changed:
@@ -163,7 +163,7 @@ def reconsidered(result, nominal: Specimen, scatter: float):
     return others + parameters, result.model.with_specimen(specimen), note
 
 
-def _with_shear_moduli(specimen: Specimen, nominal) -> Specimen:
+def with_shear_moduli(specimen: Specimen, nominal) -> Specimen:
     """The specimen with one material's G13, G23 as ``nominal`` has them (given or default)."""
     from dataclasses import replace
 
@@ -178,4 +178,4 @@ def _with_shear_moduli(specimen: Specimen, nominal) -> Specimen:
                                         for c in specimen.configurations))
 
 
-__all__ = ["ShearChoice", "choose_shear_moduli", "reconsidered", "SEPARATE_STD", "FREE_STD"]
+__all__ = ["ShearChoice", "choose_shear_moduli", "reconsidered", "with_shear_moduli", "SEPARATE_STD", "FREE_STD"]

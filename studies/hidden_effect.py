@@ -16,7 +16,15 @@ would):
   0.1 mm soft adhesive; the first 10 flexural modes per configuration, ranked by pairing
   their shapes with the plate model's (MAC of w on the reference's 13 x 11 grid).  The fit
   starts from typical handbook values of unidirectional E-glass/epoxy and carbon/epoxy
-  plies (``HANDBOOK_START``), not from the truth, and does not know G13 or G23.
+  plies (``HANDBOOK_START``), not from the truth, and does not know G13 or G23;
+- spruce_plate_3d: the same for a 240 x 180 x 8 mm quarter-sawn spruce plate
+  (``tests/data/solid3d/spruce_plate.json``, a/h = 30), whose rolling shear modulus G23 =
+  G_RT is 17x below G12; starts from handbook spruce values (``SPRUCE_START``), G13 and
+  G23 not given;
+- laminate_on_adhesive_3d: a 5 mm cross-ply CFRP/GFRP(90)/CFRP with 2 mm aluminium on a
+  soft bond line, from ``HANDBOOK_START``;
+- thick_homogeneous_3d: the control, a 150 x 100 x 8 mm aluminium plate (a/h = 19), from
+  ``ALUMINIUM_START``.
 
 For each: the baseline misfit is far above the noise, the diagnosis selects the effects
 the data carry, the refit with them brings the RMS error to within 2x the noise, and the
@@ -29,7 +37,7 @@ from __future__ import annotations
 import json
 import tomllib
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -49,8 +57,10 @@ from .common import parse_args, report_folder, start_model, true_model, write_te
 
 NOISE = 5e-4
 MODES = 8
-#: The 3-D reference of the thick laminate (see tests/data/solid3d/README.md).
-REFERENCE = Path(__file__).resolve().parent.parent / "tests" / "data" / "solid3d" / "thick_laminate.json"
+#: The 3-D references (see tests/data/solid3d/README.md); ``REFERENCE`` is the default case's.
+REFERENCE_FOLDER = Path(__file__).resolve().parent.parent / "tests" / "data" / "solid3d"
+DEFAULT_REFERENCE = "thick_laminate"
+REFERENCE = REFERENCE_FOLDER / f"{DEFAULT_REFERENCE}.json"
 REFERENCE_MODES = 10
 GPA = 1e9
 #: Start values of the 3-D case: typical unidirectional E-glass/epoxy and carbon/epoxy ply
@@ -62,6 +72,25 @@ HANDBOOK_START = {
     Parameter("E1", "cfrp_ud"): 142 * GPA, Parameter("E2", "cfrp_ud"): 10.3 * GPA,
     Parameter("G12", "cfrp_ud"): 7.2 * GPA, Parameter("nu12", "cfrp_ud"): 0.27,
 }
+#: Start values of the spruce plate (``spruce_plate.json``): "handbook" values for spruce
+#: a user would type, G13/G23 not given (so they default to G12).  Against the truth
+#: (11.0, 0.90, 0.70 GPa, 0.37): E1 -9 %, E2 -11 %, G12 -11 %, nu12 +8 %.
+SPRUCE_START = {
+    Parameter("E1", "spruce"): 10.0 * GPA, Parameter("E2", "spruce"): 0.80 * GPA,
+    Parameter("G12", "spruce"): 0.62 * GPA, Parameter("nu12", "spruce"): 0.40,
+}
+#: Start values of the homogeneous control (``thick_homogeneous.json``): handbook aluminium
+#: a user might type (6061-T6-like 68.9 GPa; against the truth E -1.6 %, G -1.6 %).
+ALUMINIUM_START = {
+    Parameter("E1", "aluminium"): 68.9 * GPA, Parameter("E2", "aluminium"): 68.9 * GPA,
+    Parameter("G12", "aluminium"): 25.9 * GPA, Parameter("nu12", "aluminium"): 0.33,
+}
+#: 3-D reference case -> the start values of its identified materials (the cross-ply on a
+#: soft bond line has the thick laminate's plies).
+REFERENCE_STARTS = {"thick_laminate": HANDBOOK_START, "spruce_plate": SPRUCE_START,
+                    "laminate_on_adhesive": HANDBOOK_START, "thick_homogeneous": ALUMINIUM_START}
+#: ``run_case`` names of the 3-D references.
+REFERENCE_CASES = tuple(f"{name}_3d" for name in REFERENCE_STARTS)
 
 
 def thick(model: SpecimenModel) -> SpecimenModel:
@@ -121,8 +150,8 @@ class HiddenEffect:
 
 
 def run_case(case: str, kinds: list[str] | None = None, seed: int = 4, workers: int = 1) -> HiddenEffect:
-    if case == "thick_laminate_3d":
-        return run_reference(kinds, workers=workers)
+    if case in REFERENCE_CASES:
+        return run_reference(kinds, workers=workers, case=case.removesuffix("_3d"))
     true_effects, make_truth, make_start = CASES[case]
     truth = make_truth(true_model().with_options(modes=MODES))
     data = synthetic_measurements(truth, modes=MODES, noise_rel=NOISE, seed=seed, labels="close")
@@ -139,19 +168,25 @@ def _max_z(result: Diagnosis, truth: dict) -> float:
 # -- the 3-D reference -----------------------------------------------------------------
 
 
-@lru_cache(maxsize=1)
-def _reference() -> dict:
-    return json.loads(REFERENCE.read_text())
+def _reference_path(case: str) -> Path:
+    return REFERENCE_FOLDER / f"{case}.json"
 
 
-def reference_truth() -> SpecimenModel:
-    """The thick laminate with its true properties (G13, G23 included), as the 3-D model has them."""
-    return parse_spec(tomllib.loads(_reference()["spec_toml"]), str(REFERENCE))
+@cache
+def _reference(case: str = DEFAULT_REFERENCE) -> dict:
+    return json.loads(_reference_path(case).read_text())
 
 
-def reference_start() -> SpecimenModel:
-    """The model a user would write: handbook start values, G13 and G23 not given."""
-    truth = reference_truth()
+def reference_truth(case: str = DEFAULT_REFERENCE) -> SpecimenModel:
+    """The 3-D reference's plate (default the thick laminate) with its true properties
+    (G13, G23 included), as the 3-D model has them."""
+    return parse_spec(tomllib.loads(_reference(case)["spec_toml"]), str(_reference_path(case)))
+
+
+def reference_start(case: str = DEFAULT_REFERENCE) -> SpecimenModel:
+    """The model a user would write: handbook start values (``REFERENCE_STARTS``), G13 and
+    G23 not given."""
+    truth = reference_truth(case)
     specimen = truth.specimen
     materials = {n: replace(m, G13=None, G23=None) if m.identify else m for n, m in specimen.materials.items()}
 
@@ -161,7 +196,7 @@ def reference_start() -> SpecimenModel:
     specimen = replace(specimen, layers=rebuilt(specimen.layers),
                        configurations=tuple(replace(c, bottom=rebuilt(c.bottom), top=rebuilt(c.top))
                                             for c in specimen.configurations))
-    return truth.with_specimen(specimen).with_values(HANDBOOK_START)
+    return truth.with_specimen(specimen).with_values(REFERENCE_STARTS[case])
 
 
 def _grid_w(solution, length: float, width: float) -> np.ndarray:
@@ -174,17 +209,18 @@ def _grid_w(solution, length: float, width: float) -> np.ndarray:
     return np.array(rows)
 
 
-def reference_measurements(modes: int = REFERENCE_MODES, noise: float = NOISE, seed: int = 1) -> Measurements:
+def reference_measurements(modes: int = REFERENCE_MODES, noise: float = NOISE, seed: int = 1,
+                           case: str = DEFAULT_REFERENCE) -> Measurements:
     """The first ``modes`` flexural modes of every configuration of the 3-D solution with
     ``noise`` relative Gaussian scatter (std_hz = noise x f): each ranked by the plate mode
     its shape pairs with (the plate model at the true values, first-order shear with
     rotary inertia; MAC of w on the 13 x 11 grid, optimal assignment), the nodal-line label
     of that plate mode given for modes within 1 % of a neighbour (as a lab reads them off)."""
-    truth = reference_truth()
+    truth = reference_truth(case)
     plate = truth.with_options(modes=modes + 6, transverse_shear=True, rotary_inertia=True)
     rng = np.random.default_rng(seed)
     rows = []
-    for conf in _reference()["configurations"]:
+    for conf in _reference(case)["configurations"]:
         flexural = [m for m in conf["modes"] if m["classification"] == "flexural"][:modes]
         f3d = np.array([m["frequency_hz"] for m in flexural])
         w3d = np.array([np.ravel(m["w"]) for m in flexural]).T
@@ -202,12 +238,12 @@ def reference_measurements(modes: int = REFERENCE_MODES, noise: float = NOISE, s
                   "std_hz": noise * f3d[k], "label": solution.labels[rank[k]] if close[k] else ""}
                  for k in range(modes)]
     frame = pd.DataFrame(rows).sort_values(["configuration", "mode"], kind="stable")
-    return parse_measurements(frame, truth, f"<3-D reference {REFERENCE.name}, {100 * noise:g} % noise>")
+    return parse_measurements(frame, truth, f"<3-D reference {_reference_path(case).name}, {100 * noise:g} % noise>")
 
 
-def reference_values() -> dict[Parameter, float]:
+def reference_values(case: str = DEFAULT_REFERENCE) -> dict[Parameter, float]:
     """The true layer properties and transverse shear moduli of the 3-D model [SI]."""
-    specimen = reference_truth().specimen
+    specimen = reference_truth(case).specimen
     out = {}
     for m in specimen.identified_materials:
         for kind in ("E1", "E2", "G12", "nu12", "G13", "G23"):
@@ -215,14 +251,15 @@ def reference_values() -> dict[Parameter, float]:
     return out
 
 
-def run_reference(kinds: list[str] | None = None, seed: int = 1, workers: int = 1) -> HiddenEffect:
-    """The 3-D reference diagnosed from handbook starts."""
-    result = diagnose(reference_start(), reference_measurements(seed=seed), kinds, workers=workers)
-    truth = {p: v for p, v in reference_values().items() if p.kind in ("E1", "E2", "G12", "nu12")}
-    return HiddenEffect("thick_laminate_3d", ("transverse_shear",), result, _max_z(result, truth))
+def run_reference(kinds: list[str] | None = None, seed: int = 1, workers: int = 1,
+                  case: str = DEFAULT_REFERENCE) -> HiddenEffect:
+    """A 3-D reference (default the thick laminate) diagnosed from handbook starts."""
+    result = diagnose(reference_start(case), reference_measurements(seed=seed, case=case), kinds, workers=workers)
+    truth = {p: v for p, v in reference_values(case).items() if p.kind in ("E1", "E2", "G12", "nu12")}
+    return HiddenEffect(f"{case}_3d", ("transverse_shear",), result, _max_z(result, truth))
 
 
-def run(out=None, cases=(*CASES, "thick_laminate_3d"), kinds: list[str] | None = None) -> list[HiddenEffect]:
+def run(out=None, cases=(*CASES, *REFERENCE_CASES), kinds: list[str] | None = None) -> list[HiddenEffect]:
     folder = report_folder("hidden_effect", out)
     outcomes = [run_case(case, kinds) for case in cases]
     lines = ["Hidden effects: baseline fit, diagnosis (forward selection), refit with the selection", ""]

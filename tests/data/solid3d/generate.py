@@ -84,6 +84,12 @@ MATERIALS = {
         nu12=0.40, nu13=0.40, nu23=0.40, density=1150.0,
         note="flexible epoxy / polyurethane bond line, isotropic (G = E / 2(1 + nu))",
     ),
+    "spruce": dict(
+        E1=11.0, E2=0.90, E3=0.50, G12=0.70, G13=0.65, G23=0.040, nu12=0.37, nu13=0.42, nu23=0.47, density=450.0,
+        note=("quarter-sawn Norway spruce, 1 = longitudinal L, 2 = radial R, 3 = tangential T; ratios in the "
+              "range of the Wood Handbook (USDA FPL, ch. 5) for spruce; rolling shear G23 = G_RT = E2 / 22.5 "
+              "= G12 / 17.5"),
+    ),
 }
 
 
@@ -118,6 +124,16 @@ CASES = {
                      "configurations add a soft 0.1 mm bond line and a 1 mm aluminium plate."),
         length_mm=250.0, width_mm=200.0,
         layers=[("cfrp_fabric", 0.5, 0.0), ("pvc_foam", 6.0, 0.0), ("cfrp_fabric", 0.5, 0.0)],
+        configurations=_bonded(1.0),
+    ),
+    "spruce_plate": dict(
+        description=("A quarter-sawn spruce plate, 240 x 180 x 8 mm (a/h = 30 along the grain, 22.5 across), "
+                     "one layer, grain along the length: wood's rolling shear modulus G23 = G_RT is about 20x "
+                     "smaller than E2 and 17x smaller than G12, so transverse shear matters at moderate "
+                     "slenderness and the default G13 = G23 = G12 is badly wrong; bonded configurations add a "
+                     "soft 0.1 mm bond line and a 1 mm aluminium plate under or over it."),
+        length_mm=240.0, width_mm=180.0,
+        layers=[("spruce", 8.0, 0.0)],
         configurations=_bonded(1.0),
     ),
     "thick_homogeneous": dict(
