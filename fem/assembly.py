@@ -90,6 +90,12 @@ class UnitMatrices:
         aggregate = self._pattern[2]
         return (aggregate @ self.element_mass.reshape(len(self.element_mass), -1).T).T
 
+    @cached_property
+    def first_unit_mass(self) -> sp.csr_matrix:
+        """The first unit mass matrix (the I0 term) alone: a mass weight for comparing mode
+        shapes, without assembling every inertia term (the layerwise element has ~100)."""
+        return self.matrix(self._pattern[2] @ self.element_mass[0].ravel())
+
     def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray) -> np.ndarray:
         """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
         first: one aggregation instead of n_c unit data arrays in memory."""

@@ -126,7 +126,7 @@ class ThickPlate(TransverseShear):
 class Layerwise(Effect):
     kind = "layerwise"
     description = ("layerwise (zig-zag) shear: each soft layer (foam or honeycomb core, bond line) shears on its "
-                   "own; free: the soft specimen layers' G13, G23")
+                   "own; free: G13, G23 of the identified materials and of the soft specimen layers")
 
     def _soft(self, model):
         """(soft specimen layers' materials, soft added layers' materials), by name."""
@@ -160,7 +160,9 @@ class Layerwise(Effect):
         if not own and not added:
             return []  # a single shear group: transverse_shear already is this model
         materials = model.specimen.materials
-        free = [Parameter(kind, name) for name in own for kind in ("G13", "G23") if kind not in materials[name].identify]
+        free = TransverseShear.shear_parameters(model)
+        free += [p for p in (Parameter(kind, name) for name in own for kind in ("G13", "G23")
+                             if kind not in materials[name].identify) if p not in free]
         return [self._on(model, free)]
 
 

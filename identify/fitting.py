@@ -165,15 +165,20 @@ class Prepared:
     notes: tuple[str, ...]
     bound: float
     seconds: float = 0.0
+    pairings: dict | None = None   # followed from the start of the refit
 
 
-def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEffect:
+def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | None = None) -> Prepared | AddedEffect:
     """One evaluation of ``state``'s model with effect ``kind`` switched on, at the start
     of its refit (``precheck``): the shear moduli to free, the conditioning, the bound.
-    An ``AddedEffect`` without a fit when the effect has nothing to act on or fails."""
+    ``start``: a fit of the same data whose layer and shear values (and pairing) the
+    refit starts from (a refinement starts where what it refines ended), default
+    ``state``'s.  An ``AddedEffect`` without a fit when the effect has nothing to act on
+    or fails."""
     started = time.perf_counter()
+    origin = start or state
     try:
-        on = effect(kind).free_all(state.model)
+        on = effect(kind).free_all(state.model.with_specimen(origin.specimen))
     except NotApplicableError as exc:
         return AddedEffect(kind, None, error=str(exc), applicable=False)
     except LayerIdError as exc:
@@ -183,7 +188,7 @@ def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEff
     new = [p for p in on.free if p not in covered]
     notes = []
     try:
-        model, sensitivities, started_at = _shear_start(on.model, state, base + new)
+        model, sensitivities, started_at = _shear_start(on.model, origin, base + new)
         notes += [started_at] if started_at else []
         shear = [p for p in new if p.kind in SHEAR_MODULI]
         if shear:
@@ -200,8 +205,10 @@ def prepare_effect(state: FitResult, kind: str, hints=()) -> Prepared | AddedEff
         return AddedEffect(kind, None, tuple(new), error=str(exc))
     if kind == "point_mass":
         bound = max([bound] + [h.get("share", 0.0) * now for h in hints])
+    if start is not None:
+        notes.append(f"started from the {' + '.join(sorted(set(start.effect_of.values()))) or 'fit'}'s values")
     return Prepared(kind, model, tuple(base), tuple(new), check, tuple(notes), float(bound),
-                    time.perf_counter() - started)
+                    time.perf_counter() - started, origin.pairings)
 
 
 def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[SpecimenModel, Sensitivities, str]:
@@ -272,7 +279,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
             notes += rivals
         else:
             result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
-                                explain=False, settle=settle, pairings=state.pairings)
+                                explain=False, settle=settle, pairings=ready.pairings or state.pairings)
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())

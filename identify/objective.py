@@ -89,7 +89,7 @@ class Objective:
             else:
                 units = solution.units
                 if weight is None or weight.shape[0] != units.n_dofs:  # the layerwise DOFs differ per stack
-                    weight = units.matrix(units.mass_data[0])
+                    weight = units.first_unit_mass
                 pairing = pairings[name].track(solution.modes, weight)
             new_pairings[name] = pairing
             model_hz[rows] = solution.frequencies_hz[pairing.indices]

@@ -247,14 +247,16 @@ def test_spec_theory_key():
 
 
 def test_layerwise_effect():
-    """The effect switches the theory; free, it brings the soft specimen layers' G13, G23
-    (not identified already) and its note states the defaults; on a stack without a soft
-    layer it has nothing to add to transverse_shear, so it offers no variant."""
+    """The effect switches the theory; free, it brings G13, G23 of the identified materials
+    (as transverse_shear does: it is that physics and more) and of the soft specimen
+    layers (not identified already), and its note states the defaults; on a stack without
+    a soft layer it has nothing to add to transverse_shear, so it offers no variant."""
     model = parse_spec(tomllib.loads(SPEC))
     on = effect("layerwise").fixed(model, {"kind": "layerwise"})
     assert on.model.options.theory == "layerwise" and on.free == ()
     (variant,) = effect("layerwise").free(model)
-    assert variant.free == (Parameter("G13", "foam"), Parameter("G23", "foam"))
+    assert variant.free == (Parameter("G13", "skin"), Parameter("G23", "skin"), Parameter("G13", "foam"),
+                            Parameter("G23", "foam"))
     assert "on their own: foam" in variant.note
     assert "assumed G23 = G12 for skin, G13 = G23 = G12 for foam" in variant.note
     frequencies = variant.model.frequencies()["original"]

@@ -60,5 +60,7 @@ def test_shear_moduli_are_estimated_with_their_std(outcome):
 
 def test_layer_properties_come_back_within_their_uncertainty(outcome):
     """E1, E2, G12, nu12 of both plies within 3 std of the 3-D model's (largest measured
-    2.6 std: the gfrp ply's one G13/G23 scale takes up G23 = 0.875 G13 as equal)."""
+    1.8 std with the layerwise model; 2.6 with the Mindlin plate, whose one bond-line shear
+    correction the moduli absorb)."""
     assert outcome.max_z < 3
+
