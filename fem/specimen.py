@@ -132,18 +132,23 @@ class Specimen:
             if name not in materials:
                 raise SpecError(f"no material {name!r} in this specimen")
             materials[name] = materials[name].with_values(**change)
-
-        def rebuilt(layer: Layer) -> Layer:
-            return replace(layer, material=materials[layer.material.name], **layer_changes.get(layer.label, {}))
-
-        def stack(layers):
-            return tuple(rebuilt(layer) for layer in layers)
-
-        configurations = tuple(
-            replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations
-        )
         attachments = tuple(replace(a, **attachment_changes.get(a.label, {})) for a in self.attachments)
-        return replace(self, layers=stack(self.layers), configurations=configurations, attachments=attachments)
+        return replace(self._with_layers(materials, layer_changes), attachments=attachments)
+
+    def with_materials(self, materials) -> "Specimen":
+        """A copy with these materials (``Material`` objects) put in every layer that uses
+        a material of the same name."""
+        return self._with_layers({**self.materials, **{m.name: m for m in materials}}, {})
+
+    def _with_layers(self, materials: dict, layer_changes: dict) -> "Specimen":
+        """Every layer (specimen and additions) with its material taken from ``materials``
+        by name and its ``layer_changes`` (label -> field -> value) applied."""
+        def stack(layers):
+            return tuple(replace(layer, material=materials[layer.material.name], **layer_changes.get(layer.label, {}))
+                         for layer in layers)
+
+        configurations = tuple(replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations)
+        return replace(self, layers=stack(self.layers), configurations=configurations)
 
     def with_configurations(self, configurations) -> "Specimen":
         return replace(self, configurations=tuple(configurations))

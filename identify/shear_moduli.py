@@ -17,7 +17,7 @@ their value, and the predicted std that decided).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -165,17 +165,7 @@ def reconsidered(result, nominal: Specimen, scatter: float):
 
 def with_shear_moduli(specimen: Specimen, nominal) -> Specimen:
     """The specimen with one material's G13, G23 as ``nominal`` has them (given or default)."""
-    from dataclasses import replace
-
-    material = replace(specimen.materials[nominal.name], G13=nominal.G13, G23=nominal.G23)
-
-    def rebuilt(layers):
-        return tuple(replace(layer, material=material) if layer.material.name == material.name else layer
-                     for layer in layers)
-
-    return replace(specimen, layers=rebuilt(specimen.layers),
-                   configurations=tuple(replace(c, bottom=rebuilt(c.bottom), top=rebuilt(c.top))
-                                        for c in specimen.configurations))
+    return specimen.with_materials([replace(specimen.materials[nominal.name], G13=nominal.G13, G23=nominal.G23)])
 
 
 __all__ = ["ShearChoice", "choose_shear_moduli", "reconsidered", "with_shear_moduli", "SEPARATE_STD", "FREE_STD"]

@@ -188,14 +188,7 @@ def reference_start(case: str = DEFAULT_REFERENCE) -> SpecimenModel:
     G23 not given."""
     truth = reference_truth(case)
     specimen = truth.specimen
-    materials = {n: replace(m, G13=None, G23=None) if m.identify else m for n, m in specimen.materials.items()}
-
-    def rebuilt(layers):
-        return tuple(replace(layer, material=materials[layer.material.name]) for layer in layers)
-
-    specimen = replace(specimen, layers=rebuilt(specimen.layers),
-                       configurations=tuple(replace(c, bottom=rebuilt(c.bottom), top=rebuilt(c.top))
-                                            for c in specimen.configurations))
+    specimen = specimen.with_materials([replace(m, G13=None, G23=None) for m in specimen.identified_materials])
     return truth.with_specimen(specimen).with_values(REFERENCE_STARTS[case])
 
 
