@@ -20,12 +20,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .objective import solving_model
-from .result import FitResult
+from .result import FitResult, FitStatus
 from .statistics import weighted_residuals
 
 #: Known factors between a frequency in Hz and a slip of unit: what each would mean.
@@ -140,6 +140,15 @@ def _missing_physics(result: FitResult) -> Cause | None:
                  f"missing physics ({', '.join(best.suggests)}): run 'identify-layers diagnose'")
 
 
+def with_causes(result: FitResult) -> FitResult:
+    """A poor fit with its likely causes attached and the first named in its message; any
+    other fit as it is."""
+    if result.status is not FitStatus.POOR_FIT:
+        return result
+    causes = likely_causes(result)
+    return replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
+
+
 def likely_causes(result: FitResult) -> tuple[Cause, ...]:
     """The causes the residuals of a poor fit show, most likely first (never empty)."""
     found = [c for c in (_units(result), _configurations(result), _pairing(result)) if c is not None]
@@ -159,4 +168,4 @@ def likely_causes(result: FitResult) -> tuple[Cause, ...]:
     return (data,) + tuple(found)
 
 
-__all__ = ["Cause", "likely_causes"]
+__all__ = ["Cause", "likely_causes", "with_causes"]

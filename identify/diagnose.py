@@ -38,9 +38,9 @@ from fem.effects import REGISTRY, effect
 from fem.io import html_pre
 from fem.model import SpecimenModel
 
-from .causes import likely_causes
+from .causes import with_causes
 from .compare import Comparison, compare
-from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, fit_layers, point_mass_hints,
+from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, point_mass_hints,
                       point_mass_starts, prepare_effect, with_determined_shear)
 from .measurements import Measurements
 from .parameters import display, json_key
@@ -495,9 +495,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 reason += "; its estimate is implausible, but no plausible rival fits about as well"
             # The chosen refit is taken to convergence (the candidates stopped once their misfit
             # settled) before the next round looks again.
-            polished = fit_layers(best.fit.model, measurements, list(best.fit.parameters), FINAL_OPTIONS,
-                                  effect_of=best.fit.effect_of, like=best.fit, explain=False, settle="quick",
-                                  pairings=best.fit.pairings)
+            polished = continued(best.fit, measurements, FINAL_OPTIONS)
             polished, notes = with_determined_shear(polished, measurements, nominal, FINAL_OPTIONS)
             if polished.finished and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares):
                 added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
@@ -530,9 +528,7 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
             break
         c = ranked[0]
         say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
-        fit = fit_layers(c.fit.model, measurements, list(c.fit.parameters),
-                         replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS), effect_of=c.fit.effect_of,
-                         like=c.fit, explain=False, settle="quick", pairings=c.fit.pairings)
+        fit = continued(c.fit, measurements, replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS))
         continued = _candidate(state, replace(c.added, result=fit))
         candidates[candidates.index(c)] = continued
         if not continued.eligible:
@@ -551,12 +547,8 @@ def _final(state: FitResult, measurements: Measurements, baseline: FitResult, se
     """The selection refitted in full: iterations to convergence and the whole pairing
     check; its status is its own (converged only when consistent with the scatter)."""
     say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = fit_layers(state.model, measurements, list(state.parameters), FINAL_OPTIONS, effect_of=state.effect_of,
-                        like=state, explain=False, settle=True, pairings=state.pairings)
+    result = with_causes(continued(state, measurements, FINAL_OPTIONS, settle=True))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
-    if result.status is FitStatus.POOR_FIT:
-        causes = likely_causes(result)
-        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
                    effect_notes=notes, baseline=baseline)
 

@@ -18,8 +18,8 @@ from .measurements import Measurements
 from .parameters import display
 from .peak_lists import fit_peak_list
 from .budget import with_budget
-from .causes import likely_causes
-from .result import FitResult, FitStatus, Iteration
+from .causes import with_causes
+from .result import FitResult, Iteration
 from .plausibility import implausible
 from .precheck import Precheck, Sensitivities, precheck
 from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
@@ -83,10 +83,16 @@ def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None
     else:
         start = like.peaks.matches() if like is not None and like.peaks is not None else None
         result = fit_peak_list(model, measurements, parameters, options, progress, effect_of, start)
-    if explain and result.status is FitStatus.POOR_FIT:
-        causes = likely_causes(result)
-        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
-    return result
+    return with_causes(result) if explain else result
+
+
+def continued(fit: FitResult, measurements: Measurements, options: FitOptions, settle: bool | str = "quick",
+              effect_of: dict | None = None) -> FitResult:
+    """``fit`` iterated on from where it stopped: its model, parameters, effects and
+    pairing (``effect_of`` default its own); causes of a poor fit are left to the caller."""
+    return fit_layers(fit.model, measurements, list(fit.parameters), options,
+                      effect_of=fit.effect_of if effect_of is None else effect_of, like=fit, explain=False,
+                      settle=settle, pairings=fit.pairings)
 
 
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
@@ -122,9 +128,7 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         state = added.result
     result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, settle=True)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
-    if result.status is FitStatus.POOR_FIT:
-        causes = likely_causes(result)
-        result = replace(result, causes=causes, message=f"{result.message}; likely: {causes[0].text}")
+    result = with_causes(result)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
                    effect_notes=tuple(notes), baseline=baseline)
 
@@ -355,9 +359,7 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
             break
     if progress:
         progress(f"point_mass: {len(screened)} starts screened, {len(chosen)} continued")
-    trials = [(fit_layers(t.model, measurements, list(t.parameters), options,
-                          effect_of=effect_of, like=t, explain=False, settle=settle, pairings=t.pairings), on)
-              for t, on in chosen]
+    trials = [(continued(t, measurements, options, settle, effect_of), on) for t, on in chosen]
     result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
     rivals = [t for t, o in trials if t is not result and t.finished
               and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
