@@ -529,9 +529,9 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
         c = ranked[0]
         say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
         fit = continued(c.fit, measurements, replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS))
-        continued = _candidate(state, replace(c.added, result=fit))
-        candidates[candidates.index(c)] = continued
-        if not continued.eligible:
+        extended = _candidate(state, replace(c.added, result=fit))
+        candidates[candidates.index(c)] = extended
+        if not extended.eligible:
             break
     return candidates
 
