@@ -224,15 +224,26 @@ def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Ma
 
 
 def peak_table(assignment: PeakAssignment) -> pd.DataFrame:
-    """Per measured peak: configuration, model mode (None when left out), measured and
-    model (or nearest) frequency, relative error, matched."""
+    """Per measured peak: configuration, model mode, measured and model frequency,
+    relative error, matched, and why a peak was left out (``note``).  A left-out peak has
+    no model mode, so its mode, model frequency and error are None (JSON null, a blank CSV
+    cell), never NaN; its note names the nearest mode and how far off it lies."""
     table = assignment.measurements.table
+    measured = table["frequency_hz"].to_numpy()
+    matched = assignment.matched
+    nearest_error = assignment.model_hz / measured - 1
+
+    def where_matched(values):
+        return pd.Series([v.item() if m else None for v, m in zip(values, matched, strict=True)], dtype=object)
+
     return pd.DataFrame({
-        "configuration": table["configuration"],
-        "mode": [int(m) if m > 0 else None for m in assignment.modes],
-        "measured_hz": table["frequency_hz"], "model_hz": assignment.model_hz,
-        "rel_error": assignment.model_hz / table["frequency_hz"] - 1,
-        "matched": assignment.matched,
+        "configuration": table["configuration"].to_numpy(),
+        "mode": where_matched(assignment.modes),
+        "measured_hz": measured, "model_hz": where_matched(assignment.model_hz),
+        "rel_error": where_matched(nearest_error),
+        "matched": matched,
+        "note": ["" if m else f"left out: matches no model mode (nearest: mode {n} at {f:.2f} Hz, {100 * e:+.2f} %)"
+                 for m, n, f, e in zip(matched, assignment.nearest, assignment.model_hz, nearest_error, strict=True)],
     })
 
 

@@ -78,11 +78,11 @@ def plot_residuals(result, path: Path) -> Path:
     colours = {name: f"C{k}" for k, name in enumerate(dict.fromkeys(rows["configuration"]))}
     for name, colour in colours.items():
         mask = (rows["configuration"] == name).to_numpy() & matched
-        ax.errorbar(x[mask], 100 * rows["rel_error"].to_numpy()[mask], yerr=None if std is None else std[mask],
+        ax.errorbar(x[mask], 100 * rows["rel_error"].to_numpy(dtype=float, na_value=np.nan)[mask], yerr=None if std is None else std[mask],
                     fmt="o", color=colour, capsize=3, label=name)
-    if (~matched).any():
-        ax.plot(x[~matched], 100 * rows["rel_error"].to_numpy()[~matched], "o", mfc="none", color="grey",
-                label="left out (nearest mode)")
+    if (~matched).any():  # a left-out peak has no error; it is drawn at its nearest mode's
+        nearest = result.peaks.model_hz / measured - 1
+        ax.plot(x[~matched], 100 * nearest[~matched], "o", mfc="none", color="grey", label="left out (nearest mode)")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(x)
     ax.set_xticklabels(_row_names(rows, rows["label"].tolist()), fontsize=6.5, rotation=90)
@@ -188,14 +188,19 @@ def plot_point_map(comparison, model: SpecimenModel, path: Path) -> Path:
 
 def plot_before_after(before, after, label: str, path: Path) -> Path:
     """Signed error per measured mode [%] without and with the effect, with the
-    measurement std as a band."""
-    table = before.measurements.table
-    names = [f"{c}\nmode {m}" for c, m in zip(table["configuration"], table["mode"])]
+    measurement std as a band (a peak either fit left out has no bar there)."""
+    from .report import before_after_table
+
+    rows = before_after_table(before, after)
+    names = [f"{c}\nmode {'-' if m is None else m}" for c, m in zip(rows["configuration"], rows["mode"], strict=True)]
     x = np.arange(len(names))
     fig, ax = new_figure(figsize=(max(7.0, 0.5 * len(names) + 2), 4.2))
-    ax.bar(x - 0.2, 100 * before.rel_error, 0.4, label=f"baseline (RMS {100 * before.rms_rel_error:.3g} %)")
-    ax.bar(x + 0.2, 100 * after.rel_error, 0.4, label=f"with {label} (RMS {100 * after.rms_rel_error:.3g} %)")
+    for shift, column, text, result in ((-0.2, "rel_error_before", "baseline", before),
+                                        (0.2, "rel_error_after", f"with {label}", after)):
+        error = rows[column].to_numpy(dtype=float, na_value=np.nan)
+        ax.bar(x + shift, np.nan_to_num(100 * error), 0.4, label=f"{text} (RMS {100 * result.rms_rel_error:.3g} %)")
     if before.measurements.has_std:
+        table = before.peaks.measurements.table if before.peaks is not None else before.measurements.table
         std = 100 * table["std_hz"] / table["frequency_hz"]
         ax.errorbar(x, np.zeros_like(x, dtype=float), yerr=std, fmt="none", ecolor="k", capsize=3,
                     label="measurement std")

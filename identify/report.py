@@ -33,8 +33,9 @@ def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataF
 
 def fit_residuals(result: FitResult) -> pd.DataFrame:
     """The residual rows of a fit (DESIGN.md): every measured frequency with the model
-    mode it is paired with (1-based; None for a peak left out), measured and model (or,
-    left out, the nearest mode's) frequency, relative error, matched; ranked data also
+    mode it is paired with (1-based), measured and model frequency, relative error,
+    matched, and a note (a peak left out has None for mode, model frequency and error,
+    and its note says why, naming the nearest mode); ranked data also
     keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
     if result.peaks is not None:
         from .peak_lists import peak_table
@@ -50,6 +51,7 @@ def fit_residuals(result: FitResult) -> pd.DataFrame:
         out.insert(1, "measured_mode", out.pop("mode"))
         out.insert(1, "mode", modes)
         out["matched"] = True
+        out["note"] = ""
     out.insert(2, "label", _model_labels(result, out))
     return out
 
@@ -142,12 +144,31 @@ def to_dict(result: FitResult) -> dict:
     }
 
 
+def _row_errors(result: FitResult) -> tuple[pd.DataFrame, np.ndarray]:
+    """The measured rows a result speaks of (for a peak list: every peak, matched or
+    not) and the relative error per row (object array, None for a peak left out)."""
+    if result.peaks is not None:
+        table = result.peaks.measurements.table
+        error = result.peaks.model_hz / table["frequency_hz"].to_numpy() - 1
+        return table, np.array([e if m else None for e, m in zip(error, result.peaks.matched, strict=True)],
+                               dtype=object)
+    return result.measurements.table, result.rel_error.astype(object)
+
+
 def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
-    """Relative error per measured mode without and with the effects switched on."""
-    table = before.measurements.table
-    return pd.DataFrame({"configuration": table["configuration"], "mode": table["mode"],
-                         "measured_hz": table["frequency_hz"], "rel_error_before": before.rel_error,
-                         "rel_error_after": after.rel_error})
+    """Relative error per measured row without and with the effects switched on.  For a
+    peak list the rows are the peaks (the two fits may match different ones: a peak left
+    out by one has None there); ``mode`` is the rank given, or for a peak the mode it is
+    matched to after the effects."""
+    table, error_before = _row_errors(before)
+    _, error_after = _row_errors(after)
+    if after.peaks is not None:
+        modes = pd.Series([int(m) if m > 0 else None for m in after.peaks.modes], dtype=object)
+    else:
+        modes = table["mode"].to_numpy()
+    return pd.DataFrame({"configuration": table["configuration"].to_numpy(), "mode": modes,
+                         "measured_hz": table["frequency_hz"].to_numpy(), "rel_error_before": error_before,
+                         "rel_error_after": error_after})
 
 
 def report_text(result: FitResult) -> str:
