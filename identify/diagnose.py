@@ -447,9 +447,10 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             if n_workers > 1 and pool is None:
                 pool = cf.ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"))
 
-            def run(batch, starts=None):
-                say(f"round {number}: trying {', '.join(batch)}" + (f" in {n_workers} processes" if pool else ""))
-                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)
+            def run(batch, starts=None):  # called in this round only: the loop variables are this round's
+                say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023
+                    + (f" in {n_workers} processes" if pool else ""))  # noqa: B023
+                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if k not in REFINES])
@@ -465,7 +466,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
             ordered = plausible_first([c for c in candidates if c.fit is not None], c_hat, PLAUSIBILITY_MARGIN,
                                       key=lambda c: c.bic, judged=lambda c: c.plausible,
-                                      related=lambda a, b: _nested(a.kind, b.kind, names))
+                                      related=lambda a, b: _nested(a.kind, b.kind, names))  # noqa: B023 (used now)
             ordered += [c for c in candidates if c.fit is None]
             best = next((c for c in ordered if c.eligible), None)
             plausible_best = best

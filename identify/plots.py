@@ -78,7 +78,8 @@ def plot_residuals(result, path: Path) -> Path:
     colours = {name: f"C{k}" for k, name in enumerate(dict.fromkeys(rows["configuration"]))}
     for name, colour in colours.items():
         mask = (rows["configuration"] == name).to_numpy() & matched
-        ax.errorbar(x[mask], 100 * rows["rel_error"].to_numpy(dtype=float, na_value=np.nan)[mask], yerr=None if std is None else std[mask],
+        error = rows["rel_error"].to_numpy(dtype=float, na_value=np.nan)
+        ax.errorbar(x[mask], 100 * error[mask], yerr=None if std is None else std[mask],
                     fmt="o", color=colour, capsize=3, label=name)
     if (~matched).any():  # a left-out peak has no error; it is drawn at its nearest mode's
         nearest = result.peaks.model_hz / measured - 1

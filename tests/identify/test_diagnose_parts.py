@@ -50,7 +50,7 @@ def test_tied_scale_derivative_matches_central_differences(thick_shear):
     for name in (c.name for c in specimen.configurations):
         exact = ties.derivatives(model.solve(name), [tied])[:, 0]
 
-        def frequencies(v):
+        def frequencies(v, name=name):
             return model.with_specimen(ties.apply(specimen, [tied], np.array([v]))).solve(name).frequencies_hz
 
         finite = (frequencies(value * (1 + STEP)) - frequencies(value * (1 - STEP))) / (2 * STEP * value)

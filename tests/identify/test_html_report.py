@@ -3,7 +3,6 @@ rendered in a real headless browser."""
 import shutil
 import subprocess
 from html.parser import HTMLParser
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

@@ -26,7 +26,6 @@ import argparse
 import json
 import sys
 import tomllib
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
