@@ -29,5 +29,10 @@ class DesignError(LayerIdError):
     """A test design cannot be built or scored (e.g. no identified material)."""
 
 
+class OptionsError(LayerIdError):
+    """An option of the model or the fit is out of its range (``ModelOptions``,
+    ``FitOptions``)."""
+
+
 class OutputError(LayerIdError):
     """An output file or report folder cannot be written where asked."""

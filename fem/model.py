@@ -13,7 +13,7 @@ from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
 from .attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
-from .errors import ModelError
+from .errors import ModelError, OptionsError
 from .inputs import InputStd
 from .laminate import Laminate
 from .layerwise import GROUPINGS, LayerwiseLaminate
@@ -29,6 +29,7 @@ from .sensitivity import (
     normalised,
 )
 from .specimen import Parameter, Specimen
+from .validation import whole
 
 #: Elements along the longer side per sqrt(modes x aspect ratio).  The element converges
 #: at O(h^4); with this density the highest requested mode of the paper's plate is within
@@ -44,6 +45,12 @@ KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
 ROTARY_INERTIA = (1.0, 1.0, 1.0)
 #: Most elastic modes a model solves per configuration (a free-plate test rarely uses 20).
 MAX_MODES = 60
+#: Most modes a model may solve at all: the user's MAX_MODES and the few extra modes the
+#: fit follows beyond the highest measured one.
+MAX_SOLVED_MODES = MAX_MODES + 10
+#: Mesh divisions a model accepts: one element cannot bend (frequencies are then off by
+#: about 15 %), and beyond 64 a solve takes minutes for no accuracy a test can see.
+DIVISIONS_RANGE = (2, 64)
 #: Plate theories: "single_layer" (Kirchhoff, or FSDT with ``transverse_shear``) or
 #: "layerwise" (one shear strain per group of layers, ``fem.layerwise``).
 THEORIES = ("single_layer", "layerwise")
@@ -84,6 +91,10 @@ class ModelOptions:
     core_stretch: bool = True  # layerwise: a soft core's transverse normal strain (E3 = E2 unless given)
 
     def __post_init__(self):
+        whole(self.modes, "ModelOptions.modes", 1, MAX_SOLVED_MODES, "of elastic modes ", OptionsError)
+        if self.divisions is not None:
+            whole(self.divisions, "ModelOptions.divisions", *DIVISIONS_RANGE,
+                  "of elements along the longer side (or None for the default rule) ", OptionsError)
         if self.theory not in THEORIES:
             raise ModelError(f"theory = {self.theory!r} is unknown; use one of {', '.join(THEORIES)}")
         if self.layer_groups not in GROUPINGS:

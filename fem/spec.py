@@ -19,7 +19,7 @@ from .inputs import InputStd
 from .laminate import Layer
 from .material import DENSITY_RANGE, MODULUS_RANGE, Material
 from .layerwise import GROUPINGS
-from .model import MAX_MODES, THEORIES, ModelOptions, SpecimenModel
+from .model import DIVISIONS_RANGE, MAX_MODES, THEORIES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
 from .stock import STOCK, stock_name
 from .validation import check_keys, number, suggestion, whole
@@ -197,6 +197,9 @@ def _with_measured_mass(mass_g: float, layers, materials: dict, area: float, con
 def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     """The validated model of a parsed TOML document: the specimen with its fixed
     ``[[effects]]`` switched on, the model options and the ``[design]`` table."""
+    if not isinstance(data, dict):
+        raise SpecError(f"spec: need the parsed TOML document (a dict), not {type(data).__name__}; read a file with "
+                        "load_spec(path)")
     check_keys(data, ("specimen", "materials", "configurations", "model", "effects", "design"), "spec")
     if "specimen" not in data:
         raise SpecError("spec: missing table [specimen]")
@@ -263,7 +266,7 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     modes = whole(model.get("modes", 5), "[model].modes", 1, MAX_MODES, "")
     divisions = model.get("divisions")
     if divisions is not None:
-        whole(divisions, "[model].divisions", 2, 64, "of elements ")
+        whole(divisions, "[model].divisions", *DIVISIONS_RANGE, "of elements ")
     for key, allowed in (("theory", THEORIES), ("layer_groups", GROUPINGS)):
         if key in model and model[key] not in allowed:
             raise SpecError(f"[model].{key} = {model[key]!r} is unknown; {suggestion(model[key], allowed)} "

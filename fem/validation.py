@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import numbers
 from typing import Iterable
 
 from .errors import LayerIdError, SpecError
@@ -67,9 +68,9 @@ def number(table: dict, key: str, where: str, *, required: bool = True, default=
 
 def whole(value, where: str, low: int, high: int, what: str, error: type[LayerIdError] = SpecError) -> int:
     """A whole number from ``low`` to ``high``, or "``where`` = v: need a whole number of ``what`` from ..."."""
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
         raise error(f"{where} = {value!r}: need a whole number {what}from {low} to {high}")
-    return value
+    return int(value)
 
 
 __all__ = ["did_you_mean", "suggestion", "check_keys", "known_name", "number", "whole"]

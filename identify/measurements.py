@@ -72,7 +72,14 @@ def _fail(source: str, message: str) -> MeasurementError:
 
 def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = "<measurements>") -> Measurements:
     """Validate a raw table against the model's configurations; rows are reported by CSV
-    line number."""
+    line number.  ``frame``: a data frame, or what makes one (a list of row dicts, a
+    dict of columns)."""
+    if not isinstance(frame, pd.DataFrame):
+        try:
+            frame = pd.DataFrame(frame)
+        except (TypeError, ValueError) as exc:
+            raise _fail(source, f"need a table (a data frame, a list of row dicts or a dict of columns), not "
+                        f"{type(frame).__name__}: {exc}") from None
     frame = frame.copy()
     frame.columns = [str(c).strip() for c in frame.columns]
     for column in frame.columns:
@@ -142,6 +149,11 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         rows = frame[duplicated]
         raise _fail(source, f"lines {', '.join(map(str, line[duplicated.to_numpy()]))}: configuration "
                     f"{rows['configuration'].iloc[0]!r} mode {rows['mode'].iloc[0]} is given more than once")
+    peaks = frame[frame["mode"] == UNRANKED].groupby("configuration", sort=False).size()
+    if (peaks > MAX_MODE).any():
+        raise _fail(source, f"configuration {peaks.idxmax()!r} has {peaks.max()} peaks without mode numbers; at most "
+                    f"{MAX_MODE} can be matched to model modes: keep the strongest peaks of the band you fit (e.g. "
+                    "peaks --band LOW HIGH)")
     frame["_order"] = frame["configuration"].map({name: i for i, name in enumerate(known)})
     frame = frame.sort_values(["_order", "mode", "frequency_hz"], kind="stable").drop(columns="_order")
     frame = frame.reset_index(drop=True)

@@ -14,9 +14,10 @@ from typing import Callable
 
 import numpy as np
 
-from fem.errors import MeasurementError
-from fem.model import SpecimenModel
+from fem.errors import MeasurementError, OptionsError
+from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
+from fem import validation
 
 from .ambiguity import settle_pairings
 from .repair import quick_repair
@@ -52,6 +53,17 @@ class FitOptions:
     # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
     # even where an ill-conditioned direction still creeps (off by default).
     stall_chi2: float = 0.0
+
+    def __post_init__(self):
+        where = "FitOptions"
+        validation.whole(self.max_iterations, f"{where}.max_iterations", 0, 100_000, "of iterations ", OptionsError)
+        validation.whole(self.extra_modes, f"{where}.extra_modes", 0, MAX_SOLVED_MODES - MAX_MODES, "of modes ", OptionsError)
+        validation.whole(self.max_damping_tries, f"{where}.max_damping_tries", 1, 1000, "of tries ", OptionsError)
+        fields = vars(self)
+        for key in ("parameter_tolerance", "cost_tolerance", "stall_chi2"):
+            validation.number(fields, key, where, low=0.0, low_inclusive=True, error=OptionsError)
+        for key in ("max_log_step", "max_linear_step"):
+            validation.number(fields, key, where, low=0.0, error=OptionsError)
 
 
 class Stop(Enum):
