@@ -53,9 +53,19 @@ def provenance(title: str, specimen: str, spec: str, measurements: str | None) -
     return rows
 
 
+def blank_missing(frame: pd.DataFrame, blank: str = "") -> pd.DataFrame:
+    """``frame`` with the None and NaN of its object (mixed) columns shown as ``blank``;
+    float columns keep NaN for the writer's own ``na_rep``."""
+    out = frame.copy()
+    for column in out.columns[out.dtypes == object]:
+        out[column] = out[column].map(lambda v: blank if v is None or (isinstance(v, float) and v != v) else v)
+    return out
+
+
 def table(frame: pd.DataFrame, float_format: str = "{:.6g}") -> str:
-    """A data frame as an HTML table (numbers formatted, text escaped)."""
-    return frame.to_html(index=False, escape=True, na_rep="", border=0,
+    """A data frame as an HTML table (numbers formatted, text escaped, a value that does
+    not exist (NaN, None) a blank cell)."""
+    return blank_missing(frame).to_html(index=False, escape=True, na_rep="", border=0,
                          float_format=lambda x: float_format.format(x))
 
 

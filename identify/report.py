@@ -11,6 +11,7 @@ import pandas as pd
 
 from fem.io import report_folder, to_json, write_text
 
+from .html_report import blank_missing
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
 
@@ -211,12 +212,13 @@ def report_text(result: FitResult) -> str:
     lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
     lines += ["", "residuals (mode: the model mode each measured frequency is paired with)",
-              fit_residuals(result).to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+              blank_missing(fit_residuals(result), "-").to_string(index=False, float_format=lambda x: f"{x:.6g}")]
     if before is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
         lines += ["", f"error per mode before and after adding {kinds} (RMS {100 * before.rms_rel_error:.4g} % -> "
                   f"{100 * result.rms_rel_error:.4g} %)",
-                  before_after_table(before, result).to_string(index=False, float_format=lambda x: f"{x:.4g}")]
+                  blank_missing(before_after_table(before, result), "-").to_string(
+                      index=False, float_format=lambda x: f"{x:.4g}")]
     lines += ["", "warnings"] + ([f"  - {w}" for w in result.warnings] or ["  none"])
     return "\n".join(lines) + "\n"
 
