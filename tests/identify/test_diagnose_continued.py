@@ -1,0 +1,29 @@
+"""A diagnosis whose best candidate has not converged within its iteration budget
+continues it (it once failed there with an UnboundLocalError: a local named like the
+``continued`` it called)."""
+import importlib
+import tomllib
+
+from fem.spec import parse_spec
+from identify.measurements import parse_measurements
+from identify.synthetic import synthetic_measurements
+from identify.updating import FitOptions
+
+from ..walk import SPEC
+
+diagnosis = importlib.import_module("identify.diagnose")  # the module (the package exports its function)
+
+#: The truth the data come from: the walk plate with a 6 g sensor the spec leaves out.
+SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}
+
+
+def test_a_best_candidate_stopped_at_its_iteration_limit_is_continued(monkeypatch):
+    spec = tomllib.loads(SPEC)
+    model = parse_spec(spec)
+    truth = parse_spec({**spec, "effects": [SENSOR]})
+    data = parse_measurements(synthetic_measurements(truth, modes=5, noise_rel=2e-4, seed=1).table, model)
+    monkeypatch.setattr(diagnosis, "CANDIDATE_OPTIONS", FitOptions(max_iterations=1, stall_chi2=0.1))
+    said = []
+    result = diagnosis.diagnose(model, data, ["point_mass", "rotary_inertia"], progress=said.append)
+    assert any(line.strip().startswith("continuing point_mass") for line in said), said
+    assert [c.kind for c in result.selected] == ["point_mass"]
