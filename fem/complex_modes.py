@@ -28,6 +28,11 @@ from .model import LaminateSolution, SpecimenModel, one_blas_thread
 
 #: A complex mode is the damped version of a real one when their MAC exceeds this.
 PAIRING_MAC = 0.9
+#: Real modes whose eigenvalues differ by less than this (relative) are one group in the
+#: pairing: damping mixes close modes (a square plate's symmetric pairs are equal to
+#: rounding, a near-isotropic one's 0.1 % apart), and within a group the complex modes go
+#: to the real ones by Re(lambda).
+CLOSE = 1e-2
 
 
 def complex_coefficients(laminate: Laminate, transverse_shear: bool = False) -> np.ndarray:
@@ -53,7 +58,10 @@ def complex_coefficients(laminate: Laminate, transverse_shear: bool = False) -> 
 @one_blas_thread
 def complex_loss_factors(model: SpecimenModel, configuration: str) -> np.ndarray:
     """The modal loss factors eta_i = Im(lambda*) / Re(lambda*) [-] of a configuration's
-    elastic modes, in the order of the real modes (``model.solve``)."""
+    elastic modes, in the order of the real modes (``model.solve``).  Within a group of
+    close modes (``CLOSE``) damping mixes the real shapes: the group's loss factors come in
+    the order of their Re(lambda), and only their lambda-weighted sum is comparable with
+    the first-order estimate mode by mode."""
     if model.options.theory != "single_layer":
         raise ModelError(f"the complex eigenproblem is built for the single-layer plate theories, not "
                          f"{model.options.theory!r}; use the first-order loss factors (fem.damping)")
@@ -95,15 +103,21 @@ def _solve(real: LaminateSolution, coefficients: np.ndarray) -> np.ndarray:
                              OPinv=operator)
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the complex eigen-solver did not converge for {k} modes: {exc}") from exc
-    # Pair with the real modes by the mass-weighted MAC (complex: |a^T M b|^2 with a real).
+    # Pair with the real modes by the mass-weighted MAC (|a^T M b|^2, a real and
+    # mass-normalised), summed over each group of close real modes (``CLOSE``).
     cross = modes.shapes.T @ (m_matrix @ phi)
     norms = np.real(np.einsum("ij,ij->j", phi.conj(), m_matrix @ phi))
-    mac = np.abs(cross) ** 2 / norms[None, :]  # real shapes are mass-normalised
-    rows, cols = linear_sum_assignment(-mac)
+    mac = np.abs(cross) ** 2 / norms[None, :]
+    group = np.concatenate([[0], np.cumsum(np.diff(modes.eigenvalues) > CLOSE * modes.eigenvalues[1:])])
+    grouped = np.array([mac[group == g].sum(axis=0) for g in group])
+    rows, cols = linear_sum_assignment(-grouped)
     order = cols[np.argsort(rows)]
-    if mac[np.arange(n_modes), order].min() < PAIRING_MAC:
-        raise ModelError(f"a damped mode could not be paired with its elastic one (MAC "
-                         f"{mac[np.arange(n_modes), order].min():.2f}): the damping changes the mode shapes too much "
-                         "for modal loss factors")
+    for g in np.unique(group):
+        members = np.flatnonzero(group == g)
+        order[members] = sorted(order[members], key=lambda j: lam[j].real)
+    worst = grouped[np.arange(n_modes), order].min()
+    if worst < PAIRING_MAC:
+        raise ModelError(f"a damped mode could not be paired with its elastic one (MAC {worst:.2f}): the damping "
+                         "changes the mode shapes too much for modal loss factors")
     lam = lam[order]
     return lam.imag / lam.real
