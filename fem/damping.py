@@ -75,3 +75,21 @@ def first_order_loss_factors(model: SpecimenModel) -> dict[str, np.ndarray]:
     etas = np.array([materials[name].loss_factor(kind) for name, kind in targets])
     stacked = loss_columns(model, targets) @ etas
     return {c.name: stacked[k * n:(k + 1) * n] for k, c in enumerate(model.specimen.configurations)}
+
+
+def loss_from_ratio(zeta):
+    """The loss factor eta [-] of a pole with damping ratio zeta [-]: a pole of
+    lambda* = omega^2 (1 + i eta) has zeta = sin(arctan(eta) / 2), so eta = tan(2 arcsin zeta)
+    (2 zeta for light damping; 0.1 % apart at zeta = 0.02)."""
+    return np.tan(2 * np.arcsin(zeta))
+
+
+def ratio_from_loss(eta):
+    """The damping ratio zeta [-] of a pole whose loss factor is eta [-]."""
+    return np.sin(np.arctan(eta) / 2)
+
+
+def loss_slope(zeta):
+    """d eta / d zeta of ``loss_from_ratio`` [-] (2 for light damping): carries a damping
+    ratio's std over to the loss factor."""
+    return 2 / (np.cos(2 * np.arcsin(zeta)) * np.sqrt(1 - zeta**2))
