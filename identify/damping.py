@@ -161,10 +161,10 @@ def _rows(model: SpecimenModel, measurements: Measurements, pairings: dict) -> t
     group = 0
     for c in model.specimen.configurations:
         frame = measurements.of(c.name)
-        if frame.empty or c.name not in pairings:
+        if frame.empty or (pairings is not None and c.name not in pairings):
             continue
         lam = model.solve(c.name).modes.eigenvalues
-        index = np.asarray(pairings[c.name].indices)
+        index = (frame["mode"].to_numpy() - 1 if pairings is None else np.asarray(pairings[c.name].indices))
         zeta = frame["damping_ratio"].to_numpy()
         eta = loss_from_ratio(zeta)
         given = frame["damping_std"].to_numpy()
@@ -205,11 +205,12 @@ def _rows(model: SpecimenModel, measurements: Measurements, pairings: dict) -> t
     return _Rows(table, group), notes
 
 
-def identify_damping(model: SpecimenModel, measurements: Measurements, pairings: dict,
+def identify_damping(model: SpecimenModel, measurements: Measurements, pairings: dict | None = None,
                      targets: list[tuple[str, str]] | None = None) -> DampingResult | None:
     """The loss factors ``targets`` (default: the spec's ``identify_damping``) of a fitted
     ``model`` from the measured damping ratios of the modes ``pairings`` pairs (a
-    ``FitResult``'s).  None when nothing is to be identified."""
+    ``FitResult``'s; None: ranked measurements, mode k with model mode k).  None when
+    nothing is to be identified."""
     targets = damping_targets(model) if targets is None else list(targets)
     if not targets:
         return None
