@@ -10,8 +10,8 @@ and the unknown loss factors solved by weighted linear least squares bounded at
 0 <= eta <= ``fem.material.MAX_LOSS_FACTOR`` (scipy ``lsq_linear``), rows weighted by
 the damping scatter: the measurements' ``damping_std``, or ``ASSUMED_DAMPING_STD_REL``
 of each damping ratio.  The condition number of the loss-factor columns gets the paper's
-verdict (``fem.sensitivity.condition_verdict``); a singular one, or fewer measured modes
-than loss factors, gives ``not_identifiable`` and no values.  A chi^2 test against the
+verdict (``fem.sensitivity.condition_verdict``); a singular one, fewer measured modes than
+loss factors, or a std above ``UNDETERMINED_STD`` gives ``not_identifiable`` and no values.  A chi^2 test against the
 damping scatter (``identify.statistics.CHI2_TEST_LEVEL``) tells ``converged`` from
 ``poor_fit``.  When a mode's energy-weighted RMS loss factor exceeds ``LARGE_LOSS`` and
 first order errs (by
@@ -58,6 +58,9 @@ REFINE_SHARE = 0.1
 #: are mixed by damping and enter as one group; and never less than ``CLOSE_FLOOR``.
 CLOSE_FACTOR = 2.0
 CLOSE_FLOOR = 1e-6
+#: A loss factor whose std would exceed this (half the allowed range 0..2) is not
+#: determined by the data: the result is ``not_identifiable``, with no values.
+UNDETERMINED_STD = 0.5 * MAX_LOSS_FACTOR
 STATUSES = ("converged", "poor_fit", "not_identifiable")
 
 
@@ -267,6 +270,13 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     jacobian = weighted
     covariance = np.linalg.pinv(jacobian.T @ jacobian)
     std = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    vague = [f"{m}.{k}" for (m, k), sd in zip(targets, std) if not sd <= UNDETERMINED_STD]
+    if vague:
+        return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: the std of "
+                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number {condition:.3g}); "
+                             "add configurations that change the layers' share of the strain energy (plan-tests "
+                             "check)", tuple(targets), nothing, nothing, condition, verdict,
+                             _residual_table(rows, None), notes=tuple(notes), scatter_stated=scatter_stated)
     at_bound = tuple(bool(v <= 1e-12 or v >= MAX_LOSS_FACTOR - 1e-12) for v in x)
     if p_value < CHI2_TEST_LEVEL:
         status = "poor_fit"
