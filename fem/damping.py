@@ -26,6 +26,11 @@ from .material import LOSS_FACTORS, SHEAR_MODULI, Material
 from .model import SpecimenModel
 from .specimen import Parameter
 
+#: Modes whose eigenvalues differ (relatively) by less than this times their loss factor
+#: are mixed by damping: only their lambda-weighted sum follows the layers' loss factors
+#: (``fem.complex_modes``); and never less than ``CLOSE_FLOOR`` (degenerate to rounding).
+CLOSE_FACTOR = 2.0
+CLOSE_FLOOR = 1e-6
 #: The moduli whose loss factor a damping parameter is (transverse shear moduli added
 #: where the model has them, ``moduli_of``).
 MODULI = {"eta_E1": ("E1",), "eta_E2": ("E2",), "eta_G12": ("G12",), "eta": ("E1", "E2", "G12")}
@@ -93,3 +98,16 @@ def loss_slope(zeta):
     """d eta / d zeta of ``loss_from_ratio`` [-] (2 for light damping): carries a damping
     ratio's std over to the loss factor."""
     return 2 / (np.cos(2 * np.arcsin(zeta)) * np.sqrt(1 - zeta**2))
+
+
+def close_groups(eigenvalues: np.ndarray, loss: np.ndarray) -> list[list[int]]:
+    """Indices of the modes (ascending eigenvalues) in groups that damping mixes: a chain of
+    neighbours closer than ``CLOSE_FACTOR`` x the larger loss factor (``CLOSE_FLOOR`` at least)."""
+    groups = [[0]]
+    for i in range(1, len(eigenvalues)):
+        gap = max(CLOSE_FLOOR, CLOSE_FACTOR * max(loss[i], loss[i - 1])) * eigenvalues[i]
+        if eigenvalues[i] - eigenvalues[i - 1] < gap:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups

@@ -21,7 +21,7 @@ eigenproblem (``fem.complex_modes``).
 Damping ratio and loss factor: ``fem.damping.loss_from_ratio`` (eta = 2 zeta for light
 damping, exact for a pole of lambda* = omega^2 (1 + i eta)).
 
-Close modes (eigenvalues closer than ``CLOSE_FACTOR`` x their loss factor) are mixed by
+Close modes (``fem.damping.close_groups``) are mixed by
 damping: only their lambda-weighted sum follows the layers' loss factors, so such a group
 enters as one row; a group with a mode not measured is left out (and said so).
 """
@@ -36,7 +36,7 @@ from scipy import stats
 from scipy.optimize import lsq_linear
 
 from fem.complex_modes import complex_loss_factors
-from fem.damping import known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
+from fem.damping import close_groups, known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
 from fem.material import MAX_LOSS_FACTOR
 from fem.model import SpecimenModel
 from fem.sensitivity import condition_verdict
@@ -54,10 +54,6 @@ LARGE_LOSS = 0.05
 #: ... and when, at the first-order solution, the complex eigenproblem differs from it by
 #: more than this share of a row's std (one complex solve per configuration decides).
 REFINE_SHARE = 0.1
-#: Modes whose eigenvalues differ (relatively) by less than this times their loss factor
-#: are mixed by damping and enter as one group; and never less than ``CLOSE_FLOOR``.
-CLOSE_FACTOR = 2.0
-CLOSE_FLOOR = 1e-6
 #: A loss factor whose std would exceed this (half the allowed range 0..2) is not
 #: determined by the data: the result is ``not_identifiable``, with no values.
 UNDETERMINED_STD = 0.5 * MAX_LOSS_FACTOR
@@ -174,18 +170,10 @@ def _rows(model: SpecimenModel, measurements: Measurements, pairings: dict) -> t
         slope = loss_slope(zeta)
         std = slope * np.where(np.isfinite(given), given, ASSUMED_DAMPING_STD_REL * zeta)
         measured = {int(i): k for k, i in enumerate(index) if np.isfinite(zeta[k])}
-        # Groups of close model modes by a chain of small gaps.
         loss = np.zeros(len(lam))
         for i, k in measured.items():
             loss[i] = eta[k]
-        bounds = [0]
-        for i in range(1, len(lam)):
-            near = lam[i] - lam[i - 1] < max(CLOSE_FLOOR, CLOSE_FACTOR * max(loss[i], loss[i - 1])) * lam[i]
-            if not near:
-                bounds.append(i)
-        bounds.append(len(lam))
-        for a, b in zip(bounds[:-1], bounds[1:]):
-            members = list(range(a, b))
+        for members in close_groups(lam, loss):
             if not any(i in measured for i in members):
                 continue
             if not all(i in measured for i in members):
