@@ -1,6 +1,6 @@
 """Run every benchmark: ``python -m benchmarks``.  (Guarded: the designer's and the
 diagnosis's worker processes are spawned and import the main module.)"""
-from . import core, designer, diagnosis, identification, layerwise, peaks
+from . import core, damping, designer, diagnosis, identification, layerwise, peaks
 
 if __name__ == "__main__":
     core.main()
@@ -9,3 +9,4 @@ if __name__ == "__main__":
     diagnosis.main()
     layerwise.main()
     peaks.main()
+    damping.main()

@@ -8,6 +8,7 @@ from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING, Limits
 from fem.model import SpecimenModel
 
+from .damping import DampingScores, damping_scores
 from .design import Design
 from .poisson import PoissonPlate, poisson_plate
 from .problem import Problem, Solved, solve_points, unmeasurable
@@ -19,7 +20,8 @@ from .sheet import TestSheet, test_sheet
 class CheckResult:
     """The scored spec design, the Poisson-plate rule, warnings (close modes, modes
     outside the band, too few frequencies), violations of the lab's limits, the limits
-    themselves and the test sheet (computed when first asked for: ``test_sheet``)."""
+    themselves and the test sheet (computed when first asked for: ``test_sheet``); the
+    loss-factor scores when materials have ``identify_damping`` (``designer.damping``)."""
 
     design: Design
     poisson: PoissonPlate
@@ -28,6 +30,7 @@ class CheckResult:
     limits: Limits | None = None
     problem: Problem | None = field(default=None, repr=False, compare=False)
     prior: tuple = field(default=(), repr=False, compare=False)
+    damping: DampingScores | None = None
 
     @property
     def feasible(self) -> bool:
@@ -50,10 +53,13 @@ class CheckResult:
         return {**self.design.to_dict(), "feasible": self.feasible, "warnings": list(self.warnings),
                 "violations": list(self.violations), "poisson_plate": self.poisson.to_dict(),
                 "limits": self.limits.to_dict() if self.limits is not None else None,
-                "test_sheet": sheet.to_dict() if sheet is not None else None}
+                "test_sheet": sheet.to_dict() if sheet is not None else None,
+                "damping": self.damping.to_dict() if self.damping is not None else None}
 
     def report(self) -> str:
         lines = [self.design.report(), "", self.poisson.report()]
+        if self.damping is not None:
+            lines += ["", self.damping.report()]
         if self.limits is not None:
             lines += ["", self.limits.describe()]
         if self.warnings:
@@ -121,5 +127,9 @@ def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
     if design.n_measured < len(design.parameters):
         warnings.append(f"{design.n_measured} measured frequencies for {len(design.parameters)} parameters: "
                         "singular whatever the plates; measure more modes ([model] modes) or add configurations")
+    damping = damping_scores(problem.model, configurations, problem.space.damping_std_rel)
+    if damping is not None and damping.useless:
+        warnings.append(f"the design does not determine the loss factors {', '.join(damping.useless)} (predicted std "
+                        "above the value): add configurations that change the layers' share of the strain energy")
     return CheckResult(design, poisson_plate(problem.specimen), tuple(warnings), tuple(violations),
-                       problem.space.limits, problem, tuple(prior))
+                       problem.space.limits, problem, tuple(prior), damping)

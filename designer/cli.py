@@ -22,6 +22,7 @@ from identify.examples import spec_or_example
 
 from .candidates import candidates
 from .check import check
+from .damping import damping_scores
 from .parallel import executor
 from .problem import Problem, use_store
 from .progress import Progress
@@ -64,8 +65,12 @@ def run_recommend(args) -> int:
     refined = refine(problem, result.best) if args.refine else None
     best = refined.design if refined is not None and refined.improved else result.best
     written = write_spec(problem, best, args.write_spec) if args.write_spec else None
+    scores = [damping_scores(problem.model, [s.configuration for s in d.solved], problem.space.damping_std_rel)
+              for d in result.designs]
     if args.json:
         out = result.to_dict()
+        for design, score in zip(out["designs"], scores):
+            design["damping"] = score.to_dict() if score is not None else None
         if refined is not None:
             out["refined"] = refined.to_dict()
         if written is not None:
@@ -73,6 +78,9 @@ def run_recommend(args) -> int:
         print(to_json(out))
         return 0
     print(result.report())
+    for k, score in enumerate(scores):
+        if score is not None:
+            print(f"\ndesign {k + 1} " + score.report())
     if refined is not None:
         print("\n" + refined.report())
     if written is not None:

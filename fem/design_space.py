@@ -51,9 +51,11 @@ CRITERIA = {
 }
 KEYS = ("materials", "thicknesses_mm", "placements", "adhesive", "configurations", "frequency_std_rel",
         "criterion", "max_added_mass_g", "max_added_thickness_mm", "band_hz", "min_separation_rel",
-        "prior_range_rel", "prior_samples", "target_std_rel", "sensor_mass_g")
+        "prior_range_rel", "prior_samples", "target_std_rel", "sensor_mass_g", "damping_std_rel")
 DEFAULT_MATERIALS = ("brass", "aluminium", "steel")
 DEFAULT_FREQUENCY_STD_REL = 1e-3
+#: Expected relative scatter of a measured damping ratio (repeated tap tests: about 3 %).
+DEFAULT_DAMPING_STD_REL = 0.03
 #: Added plates thinner than this are foils, not plates; thicker than this are blocks.
 THICKNESS_RANGE_MM = (0.01, 50.0)
 #: Prior parameter points a robust score uses by default (besides the nominal one).
@@ -74,7 +76,8 @@ class DesignSpace:
     adhesive: the bond layer (material, thickness [m]) or None; size: configurations
     per test set, the original included; frequency_std_rel: relative std of a measured
     frequency; criterion: a key of ``CRITERIA``; limits: the lab's ``Limits``;
-    defined: every material the spec defines (for names given later, e.g. in sweeps).
+    defined: every material the spec defines (for names given later, e.g. in sweeps);
+    damping_std_rel: relative std of a measured damping ratio (the loss-factor scores).
     """
 
     materials: tuple[Material, ...]
@@ -92,6 +95,7 @@ class DesignSpace:
         (k, DEFAULT_TARGETS[g]) for g, kinds in TARGET_KEYS.items() if g in DEFAULT_TARGETS for k in kinds)
     targets_given: bool = False
     sensor_mass: float | None = None
+    damping_std_rel: float = DEFAULT_DAMPING_STD_REL
 
     def target(self, kind: str) -> float | None:
         """The target relative std of a parameter kind (E1, E2, G12, nu12), or None."""
@@ -214,9 +218,11 @@ def parse_design(design: dict, defined: dict[str, Material], n_identified: int) 
                     "of parameter points ", DesignError)
     sensor = _number(design, "sensor_mass_g", None, 0.0, 1000.0, "the accelerometer's mass in grams, e.g. 2.0")
     targets = _targets(design.get("target_std_rel"))
+    damping_std = _number(design, "damping_std_rel", DEFAULT_DAMPING_STD_REL, 0.0, 1.0,
+                          "relative scatter of a measured damping ratio, e.g. 0.03 for 3 %")
     return DesignSpace(tuple(materials), thicknesses, placements, bond, size, std, criterion, limits,
                        tuple(defined.values()), prior, samples, targets, "target_std_rel" in design,
-                       None if sensor is None else sensor * 1e-3)
+                       None if sensor is None else sensor * 1e-3, damping_std)
 
 
 def _targets(table) -> tuple[tuple[str, float], ...]:

@@ -54,13 +54,20 @@ def transformation(angle: float, derivative: bool = False) -> np.ndarray:
     return out
 
 
+def plane_stress_stiffness(E1, E2, G12, nu12) -> np.ndarray:
+    """[Q11, Q12, Q22, Q66] [Pa] of moduli that may be complex (E*(1 + i eta): the complex
+    eigenproblem's) with a real Poisson ratio."""
+    delta = 1.0 - nu12**2 * E2 / E1
+    return np.array([E1 / delta, nu12 * E2 / delta, E2 / delta, G12])
+
+
 def reduced_stiffness(material: Material) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """On-axis plane-stress stiffness [Q11, Q12, Q22, Q66] [Pa] and its derivatives
     with respect to E1, E2, G12 [1] and nu12 [Pa]."""
     E1, E2, G12, nu = material.E1, material.E2, material.G12, material.nu12
     delta = 1.0 - nu**2 * E2 / E1
     numerator = np.array([E1, nu * E2, E2])
-    q = np.append(numerator / delta, G12)
+    q = plane_stress_stiffness(E1, E2, G12, nu)
     d_numerator = {"E1": [1.0, 0, 0], "E2": [0, nu, 1.0], "G12": [0, 0, 0], "nu12": [0, E2, 0]}
     d_delta = {"E1": nu**2 * E2 / E1**2, "E2": -(nu**2) / E1, "G12": 0.0, "nu12": -2 * nu * E2 / E1}
     dq = {}

@@ -18,6 +18,15 @@ MODULUS_RANGE = (1e5, 2e12)
 DENSITY_RANGE = (10.0, 25000.0)
 #: Default bounds of an identified property [SI]; nu12 within 0..0.5 unless the spec widens
 #: it (fibre laminates at +-45 deg or some woods exceed 0.5: give `bounds` then).
+#: Loss factors of a material's complex moduli E*(1 + i eta): one per in-plane modulus.
+LOSS_FACTORS = ("eta_E1", "eta_E2", "eta_G12")
+#: What an identification may find of a material's damping: the three loss factors, or
+#: ``eta``, one loss factor shared by all three moduli (an isotropic material's).
+DAMPING_PARAMETERS = ("eta",) + LOSS_FACTORS
+#: Loss factors a spec may give: 0 (elastic) up to this.  Viscoelastic adhesives and
+#: damping layers reach 1-1.5 at their glass transition; beyond 2 a "modal" resonance no
+#: longer exists in a free-plate test.
+MAX_LOSS_FACTOR = 2.0
 DEFAULT_BOUNDS = {"E1": MODULUS_RANGE, "E2": MODULUS_RANGE, "G12": MODULUS_RANGE, "G13": MODULUS_RANGE,
                   "G23": MODULUS_RANGE, "nu12": (0.0, 0.5), "density": DENSITY_RANGE}
 
@@ -47,6 +56,13 @@ class Material:
     identify: tuple[str, ...] = ()
     bounds: tuple[tuple[str, float, float], ...] = ()   # (kind, lower, upper) [SI] set in the spec
     E3: float | None = None  # through-thickness modulus [Pa]: a stretching core's (layerwise model); None = E2
+    # Loss factors of E1, E2 and G12 [-] (E*(1 + i eta)); None = not given (taken as 0, an
+    # elastic material, and said so by a damping identification).  The transverse shear
+    # moduli G13, G23 carry eta_G12.
+    eta_E1: float | None = None
+    eta_E2: float | None = None
+    eta_G12: float | None = None
+    identify_damping: tuple[str, ...] = ()  # of DAMPING_PARAMETERS; () = known loss factors
 
     def __post_init__(self):
         kinds = ELASTIC_CONSTANTS if self.identify is True else () if self.identify is False else tuple(self.identify)
@@ -73,6 +89,17 @@ class Material:
         if self.density < DENSITY_RANGE[0]:
             raise SpecError(f"material '{self.name}': density = {self.density:g} kg/m^3 is below {DENSITY_RANGE[0]:g}: "
                             "a unit slip? Densities are in kg/m^3 (7850 for steel, not 7.85)")
+        for field in LOSS_FACTORS:
+            value = getattr(self, field)
+            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)
+                                          and 0 <= value <= MAX_LOSS_FACTOR):
+                raise SpecError(f"material '{self.name}': {field} = {value!r} must be a loss factor 0..{MAX_LOSS_FACTOR:g} "
+                                "(0.001 for steel, 0.01-0.1 for polymers, up to 1-1.5 for damping layers)")
+        unknown = [k for k in self.identify_damping if k not in DAMPING_PARAMETERS]
+        if unknown or ("eta" in self.identify_damping and len(self.identify_damping) > 1):
+            raise SpecError(f"material '{self.name}': identify_damping = {list(self.identify_damping)!r}: need true, "
+                            f"false or a list of {', '.join(LOSS_FACTORS)}, or [\"eta\"] alone (one loss factor for "
+                            "all three moduli)")
         isotropic = self.E1 == self.E2 and abs(self.G12 * 2 * (1 + self.nu12) / self.E1 - 1) < 1e-6
         if isotropic and not -1 < self.nu12 < 0.5:
             raise SpecError(f"material '{self.name}': nu12 = {self.nu12!r} for an isotropic material "
@@ -100,6 +127,16 @@ class Material:
     def defaulted_shear_moduli(self) -> tuple[str, ...]:
         """Names of the transverse shear moduli not given, hence set to G12."""
         return tuple(name for name in SHEAR_MODULI if getattr(self, name) is None)
+
+    @property
+    def isotropic(self) -> bool:
+        """E1 = E2 and G12 = E1 / 2(1 + nu12) to 0.1 % (a spec's rounded G12, e.g. 37.31 GPa for
+        brass's 100 GPa and 0.34)."""
+        return self.E1 == self.E2 and abs(self.G12 * 2 * (1 + self.nu12) / self.E1 - 1) < 1e-3
+
+    def loss_factor(self, kind: str) -> float:
+        """The loss factor of E1, E2 or G12 (``eta_E1`` ...) [-]; 0 when not given."""
+        return getattr(self, kind) or 0.0
 
     def bound(self, parameter: str) -> tuple[float, float]:
         """(lower, upper) [SI] an identification keeps the property within: the spec's

@@ -17,7 +17,7 @@ from .effects import apply_fixed
 from .errors import SpecError
 from .inputs import InputStd
 from .laminate import Layer
-from .material import DENSITY_RANGE, MODULUS_RANGE, Material
+from .material import DENSITY_RANGE, LOSS_FACTORS, MAX_LOSS_FACTOR, MODULUS_RANGE, Material
 from .layerwise import GROUPINGS
 from .model import DIVISIONS_RANGE, MAX_MODES, THEORIES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
@@ -30,7 +30,8 @@ GPA, MM = 1e9, 1e-3
 MIN_THICKNESS_MM = 1e-3
 MATERIAL_KEYS = {
     "E1_GPa": True, "E2_GPa": True, "G12_GPa": True, "nu12": True, "density_kg_m3": True,
-    "identify": False, "G13_GPa": False, "G23_GPa": False, "E3_GPa": False, "note": False, "bounds": False,
+    "identify": False, "eta_E1": False, "eta_E2": False, "eta_G12": False, "eta": False, "identify_damping": False,
+    "G13_GPa": False, "G23_GPa": False, "E3_GPa": False, "note": False, "bounds": False,
     **{f"{key}_std": False for key in ("E1_GPa", "E2_GPa", "G12_GPa", "G13_GPa", "G23_GPa", "nu12", "density_kg_m3")},
 }
 #: Plausible ranges that catch unit slips (a modulus in MPa, a density in g/cm^3).
@@ -72,10 +73,37 @@ def _material(name: str, table: dict) -> Material:
                         'e.g. ["G13", "G23"]')
     bounds = _bounds(table.get("bounds", {}), where)
     try:
-        return Material(name, values["E1"], values["E2"], values["G12"], nu12, density,
-                        values["G13"], values["G23"], identify, bounds, values["E3"])
+        material = Material(name, values["E1"], values["E2"], values["G12"], nu12, density,
+                            values["G13"], values["G23"], identify, bounds, values["E3"])
+        return replace(material, **_damping(table, where, material.isotropic))
     except SpecError as exc:
         raise SpecError(f"{where}: {exc}".replace(f"material '{name}': ", "")) from None
+
+
+def _damping(table: dict, where: str, isotropic: bool) -> dict:
+    """A material's loss factors and what of its damping is identified: ``eta`` sets
+    ``eta_E1``, ``eta_E2`` and ``eta_G12`` at once; ``identify_damping = true`` means one
+    shared ``eta`` for an isotropic material (or one given by ``eta``), else the three."""
+    hint = f"a loss factor 0..{MAX_LOSS_FACTOR:g} (e.g. 0.02)"
+    etas = {key: number(table, key, where, required=False, low=0.0, high=MAX_LOSS_FACTOR, low_inclusive=True,
+                        hint=hint) for key in ("eta",) + LOSS_FACTORS}
+    if etas["eta"] is not None:
+        both = [key for key in LOSS_FACTORS if etas[key] is not None]
+        if both:
+            raise SpecError(f"{where}: eta and {both[0]} are both given; eta sets eta_E1, eta_E2 and eta_G12 at once: "
+                            "give either eta or the separate loss factors")
+        etas.update({key: etas["eta"] for key in LOSS_FACTORS})
+    wanted = table.get("identify_damping", False)
+    if wanted is True:
+        kinds = ("eta",) if isotropic or "eta" in table else LOSS_FACTORS
+    elif wanted is False:
+        kinds = ()
+    elif isinstance(wanted, list) and wanted and all(isinstance(k, str) for k in wanted):
+        kinds = tuple(wanted)
+    else:
+        raise SpecError(f"{where}.identify_damping = {wanted!r}: need true, false or a list of loss factors, "
+                        'e.g. ["eta_E1", "eta_G12"]')
+    return {**{key: etas[key] for key in LOSS_FACTORS}, "identify_damping": kinds}
 
 
 def _bounds(table, where: str) -> tuple[tuple[str, float, float], ...]:

@@ -19,6 +19,7 @@ from .parameters import display
 from .peak_lists import fit_peak_list
 from .budget import with_budget
 from .causes import with_causes
+from .damping import identify_damping
 from .result import FitResult, Iteration
 from .plausibility import implausible
 from .precheck import Precheck, Sensitivities, precheck
@@ -61,12 +62,21 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
     in the spec's units (GPa, mm, g).  ``progress`` is called with every accepted
     iteration (or, with effects, a line of text per refit).  When the spec states the
     known inputs' std, the result carries the uncertainty budget and its std includes them.
+    When materials have ``identify_damping``, the result's ``damping`` holds their loss
+    factors, found after the stiffness from the measured damping ratios.
     """
     if effects:
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
-        return with_budget(fit_with_effects(model, measurements, list(effects), progress=progress))
-    return with_budget(fit_layers(model, measurements, parameters, options, progress))
+        return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress)))
+    return with_damping(with_budget(fit_layers(model, measurements, parameters, options, progress)))
+
+
+def with_damping(result: FitResult) -> FitResult:
+    """The fit with the layers' loss factors identified from the measured damping ratios
+    at its stiffness (``identify.damping``), when the spec asks for them."""
+    damping = identify_damping(result.model, result.measurements, result.pairings)
+    return result if damping is None else replace(result, damping=damping)
 
 
 def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions = FitOptions(),

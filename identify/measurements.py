@@ -3,8 +3,9 @@
 Format (DESIGN.md): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
 rank among the elastic modes) and ``std_hz`` optional.  An optional ``label`` column
 names a mode's nodal pattern as the model prints it, e.g. ``(1,2)``; when given it fixes
-which model mode a measured one is paired with.  ``damping_ratio`` may be given (as
-``identify-layers peaks`` writes it); it is kept for reports.
+which model mode a measured one is paired with.  ``damping_ratio`` (zeta, the modal
+loss factor is 2 zeta) and its standard uncertainty ``damping_std`` (same unit) may be
+given, as ``identify-layers peaks`` writes them: a damping identification uses them.
 
 Without ``mode`` the file is a peak list, as recordings give it: some modes missing,
 some peaks spurious.  Its rows get mode 0 (no rank) and the fit matches them to model
@@ -26,7 +27,7 @@ from fem.model import SpecimenModel
 from fem.validation import suggestion
 
 REQUIRED = ("configuration", "frequency_hz")
-OPTIONAL = ("mode", "std_hz", "label", "damping_ratio")
+OPTIONAL = ("mode", "std_hz", "label", "damping_ratio", "damping_std")
 #: The mode number of a peak that has no rank yet (a peak list).
 UNRANKED = 0
 MAX_MODE = 60
@@ -37,7 +38,7 @@ class Measurements:
     """A validated table: one row per measured frequency, sorted by configuration
     (spec order) and mode (peak lists: by frequency).  Columns: configuration, mode
     (``UNRANKED`` in a peak list), frequency_hz, std_hz (NaN when not given), label
-    (empty when not given), damping_ratio (NaN when not given)."""
+    (empty when not given), damping_ratio and damping_std (NaN when not given)."""
 
     table: pd.DataFrame
     source: str = "<measurements>"
@@ -131,12 +132,26 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
     if "damping_ratio" in frame.columns:
         damping = pd.to_numeric(frame["damping_ratio"], errors="coerce")
         for i, (raw, d) in enumerate(zip(frame["damping_ratio"], damping)):
-            if not pd.isna(raw) and not (np.isfinite(d) and 0 <= d < 0.5):
-                raise _fail(source, f"line {line[i]}: damping_ratio = {raw!r}: need a ratio 0..0.5 (0.01 for 1 %), "
+            if not pd.isna(raw) and not (np.isfinite(d) and 0 < d < 0.5):
+                raise _fail(source, f"line {line[i]}: damping_ratio = {raw!r}: need a ratio above 0 and below 0.5 (0.01 for 1 %), "
                             "or leave it empty")
         frame["damping_ratio"] = damping.astype(float)
     else:
         frame["damping_ratio"] = np.nan
+    if "damping_std" in frame.columns:
+        damping_std = pd.to_numeric(frame["damping_std"], errors="coerce")
+        for i, (raw, s, d) in enumerate(zip(frame["damping_std"], damping_std, frame["damping_ratio"])):
+            if pd.isna(raw):
+                continue
+            if not (np.isfinite(s) and s > 0):
+                raise _fail(source, f"line {line[i]}: damping_std = {raw!r}: need a positive std of the damping ratio "
+                            "(0.0003 for 3 % of 0.01), or leave it empty")
+            if pd.isna(d):
+                raise _fail(source, f"line {line[i]}: damping_std = {raw!r} without a damping_ratio; give both or "
+                            "neither")
+        frame["damping_std"] = damping_std.astype(float)
+    else:
+        frame["damping_std"] = np.nan
     frame["label"] = (frame["label"].map(lambda v: "" if pd.isna(v) else str(v).strip()) if "label" in frame.columns
                       else "")
     for i, label in enumerate(frame["label"]):
@@ -164,7 +179,8 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
             a, b = group.iloc[bad[0]], group.iloc[bad[0] + 1]
             raise _fail(source, f"configuration {name!r}: mode {b['mode']} ({b['frequency_hz']:g} Hz) is below mode "
                         f"{a['mode']} ({a['frequency_hz']:g} Hz); mode numbers are ranks, so frequencies must rise")
-    return Measurements(frame[["configuration", "mode", "frequency_hz", "std_hz", "label", "damping_ratio"]], source)
+    columns = ["configuration", "mode", "frequency_hz", "std_hz", "label", "damping_ratio", "damping_std"]
+    return Measurements(frame[columns], source)
 
 
 def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:

@@ -11,6 +11,7 @@ import pandas as pd
 
 from fem.io import report_folder, to_json, write_text
 
+from . import damping_report
 from .html_report import blank_missing
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
@@ -81,7 +82,9 @@ def parameter_table(result: FitResult) -> pd.DataFrame:
                      "value": display(p, value), "std": display(p, sd) if math.isfinite(sd) else float("nan"),
                      "unit": UNITS[p.kind][0], "std_percent": 100 * sd / abs(value) if value and math.isfinite(sd)
                      else float("nan"), "flags": "; ".join(flags)})
-    return pd.DataFrame(rows)
+    table = pd.DataFrame(rows)
+    return table if result.damping is None else pd.concat([table, damping_report.parameter_rows(result.damping)],
+                                                          ignore_index=True)
 
 
 def history_table(result: FitResult) -> pd.DataFrame:
@@ -121,7 +124,7 @@ def to_dict(result: FitResult) -> dict:
     for kind, text in result.effect_notes:  # every effect switched on, with what was decided
         effects.setdefault(kind, {"std": {}, "flags": {}}).setdefault("notes", []).append(text)
     u, st = result.uncertainty, result.statistics
-    return {
+    return damping_report.merge_into({
         "converged": result.converged,
         "status": result.status.value,
         "message": result.message,
@@ -142,7 +145,7 @@ def to_dict(result: FitResult) -> dict:
                         "matrix": [[_finite(x) for x in row] for row in u.correlation]},
         "warnings": list(result.warnings),
         "history": history_table(result).to_dict(orient="records"),
-    }
+    }, result.damping, result.model)
 
 
 def _row_errors(result: FitResult) -> tuple[pd.DataFrame, np.ndarray]:
@@ -219,6 +222,8 @@ def report_text(result: FitResult) -> str:
                   f"{100 * result.rms_rel_error:.4g} %)",
                   blank_missing(before_after_table(before, result), "-").to_string(
                       index=False, float_format=lambda x: f"{x:.4g}")]
+    if result.damping is not None:
+        lines += damping_report.text_section(result.damping)
     lines += ["", "warnings"] + ([f"  - {w}" for w in result.warnings] or ["  none"])
     return "\n".join(lines) + "\n"
 
@@ -254,6 +259,10 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
         write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
         figures.append((plot_before_after(result.baseline, result, kinds, folder / "before_after.png"),
                         f"error per mode without and with {kinds}"))
+    if result.damping is not None:
+        write_text(folder / "damping.csv", result.damping.residuals.to_csv(index=False))
+        figures.append((damping_report.plot_damping(result.damping, folder / "damping.png"),
+                        "modal loss factors per configuration: measured (1 std bars) and model"))
     st, u = result.statistics, result.uncertainty
     statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
                                             "iterations", "RMS relative error [%]",
@@ -275,6 +284,9 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
                  ("Statistics", h.table(statistics)),
                  ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
                   "with; label: its nodal pattern</p>" + h.table(residuals)),
+                 *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}",
+                                         *result.damping.notes]) + h.table(result.damping.residuals, "{:.4g}"))]
+                   if result.damping is not None else []),
                  ("Figures", "".join(h.figure(path, caption) for path, caption in figures)),
                  ("Warnings and notes", h.notes(result.warnings))]
     header = h.provenance("identification (identify-layers fit)", result.specimen.name, result.model.source,

@@ -19,6 +19,7 @@ from .uncertainty import Uncertainty
 
 if TYPE_CHECKING:
     from .budget import Budget
+    from .damping import DampingResult
     from .peak_lists import PeakAssignment
 
 
@@ -59,7 +60,9 @@ class FitResult:
     peaks: for a peak list, what became of every peak (``measurements`` then holds the
     matched ones, ranked); causes: for a poor fit, what is likely wrong, most likely first;
     budget: each known input's and the measurements' share of the std, when the spec
-    states the known inputs' std (``uncertainty`` then includes them).
+    states the known inputs' std (``uncertainty`` then includes them); damping: the layers'
+    loss factors from the measured damping ratios, when the spec asks for them
+    (``identify.damping``).
     """
 
     status: FitStatus
@@ -82,6 +85,7 @@ class FitResult:
     peaks: "PeakAssignment | None" = None
     causes: tuple = ()
     budget: "Budget | None" = None
+    damping: "DampingResult | None" = None
 
     @property
     def converged(self) -> bool:

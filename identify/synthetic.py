@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from fem.complex_modes import complex_loss_factors
+from fem.damping import ratio_from_loss
 from fem.model import SpecimenModel
 
 from .measurements import Measurements, parse_measurements
@@ -16,6 +18,7 @@ def synthetic_measurements(
     seed: int = 0,
     labels: str = "none",
     configurations: list[str] | None = None,
+    damping_std_rel: float | None = None,
 ) -> Measurements:
     """The first ``modes`` elastic frequencies of every configuration of ``truth`` (the
     model that generates the data: its specimen, mesh and effects).
@@ -23,6 +26,9 @@ def synthetic_measurements(
     noise_rel: relative std of Gaussian noise added (also written as ``std_hz`` when > 0).
     labels: "none", "close" (nodal-line labels of modes within 1 % of a neighbour, as a lab
     would identify close modes by their shapes) or "all".
+    damping_std_rel: when given, each mode's damping ratio from the complex eigenproblem of
+    the materials' loss factors (``fem.complex_modes``), with Gaussian noise of this
+    relative std (also written as ``damping_std`` when > 0).
     """
     solver = truth.with_options(modes=max(modes, truth.options.modes))
     specimen = truth.specimen
@@ -45,6 +51,13 @@ def synthetic_measurements(
             if labels == "all" or (labels == "close" and close[i]):
                 row["label"] = solution.labels[i]
             rows.append(row)
+        if damping_std_rel is not None:
+            zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
+            noisy_zeta = zeta * (1 + damping_std_rel * rng.standard_normal(modes))
+            for row, z, z_noisy in zip(rows[-modes:], zeta, noisy_zeta):
+                row["damping_ratio"] = z_noisy
+                if damping_std_rel > 0:
+                    row["damping_std"] = damping_std_rel * z
     frame = pd.DataFrame(rows)
     if labels != "none" and "label" not in frame:
         frame["label"] = ""
