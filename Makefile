@@ -27,7 +27,7 @@ bench: $(STAMP)
 # The documentation site (site/); --strict: a warning (a broken link, a missing page) fails.
 docs: $(STAMP)
 	$(BIN)/pip install --quiet -e '.[docs]'
-	$(BIN)/mkdocs build --strict
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 clean:
 	rm -rf $(VENV) build site *.egg-info
