@@ -1,4 +1,4 @@
-"""Physics-core benchmarks (issue 2): solve time, sensitivity cost, accuracy vs mesh.
+"""Physics-core benchmarks: solve time, sensitivity cost, accuracy vs mesh.
 
 Targets on the 2-core reference machine: one solve of the paper's plate with 10 modes
 within 0.05 % of converged <= 30 ms; all 12 sensitivities <= 1.3x one solve (the

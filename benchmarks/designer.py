@@ -1,10 +1,10 @@
-"""Test-planner benchmarks (issues 4 and 11).
+"""Test-planner benchmarks.
 
 Targets on the 2-core reference machine: 36 candidates (3 materials x 6 thicknesses x 2
 placements) and all 630 sets of two additions < 10 s; 1000 candidates through the
 convex relaxation < 60 s; the 630 sets scored over 16 prior samples (robust) < 30 s; the
 test sheet adds < 1 s to `check`.  Times are from a cold cache (every configuration
-solved).  The spaces keep every candidate of issue 4: a mass limit of 10 kg stands in
+solved).  The spaces keep every candidate of the planner's acceptance space: a mass limit of 10 kg stands in
 for the default one (3 x the specimen's mass), which would leave the thick plates out.
 """
 import itertools

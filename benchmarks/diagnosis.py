@@ -1,8 +1,8 @@
-"""Diagnosis benchmarks (issue 10): ``diagnose`` against one baseline ``fit`` of the same
+"""Diagnosis benchmarks: ``diagnose`` against one baseline ``fit`` of the same
 data, in the same run, with every registered effect a candidate (target: at most 10x
 the fit), with worker processes as the command line uses them.  Cases: the bundled example (nothing missing: the baseline is at the noise
 level), a hidden 3 g sensor on the paper's plate, and the thick laminate of the 3-D
-reference (issue 10's figure was 178 s).  Solutions are cached by content, so the
+reference (178 s before the forward selection).  Solutions are cached by content, so the
 cache is cleared before each timed call."""
 import time
 

@@ -1,6 +1,6 @@
 """Identification benchmarks: the paper's three configurations from Table 6's start
-(issue 3, target < 1 s) and the same data as a peak list without mode numbers (issue 9,
-target within 3x the ranked fit).  Solutions are cached by content, so the cache is
+(target < 1 s) and the same data as a peak list without mode numbers (target within
+3x the ranked fit).  Solutions are cached by content, so the cache is
 cleared before each timed fit."""
 import time
 

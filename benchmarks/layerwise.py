@@ -1,4 +1,4 @@
-"""Layerwise benchmark (issue 13): the cost of one solve and of one identification with the
+"""Layerwise benchmark: the cost of one solve and of one identification with the
 layerwise (zig-zag) model against the FSDT model, on the foam-core sandwich of the 3-D
 references (250 x 200 mm, 0.5 mm woven CFRP skins, 6 mm PVC foam; 0.1 mm bond line and
 1 mm aluminium under or over it), 10 modes per configuration, the default mesh.

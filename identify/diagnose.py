@@ -43,10 +43,11 @@ from .compare import Comparison, compare
 from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, point_mass_hints,
                       point_mass_starts, prepare_effect, with_determined_shear)
 from .measurements import Measurements
-from .parameters import display, json_key
+from .parameters import UNITS, display, json_key
 from .plausibility import plausible_first
 from .precheck import Precheck
 from .result import FitResult, FitStatus
+from .rounding import percent, status_line, with_std
 from .ties import Tied
 from .updating import FitOptions
 
@@ -283,13 +284,12 @@ class Diagnosis:
             lines.append(f"  -> {step.reason}")
         final = self.final
         if final is not None:
-            lines += ["", f"refit with {' + '.join(c.kind for c in self.selected)}: {final.status.value}",
-                      f"  {final.message}", f"  RMS relative error {100 * final.rms_rel_error:.4f} %"]
+            lines += ["", f"refit with {' + '.join(c.kind for c in self.selected)}",
+                      f"  {status_line(final.status.value, final.message)}",
+                      f"  RMS relative error {percent(final.rms_rel_error, 3)}"]
             added = [p for p in final.parameters if p not in self.baseline.parameters]
             for p in added:
-                sd = final.std(p)
-                lines.append(f"  {p.name:40s} {display(p, final.value(p)):12.5g} +- "
-                             + (f"{display(p, sd):.3g}" if math.isfinite(sd) else "n/a"))
+                lines.append(f"  {p.name:40s} {with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])}")
             notes = [text for _, text in final.effect_notes]
             lines += [f"  - {text}" for text in notes]
         if math.isfinite(self.seconds):

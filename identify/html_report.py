@@ -82,18 +82,19 @@ def notes(items) -> str:
         else "<p>none</p>"
 
 
-def document(title: str, header: dict[str, str], status: tuple[str, str, bool] | None,
+def document(title: str, header: dict[str, str], status: tuple[str, bool] | None,
              sections: list[tuple[str, str]]) -> str:
-    """The whole page: title, header table, a status box (status, message, good?), then
+    """The whole page: title, header table, a status box (one status line, good?), then
     (heading, html) sections."""
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in header.items())
     parts = [f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
              f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>",
              f"<table class=\"header\">{rows}</table>"]
     if status is not None:
-        name, message, good = status
+        line, good = status
+        name, colon, rest = line.partition(": ")
         parts.append(f"<div class=\"status {'converged' if good else 'warning'}\"><strong>{html.escape(name)}</strong>"
-                     f": {html.escape(message)}</div>")
+                     f"{colon}{html.escape(rest)}</div>")
     parts += [f"<h2>{html.escape(heading)}</h2>{body}" for heading, body in sections]
     parts.append("</body></html>")
     return "\n".join(parts)

@@ -1,6 +1,6 @@
 """Measured resonance frequencies (CSV), validated against the spec they belong to.
 
-Format (DESIGN.md): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
+Format (see the measurement CSV in the docs): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
 rank among the elastic modes) and ``std_hz`` optional.  An optional ``label`` column
 names a mode's nodal pattern as the model prints it, e.g. ``(1,2)``; when given it fixes
 which model mode a measured one is paired with.  ``damping_ratio`` (zeta, the modal

@@ -28,7 +28,7 @@ def display(parameter: Parameter, value: float) -> float:
 
 
 def json_key(parameter: Parameter) -> str:
-    """The DESIGN.md key of a parameter's kind, e.g. ``E1_GPa`` or ``nu12``."""
+    """The spec and JSON key of a parameter's kind, e.g. ``E1_GPa`` or ``nu12``."""
     unit = UNITS[parameter.kind][0].replace("/", "_").replace("^", "")
     return f"{parameter.kind}_{unit}" if unit else parameter.kind
 

@@ -178,7 +178,7 @@ class PeakList:
         return "\n".join(lines)
 
     def write_csv(self, path: str | Path) -> None:
-        """The peak-list CSV of DESIGN.md: configuration,frequency_hz,std_hz,damping_ratio."""
+        """The peak-list CSV: configuration,frequency_hz,std_hz,damping_ratio."""
         write_text(path, self.to_frame()[CSV_COLUMNS].to_csv(index=False, float_format="%.7g"))
 
     def plot(self, directory: str | Path) -> list[Path]:

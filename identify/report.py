@@ -1,4 +1,7 @@
-"""Reading an identification: text report, JSON (DESIGN.md shape), CSV tables and plots."""
+"""Reading an identification: text report, JSON (the ``fit --json`` shape), CSV tables and plots.
+
+Text and HTML round every value to its uncertainty (``rounding``); JSON and CSV keep full
+precision."""
 from __future__ import annotations
 
 import html
@@ -15,6 +18,7 @@ from . import damping_report
 from .html_report import blank_missing
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
+from .rounding import percent, status_line, with_std
 
 if TYPE_CHECKING:
     from .result import FitResult
@@ -34,7 +38,7 @@ def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataF
 
 
 def fit_residuals(result: FitResult) -> pd.DataFrame:
-    """The residual rows of a fit (DESIGN.md): every measured frequency with the model
+    """The residual rows of a fit (``fit --json`` "residuals"): every measured frequency with the model
     mode it is paired with (1-based), measured and model frequency, relative error,
     matched, and a note (a peak left out has None for mode, model frequency and error,
     and its note says why, naming the nearest mode); ranked data also
@@ -102,7 +106,7 @@ def _finite(x: float):
 
 
 def to_dict(result: FitResult) -> dict:
-    """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
+    """The ``fit --json`` document, with status, conditioning, warnings and history added."""
     materials: dict[str, dict] = {}
     effects: dict[str, dict] = {}
     for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
@@ -159,6 +163,50 @@ def _row_errors(result: FitResult) -> tuple[pd.DataFrame, np.ndarray]:
     return result.measurements.table, result.rel_error.astype(object)
 
 
+def _formatted(frame: pd.DataFrame, formats: dict[str, Callable[[float], str]]) -> pd.DataFrame:
+    """``frame`` with the named columns turned into text (blank where a value is missing)."""
+    out = frame.copy()
+    for column, fmt in formats.items():
+        if column in out:
+            out[column] = [fmt(float(x)) if x is not None and not pd.isna(x) else "" for x in out[column]]
+    return out
+
+
+def _error_percent(rel: float) -> str:
+    return f"{100 * rel:+.3g}"
+
+
+#: How residual and before/after tables show their numbers: frequencies as measured (to
+#: 6 significant digits), relative errors in per cent to 3, errors over std to 2 decimals.
+RESIDUAL_FORMATS: dict[str, Callable[[float], str]] = {
+    "measured_hz": lambda x: f"{x:.6g}", "model_hz": lambda x: f"{x:.6g}", "rel_error": _error_percent,
+    "rel_error_before": _error_percent, "rel_error_after": _error_percent,
+    "error_over_std": lambda x: f"{x:+.2f}"}
+
+
+def shown_residuals(rows: pd.DataFrame) -> pd.DataFrame:
+    """The residual rows as a report prints them: relative errors in % (column
+    ``error_%``), frequencies to 6 significant digits."""
+    out = _formatted(rows, RESIDUAL_FORMATS)
+    return out.rename(columns={"rel_error": "error_%"})
+
+
+def shown_before_after(rows: pd.DataFrame) -> pd.DataFrame:
+    """The before/after table as a report prints it: errors in %."""
+    return _formatted(rows, RESIDUAL_FORMATS).rename(columns={"rel_error_before": "error_before_%",
+                                                              "rel_error_after": "error_after_%"})
+
+
+def shown_parameters(parameters: pd.DataFrame) -> pd.DataFrame:
+    """The parameter table as a report prints it: ``value ± std`` rounded to two
+    significant digits of the std, with the relative std in % (parameters.csv keeps
+    the full precision)."""
+    text = [with_std(v, s, u if isinstance(u, str) else "")
+            for v, s, u in zip(parameters["value"], parameters["std"], parameters["unit"], strict=True)]
+    return pd.DataFrame({"parameter": parameters["parameter"], "of": parameters["of"], "value ± std (rel.)": text,
+                         "flags": parameters["flags"]})
+
+
 def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
     """Relative error per measured row without and with the effects switched on.  For a
     peak list the rows are the peaks (the two fits may match different ones: a peak left
@@ -182,7 +230,7 @@ def report_text(result: FitResult) -> str:
     before = result.baseline
     chi2 = (f"  reduced chi^2          {st.reduced_chi2:.3g} (1 = the stated scatter)" if st.scatter_known else
             f"  misfit / scatter       {st.misfit_over_scatter:.3g} (against an assumed 0.1 %: no std_hz given)")
-    lines = [f"== identification: {result.status.value} ==", f"   {result.message}"]
+    lines = ["== identification ==", f"   {status_line(result.status.value, result.message)}"]
     if result.causes:
         lines += ["", "likely causes (share of the misfit each accounts for)"]
         lines += [f"  {100 * c.score:5.0f} %  {c.kind}: {c.text}" for c in result.causes]
@@ -191,19 +239,16 @@ def report_text(result: FitResult) -> str:
               f"configurations",
               f"  unknown parameters     {len(result.parameters)}",
               f"  iterations             {result.iterations}",
-              f"  RMS relative error     {100 * result.rms_rel_error:.4f} %",
+              f"  RMS relative error     {percent(result.rms_rel_error, 3)}",
               chi2,
               f"  consistent with it     {'yes' if st.consistent else 'no'} (chi^2 test, p = {st.p_value:.2g}; "
               f"level 0.001)",
               f"  scatter from           {st.noise_source}",
               f"  condition number       {u.condition_number:.3g} ({u.verdict}; paper: good < 1e3, singular > 1e7)"]
-    lines += ["", "parameters (value +- 1 std)"]
+    lines += ["", "parameters (value ± 1 std, rounded to two digits of the std; relative std)"]
     for p, value, sd, flags in zip(result.parameters, result.values, u.std, u.flags):
-        unit = UNITS[p.kind][0]
-        shown = display(p, value)
-        sd_text = f"{display(p, sd):.4g}" if math.isfinite(sd) else "n/a"
-        rel = f"({100 * sd / abs(value):.2g} %)" if math.isfinite(sd) and value else ""
-        lines.append(f"  {p.name:28s} {shown:12.5g} +- {sd_text:>9s} {unit:7s} {rel:10s} {'; '.join(flags)}")
+        shown = with_std(display(p, value), display(p, sd), UNITS[p.kind][0])
+        lines.append(f"  {p.name:28s} {shown:38s} {'; '.join(flags)}".rstrip())
     strong = [(i, j) for i in range(len(result.parameters)) for j in range(i)
               if np.isfinite(u.correlation[i, j]) and abs(u.correlation[i, j]) > 0.9]
     if result.budget is not None:
@@ -215,13 +260,12 @@ def report_text(result: FitResult) -> str:
     lines += ["", "weakly identifiable combinations (singular value < 1e-3 of the largest)"]
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
     lines += ["", "residuals (mode: the model mode each measured frequency is paired with)",
-              blank_missing(fit_residuals(result), "-").to_string(index=False, float_format=lambda x: f"{x:.6g}")]
+              blank_missing(shown_residuals(fit_residuals(result)), "-").to_string(index=False)]
     if before is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
-        lines += ["", f"error per mode before and after adding {kinds} (RMS {100 * before.rms_rel_error:.4g} % -> "
-                  f"{100 * result.rms_rel_error:.4g} %)",
-                  blank_missing(before_after_table(before, result), "-").to_string(
-                      index=False, float_format=lambda x: f"{x:.4g}")]
+        lines += ["", f"error per mode before and after adding {kinds} (RMS {percent(before.rms_rel_error, 3)} -> "
+                  f"{percent(result.rms_rel_error, 3)})",
+                  blank_missing(shown_before_after(before_after_table(before, result)), "-").to_string(index=False)]
     if result.damping is not None:
         lines += damping_report.text_section(result.damping)
     lines += ["", "warnings"] + ([f"  - {w}" for w in result.warnings] or ["  none"])
@@ -269,13 +313,13 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
                                             "misfit / scatter", "chi^2 test p-value", "scatter from",
                                             "condition number", "verdict"],
                                "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
-                                         str(result.iterations), f"{100 * st.rms_rel_error:.4g}",
+                                         str(result.iterations), percent(st.rms_rel_error, 3).removesuffix(" %"),
                                          f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
                                          f"{u.condition_number:.3g}", u.verdict]})
     sections = []
     if result.causes:
         sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
-    sections += [("Parameters (value +- 1 std)", h.table(parameters))]
+    sections += [("Parameters (value ± 1 std)", h.table(shown_parameters(parameters)))]
     if result.budget is not None:
         sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
                          "scatter's share of each parameter's std (display units); total = the std above</p>"
@@ -283,7 +327,8 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
     sections += [
                  ("Statistics", h.table(statistics)),
                  ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
-                  "with; label: its nodal pattern</p>" + h.table(residuals)),
+                  "with; label: its nodal pattern; error_%: (model - measured) / measured in %</p>"
+                  + h.table(shown_residuals(residuals))),
                  *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}",
                                          *result.damping.notes]) + h.table(result.damping.residuals, "{:.4g}"))]
                    if result.damping is not None else []),
@@ -292,7 +337,7 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
     header = h.provenance("identification (identify-layers fit)", result.specimen.name, result.model.source,
                           result.measurements.source)
     page = h.document(f"Layer identification: {result.specimen.name}", header,
-                      (result.status.value, result.message, result.converged), sections)
+                      (status_line(result.status.value, result.message), result.converged), sections)
     write_text(folder / "report.html", page)
 
 

@@ -130,7 +130,7 @@ class FitResult:
         return report_text(self)
 
     def to_dict(self) -> dict:
-        """The ``fit --json`` document (DESIGN.md), display units."""
+        """The ``fit --json`` document, display units."""
         from .report import to_dict
 
         return to_dict(self)

@@ -1,4 +1,4 @@
-"""Slips and bad paths a lab makes (issue 12): each a one-line error naming the value and
+"""Slips and bad paths a lab makes: each a one-line error naming the value and
 the fix, exit status 2, nothing written; or a documented sound behaviour."""
 import copy
 import os

@@ -1,4 +1,4 @@
-"""One model object from the spec (issue 8): every command and the API see the same
+"""One model object from the spec: every command and the API see the same
 model, the spec's fixed effects included, and a bad [design] table stops them all."""
 import copy
 import json

@@ -1,4 +1,4 @@
-"""Outputs that never half-exist (issue 12): report folders written whole, interrupted
+"""Outputs that never half-exist: report folders written whole, interrupted
 runs that leave the previous report or none, a resumable sweep, and bad output paths
 refused in one line before any work."""
 import os

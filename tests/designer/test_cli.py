@@ -1,4 +1,4 @@
-"""plan-tests: check / recommend / sweep, their JSON contracts (DESIGN.md), exit
+"""plan-tests: check / recommend / sweep, their JSON contracts (docs/json.md), exit
 statuses, the sweep's report folder, and a sweep's numbers against a direct check."""
 import io
 import json

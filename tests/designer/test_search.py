@@ -1,4 +1,4 @@
-"""recommend: the acceptance space of issue 4, exhaustive search against the convex
+"""recommend: the planner's acceptance space, exhaustive search against the convex
 relaxation, and the lab's limits."""
 import itertools
 

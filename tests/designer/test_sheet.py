@@ -1,7 +1,7 @@
 """The test sheet of `plan-tests check`: its sensor, tap and support points verified
 against an independent model (``ritz.RitzPlate``, a Rayleigh-Ritz solution written for
 these tests, not the project's finite elements), the sensor's mass shift against an
-exact solve, and the JSON contract of DESIGN.md."""
+exact solve, and the JSON contract of docs/json.md."""
 import json
 
 import numpy as np
@@ -163,7 +163,7 @@ def test_frequency_spread_over_the_prior():
 
 
 def test_check_json_test_sheet_and_figures(capsys, tmp_path):
-    """`plan-tests check --json` has "test_sheet" as DESIGN.md gives it: one entry per
+    """`plan-tests check --json` has "test_sheet" as docs/json.md gives it: one entry per
     configuration with its frequencies and the support, tap and sensor points in mm from
     the corner, on the plate; --out writes one figure per configuration; the text report
     has the sheet."""

@@ -1,4 +1,4 @@
-"""The uncertainty budget (issue 12): known inputs' std propagated to the identified
+"""The uncertainty budget: known inputs' std propagated to the identified
 properties, checked by a refit and by Monte Carlo."""
 from dataclasses import replace
 

@@ -20,7 +20,7 @@ def sensor_csv(tmp_path_factory):
 
 
 def test_fit_with_free_point_mass(sensor_csv, capsys, tmp_path):
-    """DESIGN.md: the effect's parameters are reported under "effects"; the report shows
+    """The fit JSON: the effect's parameters are reported under "effects"; the report shows
     the error per mode before and after."""
     code = main(["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json",
                  "--report", str(tmp_path)])

@@ -1,4 +1,4 @@
-"""identify-layers peaks: recordings in, the DESIGN.md peak list out, and fit takes it."""
+"""identify-layers peaks: recordings in, the peak list out, and fit takes it."""
 import json
 
 import numpy as np

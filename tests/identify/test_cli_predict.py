@@ -1,4 +1,4 @@
-"""identify-layers predict: table and JSON contract (DESIGN.md)."""
+"""identify-layers predict: table and JSON contract (docs/json.md)."""
 import json
 
 import numpy as np
@@ -8,7 +8,7 @@ from tests.conftest import DATA, FREE_PLATES
 
 
 def test_predict_json_shape_and_values(capsys):
-    """The example spec with Table 1 values: the JSON has the DESIGN.md shape and
+    """The example spec with Table 1 values: the JSON has the documented shape and
     the original plate's frequencies are the converged CLT ones (0.02 %)."""
     spec = DATA / "paper_plate_table1.toml"
     assert main(["predict", str(spec), "--json", "--modes", "8"]) == 0

@@ -1,4 +1,4 @@
-"""Acceptance (issue 10, further 3-D references): the control plate and a cross-ply on a
+"""Acceptance (further 3-D references): the control plate and a cross-ply on a
 soft bond line, diagnosed as ``test_diagnose_reference.py`` diagnoses the thick laminate
 (handbook starts, G13 and G23 not given, 0.05 % scatter stated, every effect a candidate).
 The wood plate is ``test_diagnose_wood.py``."""

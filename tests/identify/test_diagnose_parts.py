@@ -1,4 +1,4 @@
-"""The parts of the forward-selection diagnosis (issue 10), each on its own: the tied
+"""The parts of the forward-selection diagnosis, each on its own: the tied
 shear-modulus scale and its derivative, the thick_plate effect, the plausibility limits,
 the conditioning pre-check that keeps singular candidates from being iterated, and the
 short-circuit when the baseline is at the noise level."""
@@ -72,7 +72,7 @@ def test_thick_plate_is_shear_and_rotary_inertia_with_free_shear_moduli():
 
 
 def test_plausibility_limits():
-    """Acceptance (issue 10): a point mass of 8 % of the plate is flagged; a 2 % sensor is
+    """Acceptance: a point mass of 8 % of the plate is flagged; a 2 % sensor is
     not.  A suspension holding the plate at half its first frequency is flagged, one at
     1 % is not; an angle turned 12 degrees is flagged."""
     specimen = true_model().specimen

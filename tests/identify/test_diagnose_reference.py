@@ -1,4 +1,4 @@
-"""Acceptance (issue 10, thick reference): the diagnosis of a thick bonded laminate whose
+"""Acceptance (thick reference): the diagnosis of a thick bonded laminate whose
 frequencies come from an independent 3-D solid model (CalculiX C3D20R,
 ``tests/data/solid3d/thick_laminate.json``; 200 x 150 x 6 mm glass/carbon/glass, a/h = 33,
 1 mm aluminium on a 0.1 mm soft adhesive under or over it), started from handbook ply

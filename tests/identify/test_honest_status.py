@@ -1,4 +1,4 @@
-"""Results never claim more than the data show (issue 9): a misfit the scatter cannot
+"""Results never claim more than the data show: a misfit the scatter cannot
 explain is a poor fit with its likely cause, never 'converged', and exits non-zero."""
 import json
 

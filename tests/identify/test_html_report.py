@@ -1,5 +1,6 @@
-"""The self-contained HTML report (issue 12): its parts found by parsing it, and the page
-rendered in a real headless browser."""
+"""The self-contained HTML report: its parts found by parsing it, values rounded to their
+uncertainty, one status line, and the page rendered in a real headless browser."""
+import re
 import shutil
 import subprocess
 from html.parser import HTMLParser
@@ -62,14 +63,41 @@ def test_report_has_header_parameters_and_embedded_figures(report):
     header = {row[0]: row[1] for row in page.tables[0]}
     assert {"specimen", "spec file", "measurement file", "date", "tool"} <= set(header)
     assert "SHA-256" in header["spec file"] and "SHA-256" in header["measurement file"]
-    assert "Parameters (value +- 1 std)" in page.headings
-    parameters = next(t for t in page.tables if t and t[0][:3] == ["parameter", "of", "value"])
+    assert "Parameters (value ± 1 std)" in page.headings
+    parameters = next(t for t in page.tables if t and t[0][:3] == ["parameter", "of", "value ± std (rel.)"])
     csv = pd.read_csv(report / "parameters.csv")
     assert len(parameters) - 1 == len(csv) == 12
     assert [row[0] for row in parameters[1:]] == csv["parameter"].tolist()
-    np.testing.assert_allclose([float(row[2]) for row in parameters[1:]], csv["value"], rtol=1e-5)
+    shown = [float(row[2].split(" ± ")[0]) for row in parameters[1:]]
+    # rounded to two digits of the std: within half a unit of the std's second digit
+    assert np.all(np.abs(shown - csv["value"]) <= 0.051 * csv["std"])
     assert csv["unit"].fillna("").tolist()[:4] == ["GPa", "GPa", "GPa", ""]
     assert len(page.images) >= 3 and all(src.startswith("data:image/png;base64,") for src in page.images)
+
+
+def test_values_rounded_to_their_uncertainty_and_one_status_line(report):
+    """A lab reads ``67.8 ± 1.2 GPa (1.7 %)``: the value to the decimal of the std's second
+    significant digit, the relative std in %; relative errors in %; the status said once
+    (not "converged: converged"). parameters.csv and fit.json keep the full precision."""
+    page = Page()
+    text = (report / "report.html").read_text()
+    page.feed(text)
+    parameters = next(t for t in page.tables if t and t[0][2:3] == ["value ± std (rel.)"])
+    cells = {row[0]: row[2] for row in parameters[1:]}
+    # the bundled fit (Table 1: bottom coating E1 = 68 GPa) at 0.05 % scatter: E1 to 1.7 %
+    assert re.fullmatch(r"6\d\.\d ± 1\.\d GPa \(1\.\d %\)", cells["bottom_coating.E1"]), cells
+    for cell in cells.values():
+        value, std = re.fullmatch(r"(\S+) ± (\S+) .*\(.* %\)", cell).groups()
+        significant = std.lstrip("0.").replace(".", "")
+        assert len(significant) == 2, f"std {std} not to two significant digits"
+        assert len(value.partition(".")[2]) == len(std.partition(".")[2]), f"{cell}: value and std decimals differ"
+    residuals = next(t for t in page.tables if t and "error_%" in t[0])
+    assert all("e-" not in cell for row in residuals for cell in row), "relative errors in %, not 1e-05"
+    status = re.search(r'<div class="status[^"]*">(.*?)</div>', text, re.S).group(1)
+    words = re.sub(r"<[^>]+>", "", status).split(":")[0].strip()
+    assert words == "converged" and re.sub(r"<[^>]+>", "", status).count("converged") == 1, status
+    csv = pd.read_csv(report / "parameters.csv")
+    assert csv["value"].map(lambda v: len(repr(v))).max() > 8, "the CSV keeps full precision"
 
 
 @pytest.mark.skipif(shutil.which("chromium") is None, reason="needs Debian's chromium (apt-get install chromium)")

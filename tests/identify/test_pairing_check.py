@@ -1,4 +1,4 @@
-"""The pairing is checked at the solution (issue 9): a pair the start has the wrong way
+"""The pairing is checked at the solution: a pair the start has the wrong way
 round, and mode labels copied from predict."""
 import copy
 import tomllib

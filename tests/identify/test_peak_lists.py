@@ -1,4 +1,4 @@
-"""Peak lists as recordings give them (issue 9): no mode numbers, modes missing, spurious
+"""Peak lists as recordings give them: no mode numbers, modes missing, spurious
 peaks; ranks with gaps; the matching itself against hand-worked cases."""
 import numpy as np
 import pandas as pd

@@ -10,7 +10,7 @@ CANDIDATES = ["transverse_shear", "rotary_inertia", "point_mass", "suspension"]
 
 @pytest.mark.parametrize("case", ["sensor_mass", "thick_plate"])
 def test_true_effect_ranked_first_and_error_falls(case):
-    """Acceptance (issue 5, still holds with the forward selection of issue 10): the right
+    """Acceptance (also with the forward selection): the right
     effect ranks first and is the one selected; the RMS error of the refit falls at least
     5x and to within 2x the noise (the data's own scatter: a refit with the true physics
     has RMS ~ the noise); the layer properties come back within 3 std."""
@@ -37,7 +37,7 @@ def test_true_effect_ranked_first_and_error_falls(case):
 
 
 def test_two_hidden_effects_are_both_selected():
-    """Acceptance (issue 10, combined effects): a 10 g sensor (1 % of the plate's mass) on
+    """Acceptance (combined effects): a 10 g sensor (1 % of the plate's mass) on
     the thick plate (a/h = 27, Mindlin: shear and rotary inertia).  Neither effect alone
     explains the data; the forward selection adds one, looks again and adds the other;
     the final refit is at the noise level (RMS within 2x the noise, converged)."""

@@ -545,7 +545,7 @@ def _grid_list(a: np.ndarray, digits: int = 5) -> list:
 
 
 def spec_toml(name: str, case: dict) -> str:
-    """A project spec (shared/DESIGN.md format) with the true properties."""
+    """A project spec (the spec format of the docs) with the true properties."""
     used = []
     for m, _, _ in case["layers"]:
         if m not in used:
