@@ -68,6 +68,7 @@ from scipy.special import gammaln
 
 from fem.errors import MeasurementError
 from fem.io import atomic_path, write_text
+from fem.model import one_blas_thread
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window
@@ -198,19 +199,71 @@ class LocalFit:
 
 
 def _basis(s: np.ndarray, pole: np.ndarray, centre: float) -> np.ndarray:
-    """Real-coefficient basis of sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc)."""
+    """Real-stacked basis (rows: real parts, then imaginary parts) of
+    sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc) with real coefficients
+    (Re A_r for every pole, then Im A_r, then the residual terms)."""
     a = 1 / (s[:, None] - pole)
     b = 1 / (s[:, None] - pole.conj())
     x = (s.imag - centre)[:, None] / centre
-    return np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x])
+    m = np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x])
+    return np.vstack([m.real, m.imag])
 
 
-def _solve(m: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Real least squares of the complex system m c = h: coefficients and residual."""
-    a = np.vstack([m.real, m.imag])
-    rhs = np.concatenate([h.real, h.imag])
-    c = np.linalg.lstsq(a, rhs, rcond=None)[0]
-    return c, a @ c - rhs
+class _Projection:
+    """Variable projection of the local model (Golub & Pereyra 1973): for the poles
+    p(x) the linear coefficients c(x) = A(x)^+ h are projected out, the residual is
+    r(x) = A c - h and its exact Jacobian
+
+        dr/dx_k = (I - Q Q^T) (dA/dx_k) c - Q R^-T (dA/dx_k)^T r
+
+    (A = Q R).  Only the two columns of the pole moved by x_k depend on it, so each
+    Jacobian costs one small QR and a few matrix-vector products.  Pole r is
+    p_r = -d_r exp(x_2r+1) + i (Im seed_r + d_r x_2r), d_r = |Re seed_r|."""
+
+    def __init__(self, frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray):
+        self.s = 2j * np.pi * frequency_hz
+        self.centre = float(self.s.imag.mean())
+        self.h = np.concatenate([h.real, h.imag])
+        self.seed, self.fixed = seed, fixed
+        self.scale = np.abs(seed.real)
+        self._at = None
+
+    def pole(self, x: np.ndarray) -> np.ndarray:
+        return -self.scale * np.exp(x[1::2]) + 1j * (self.seed.imag + self.scale * x[0::2])
+
+    def _state(self, x: np.ndarray):
+        if self._at is None or not np.array_equal(self._at[0], x):
+            p = self.pole(x)
+            a = _basis(self.s, np.concatenate([p, self.fixed]), self.centre)
+            q, r = np.linalg.qr(a)
+            c = np.linalg.lstsq(r, q.T @ self.h, rcond=None)[0]
+            self._at = (x.copy(), p, a, q, r, c, a @ c - self.h)
+        return self._at[1:]
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        return self._state(x)[-1]
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        p, _, q, rmat, c, res = self._state(x)
+        m, n = len(p), len(p) + len(self.fixed)
+        a = 1 / (self.s[:, None] - p)
+        b = 1 / (self.s[:, None] - p.conj())
+        plus, minus = a**2 + b**2, a**2 - b**2
+        # d(column)/dx for the frequency (x0) and decay (x1) parameters of each free pole
+        d_re = {0: 1j * self.scale * minus, 1: p.real * plus}
+        d_im = {0: -self.scale * plus, 1: 1j * p.real * minus}
+        jac = np.empty((len(res), 2 * m))
+        for k in (0, 1):
+            dc = d_re[k] * c[:m] + d_im[k] * c[n:n + m]  # (dA/dx) c, one column per pole
+            stacked = np.vstack([dc.real, dc.imag])
+            first = stacked - q @ (q.T @ stacked)
+            v = np.zeros((rmat.shape[0], m))
+            cols = np.arange(m)
+            v[cols, cols] = np.concatenate([d_re[k].real, d_re[k].imag]).T @ res
+            v[n + cols, cols] = np.concatenate([d_im[k].real, d_im[k].imag]).T @ res
+            second = q @ np.linalg.lstsq(rmat.T, v, rcond=None)[0]
+            jac[:, k::2] = first - second
+        return jac
 
 
 def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None) -> LocalFit:
@@ -218,29 +271,19 @@ def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: 
 
     Model: sum of conjugate pole pairs with complex residues, the neighbouring modes'
     ``fixed`` poles (residues fitted) and c0 + c1 (w - wc); the linear parameters are
-    projected out, the poles (frequency shift and log decay, in units of each seed's
-    decay) go to ``least_squares``.  snr: each mode's peak |A_r| / |Re p_r| over the RMS
-    residual per line."""
-    s = 2j * np.pi * frequency_hz
-    centre = float(s.imag.mean())
-    scale = np.abs(seed.real)
+    projected out (:class:`_Projection`), the poles (frequency shift and log decay, in
+    units of each seed's decay) go to ``least_squares`` with the exact Jacobian.  snr:
+    each mode's peak |A_r| / |Re p_r| over the RMS residual per line."""
     fixed = np.array([], dtype=complex) if fixed is None else fixed
-
-    def pole(x):
-        return -scale * np.exp(x[1::2]) + 1j * (seed.imag + scale * x[0::2])
-
-    def residual(x):
-        return _solve(_basis(s, np.concatenate([pole(x), fixed]), centre), h)[1]
-
-    x0 = np.zeros(2 * len(seed))
+    problem = _Projection(frequency_hz, h, seed, fixed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        result = optimize.least_squares(residual, x0, method="lm", x_scale=1.0)
-    p = pole(result.x)
-    c, r = _solve(_basis(s, np.concatenate([p, fixed]), centre), h)
+        result = optimize.least_squares(problem.residual, np.zeros(2 * len(seed)), jac=problem.jacobian,
+                                        method="lm", x_scale=1.0)
+    p, _, _, _, c, r = problem._state(result.x)
     m, n = len(seed), len(seed) + len(fixed)
     residue = np.abs(c[:m] + 1j * c[n:n + m])
-    rms = np.sqrt(np.sum(r**2) / len(s)) + 1e-300
+    rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
     inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
     return LocalFit(p, residue / np.abs(p.real) / rms, bool(result.success and np.all(np.isfinite(p)) and inside.all()))
 
@@ -251,36 +294,46 @@ def _half_window(frf: AveragedFRF, pole: np.ndarray) -> np.ndarray:
     return FIT_HALF_WIDTHS * np.maximum(np.abs(pole.real) / (2 * np.pi), 2 * frf.resolution_hz)
 
 
-def _groups(frf: AveragedFRF, pole: np.ndarray) -> list[np.ndarray]:
-    """Indices of poles whose fit windows overlap (fitted together), in frequency order."""
-    f = pole.imag / (2 * np.pi)
-    half = _half_window(frf, pole)
-    groups, current, reach = [], [], -np.inf
-    for i in np.argsort(f):
-        if current and f[i] - half[i] > reach:
-            groups.append(np.array(current))
-            current, reach = [], -np.inf
-        current.append(i)
-        reach = max(reach, f[i] + half[i])
-    return groups + [np.array(current)] if current else groups
+def _neighbourhoods(frf: AveragedFRF, seeds: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """For each seed: the poles fitted with it (those whose fit windows overlap its
+    own), the fixed neighbours (every other seed inside the joint window, and the
+    nearest one beyond each edge) and the window's lines.  Not transitive: in a dense
+    band (a plate's modal density is constant, its half-bandwidths grow with
+    frequency) overlapping windows would otherwise chain every mode into one fit."""
+    f = seeds.imag / (2 * np.pi)
+    half = _half_window(frf, seeds)
+    order = np.argsort(f)
+    out = []
+    for i in range(len(seeds)):
+        joint = np.flatnonzero(np.abs(f - f[i]) < half + half[i])
+        joint = joint[np.argsort(f[joint])]
+        lo, hi = (f[joint] - half[joint]).min(), (f[joint] + half[joint]).max()
+        inside = (f >= lo) & (f <= hi)
+        inside[joint] = False
+        below, above = order[f[order] < lo], order[f[order] > hi]
+        fixed = np.concatenate([below[-1:], np.flatnonzero(inside), above[:1]])
+        out.append((joint, fixed, frf.lines((lo, hi))))
+    return out
 
 
-def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Local fits of every group of ``seeds`` on ``h``: poles, SNR, success per pole."""
+def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray,
+             cache: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Local fits of every seed with its neighbourhood (:func:`_neighbourhoods`) on
+    ``h``: poles, SNR, success per seed.  ``cache`` (a dict kept by the caller for one
+    ``h``) skips fits already made with the same free and fixed poles."""
     pole = np.full(len(seeds), np.nan + 0j)
     snr = np.zeros(len(seeds))
     ok = np.zeros(len(seeds), dtype=bool)
-    rank = np.argsort(np.argsort(seeds.imag))
-    by_frequency = seeds[np.argsort(seeds.imag)]
-    for group in _groups(frf, seeds):
-        f, half = seeds[group].imag / (2 * np.pi), _half_window(frf, seeds[group])
-        lines = frf.lines(((f - half).min(), (f + half).max()))
-        below, above = rank[group].min() - 1, rank[group].max() + 1
-        fixed = by_frequency[[i for i in (below, above) if 0 <= i < len(seeds)]]
-        if len(lines) < 2 * (len(group) + len(fixed)) + 4:
+    cache = {} if cache is None else cache
+    for i, (joint, fixed, lines) in enumerate(_neighbourhoods(frf, seeds)):
+        if len(lines) < 2 * (len(joint) + len(fixed)) + 4:
             continue
-        fit = local_fit(frf.frequency_hz[lines], h[lines], seeds[group], fixed)
-        pole[group], snr[group], ok[group] = fit.pole, fit.snr, fit.ok
+        key = (seeds[joint].tobytes(), seeds[fixed].tobytes())
+        if key not in cache:
+            cache[key] = local_fit(frf.frequency_hz[lines], h[lines], seeds[joint], seeds[fixed])
+        fit = cache[key]
+        at = int(np.flatnonzero(joint == i)[0])
+        pole[i], snr[i], ok[i] = fit.pole[at], fit.snr[at], fit.ok
     return pole, snr, ok
 
 
@@ -403,6 +456,7 @@ def _band(frf_records, hits, band_hz, guide_hz, nyquist) -> tuple[float, float]:
     return lo, hi
 
 
+@one_blas_thread
 def extract_peaks(recordings, configuration: str = "original", sample_rate: float | None = None,
                   band_hz: tuple[float, float] | None = None, guide_hz=None,
                   max_order: int | None = None) -> PeakList:
@@ -462,8 +516,9 @@ def _note_below_band(frf: AveragedFRF, band, notes: list[str]) -> None:
 
 def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
     """Fit the stable columns on H1; drop weak or duplicated ones and refit."""
+    cache: dict = {}
     while True:
-        pole, snr, ok = _fit_all(frf, frf.h1, seeds)
+        pole, snr, ok = _fit_all(frf, frf.h1, seeds, cache)
         f, zeta = correct_for_window(pole, frf.decay_rate)
         bad = ~ok | (snr < SNR_MIN) | ~(zeta > 0) | (zeta > MAX_DAMPING)
         dup = np.zeros(len(seeds), dtype=bool)
@@ -575,7 +630,7 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
     names = [[k for k in FLAG_ORDER if flags[k][j]] for j in range(len(f))]
     left = picked.drop(index=list(used)).nlargest(NOTED_PEAKS, "prominence_db").sort_values("frequency_hz")
     if len(left):
-        listed = ", ".join(f"{x:.1f} Hz ({p:.1f} dB)" for x, p in zip(left["frequency_hz"], left["prominence_db"]))
+        listed = ", ".join(f"{x:.1f} Hz ({p:.1f} dB)" for x, p in zip(left["frequency_hz"], left["prominence_db"], strict=True))
         more = len(picked) - len(used) - len(left)
         notes.append(f"peaks picked on |H1| without a stable pole (spurious: suspension, anti-resonance, cable, "
                      f"noise?) left out: {listed}" + (f" and {more} smaller ones" if more else ""))
@@ -634,7 +689,7 @@ def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
     good = (table["quality"] == "good").to_numpy()
     ax.plot(table["frequency_hz"][good], at[good], "v", color="tab:green", label="peak (good)")
     ax.plot(table["frequency_hz"][~good], at[~good], "v", color="tab:orange", label="peak (flagged)")
-    for x, y, q in zip(table["frequency_hz"], at, table["quality"]):
+    for x, y, q in zip(table["frequency_hz"], at, table["quality"], strict=True):
         ax.annotate(f"{x:.1f}" + ("" if q == "good" else f"\n{q}"), (x, y), textcoords="offset points", xytext=(0, 6),
                     ha="center", fontsize=7)
     ax.set(xlabel="frequency [Hz]", ylabel="magnitude [dB]", title=f"{result.configuration}: averaged FRF and peaks")

@@ -81,19 +81,52 @@ def _check_samples(source, name: str, values: np.ndarray, first_line: int = 0) -
     return values
 
 
-def _rate_from_time(source, time: np.ndarray, stated: float | None) -> float:
+#: Jitter of the time column accepted beyond its printed precision, as a fraction of a step.
+STEP_JITTER = 1e-3
+
+
+def printed_quantum(text: pd.Series) -> np.ndarray:
+    """The resolution of each number of a printed column (a unit of its last digit):
+    the finer of the column's fixed decimals (``%.6f``: 1e-6) and its significant
+    digits at that value (``%.7g``: 1e-6 at 1.5, 1e-11 at 2.08e-05).  Printers drop
+    trailing zeros ("0", "1.5"), so the column's most digits count for every value."""
+    parts = text.astype(str).str.strip().str.extract(r"^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$")
+    whole, decimals = parts[0].fillna(""), parts[1].fillna("")
+    exponent = pd.to_numeric(parts[2], errors="coerce").fillna(0).to_numpy()
+    places = (decimals.str.len().to_numpy() - exponent).max()
+    digits = (whole + decimals).str.lstrip("0").str.len().max()
+    value = np.abs(pd.to_numeric(text, errors="coerce").to_numpy(dtype=float))
+    with np.errstate(divide="ignore"):
+        significant = np.where(value > 0, 10.0 ** (np.floor(np.log10(value)) - max(digits, 1) + 1), 0.0)
+    return np.maximum(10.0 ** -places, significant)
+
+
+def _rate_from_time(source, time: np.ndarray, stated: float | None, quantum: np.ndarray | None = None) -> float:
+    """The sample rate [Hz] of a time column: 1 / the slope of the least-squares line
+    through (sample index, time).  Each step may differ from the line's by the printed
+    precision of its two ends (half a unit of the last digit each: a column written
+    with ``%.7g`` reads 2.08e-05 and 2.09e-05 s at 48 kHz) plus ``STEP_JITTER`` of a
+    step; a larger difference is a gap (dropped samples) and is refused at its line."""
+    n = len(time)
+    index = np.arange(n) - (n - 1) / 2
+    dt = float(index @ (time - time.mean()) / (index @ index))
+    quantum = np.zeros(n) if quantum is None else quantum
+    if dt <= 0 or 0.5 * quantum.max() > 0.5 * dt:
+        raise _fail(source, f"time_s does not resolve the samples (printed to {quantum.max():g} s, step {dt:g} s); "
+                    "export time with more digits, or drop the time_s column and give --sample-rate")
     step = np.diff(time)
+    allowed = 0.5 * (quantum[:-1] + quantum[1:]) + STEP_JITTER * dt
     back = np.flatnonzero(step <= 0)
     if back.size:
         i = back[0]
         raise _fail(source, f"line {i + 3}: time_s = {time[i + 1]:g} is not after {time[i]:g}; time must increase "
                     "monotonically: sort the rows or remove repeated samples")
-    dt = (time[-1] - time[0]) / (len(time) - 1)
-    uneven = np.flatnonzero(np.abs(step - dt) > 1e-3 * dt)
+    uneven = np.flatnonzero(np.abs(step - dt) > allowed)
     if uneven.size:
         i = uneven[0]
-        raise _fail(source, f"line {i + 3}: time step {step[i]:g} s differs from the mean {dt:g} s; "
-                    "samples must be evenly spaced: re-export without dropped samples")
+        raise _fail(source, f"line {i + 3}: time step {step[i]:g} s differs from the least-squares step {dt:g} s by more than the "
+                    f"column's printed precision ({allowed[i]:.2g} s): samples dropped? the samples must be evenly "
+                    "spaced: re-export without gaps")
     rate = _snap(1.0 / dt)
     if stated is not None and abs(rate / stated - 1) > RATE_TOLERANCE:
         raise _fail(source, f"time_s gives a sample rate of {rate:.6g} Hz but sample_rate = {stated:g} Hz; "
@@ -118,7 +151,7 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
     and one response column (acceleration, velocity, displacement or response)."""
     source = Path(path).name
     try:
-        frame = pd.read_csv(path)
+        frame = pd.read_csv(path, dtype={"time_s": str})
     except pd.errors.EmptyDataError:
         raise _fail(source, "the file is empty; export the hit's time series with a header line") from None
     except (OSError, UnicodeDecodeError, pd.errors.ParserError) as exc:
@@ -148,7 +181,8 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
                         "fix or remove that row")
     if "time_s" in frame.columns:
         time = _check_samples(source, "time_s", numeric["time_s"], first_line=2)
-        rate = _rate_from_time(source, time, None if sample_rate is None else _check_rate(source, sample_rate))
+        rate = _rate_from_time(source, time, None if sample_rate is None else _check_rate(source, sample_rate),
+                               printed_quantum(frame["time_s"]))
     elif sample_rate is None:
         raise _fail(source, "no time_s column and no sample rate; add a time_s column or give the sample rate "
                     "(--sample-rate HZ)")

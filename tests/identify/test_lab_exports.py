@@ -1,0 +1,86 @@
+"""Recordings as labs export them: a time column printed with 7 significant digits, or
+no time column and integer ADC counts on an offset, give the peaks of the full-precision
+file; a real gap (dropped samples) is refused at its line."""
+import numpy as np
+import pandas as pd
+import pytest
+
+from fem.errors import MeasurementError
+from identify.peaks import extract_peaks
+from identify.recordings import read_csv
+from identify.tap_quirks import write_counts_csv, write_rounded_csv
+from identify.tap_simulation import Modes, Session, write_csv
+
+#: The test plate's separated modes at 48 kHz, 2-s hits (a full lab recording).
+MODES = Modes([129.2, 191.6, 238.8, 383.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.003], [1.0, -0.8, 0.6, 1.2, 0.9])
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("exports")
+    hits = Session(MODES, n_hits=3, seed=11).hits()
+    files = {"full": [], "rounded": [], "counts": []}
+    for hit in hits:
+        for kind, write in (("full", write_csv), ("rounded", write_rounded_csv), ("counts", write_counts_csv)):
+            path = folder / f"{kind}_{hit.source}.csv"
+            write(hit, path)
+            files[kind].append(path)
+    return files
+
+
+def test_rounded_time_and_counts_give_the_full_precision_peaks(exports):
+    """Acceptance: frequencies within 0.01 % (the peaks' own scatter is about 0.03 %:
+    the same hits must give the same peaks far closer than that)."""
+    full = extract_peaks(exports["full"]).table["frequency_hz"].to_numpy()
+    rounded = extract_peaks(exports["rounded"]).table["frequency_hz"].to_numpy()
+    counts = extract_peaks(exports["counts"], sample_rate=48000.0).table["frequency_hz"].to_numpy()
+    assert len(full) == len(MODES.frequencies_hz)
+    np.testing.assert_allclose(rounded, full, rtol=1e-4)
+    np.testing.assert_allclose(counts, full, rtol=1e-4)
+
+
+def test_rounded_time_column_reads_the_exact_rate(exports):
+    text = exports["rounded"][0].read_text().splitlines()
+    assert text[2].startswith("2.083333e-05,") and text[3].startswith("4.166667e-05,")
+    assert read_csv(exports["rounded"][0]).sample_rate == 48000.0
+
+
+def test_counts_need_the_sample_rate(exports):
+    with pytest.raises(MeasurementError, match=r"no time_s column and no sample rate; .*--sample-rate"):
+        read_csv(exports["counts"][0])
+    hit = read_csv(exports["counts"][0], sample_rate=48000)
+    assert np.all(hit.force == np.rint(hit.force))  # integer counts
+    assert np.median(hit.force) == pytest.approx(1200, abs=5)  # on the ADC's offset, removed downstream (frf)
+
+
+def _series(n=2000, rate=48000.0):
+    t = np.arange(n) / rate
+    return pd.DataFrame({"time_s": t, "force": np.exp(-((t - 1e-3) / 2e-4) ** 2), "acceleration": np.sin(t * 2000)})
+
+
+def test_dropped_sample_is_refused_at_its_line(tmp_path):
+    """One sample dropped after file line 1001: the step to line 1002 is 2 dt."""
+    path = tmp_path / "gap.csv"
+    path.write_text(_series().drop(index=1000).to_csv(index=False, float_format="%.7g"))
+    with pytest.raises(MeasurementError, match=r"gap.csv: line 1002: time step 4.167e-05 s differs from the least-squares step"):
+        read_csv(path)
+
+
+def test_jitter_within_printed_precision_and_a_thousandth_of_a_step(tmp_path):
+    """Timestamps with 0.4e-3 step of clock jitter are accepted; 1e-2 step is a gap-like error."""
+    rng = np.random.default_rng(0)
+    frame = _series()
+    dt = 1 / 48000
+    ok, bad = tmp_path / "ok.csv", tmp_path / "bad.csv"
+    ok.write_text(frame.assign(time_s=frame["time_s"] + 0.2e-3 * dt * rng.uniform(-1, 1, len(frame))).to_csv(index=False))
+    assert read_csv(ok).sample_rate == 48000.0
+    bad.write_text(frame.assign(time_s=frame["time_s"] + 1e-2 * dt * rng.uniform(-1, 1, len(frame))).to_csv(index=False))
+    with pytest.raises(MeasurementError, match=r"bad.csv: line \d+: time step .* printed precision"):
+        read_csv(bad)
+
+
+def test_time_printed_too_coarsely_is_refused(tmp_path):
+    path = tmp_path / "coarse.csv"
+    path.write_text(_series().to_csv(index=False, float_format="%.3f"))
+    with pytest.raises(MeasurementError, match=r"coarse.csv: time_s does not resolve the samples.*--sample-rate"):
+        read_csv(path)
