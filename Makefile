@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench blind clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,11 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m benchmarks
+
+# The blind diagnosis study on the development half (HALF=heldout or both for the others).
+HALF ?= dev
+blind: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m studies.blind_diagnosis --half $(HALF)
 
 clean:
 	rm -rf $(VENV) build *.egg-info
