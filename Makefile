@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench docs clean
+.PHONY: demo test lint bench docs blind clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,11 @@ bench: $(STAMP)
 docs: $(STAMP)
 	$(BIN)/pip install --quiet -e '.[docs]'
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+# The blind diagnosis study on the development half (HALF=heldout or both for the others).
+HALF ?= dev
+blind: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m studies.blind_diagnosis --half $(HALF)
 
 clean:
 	rm -rf $(VENV) build site *.egg-info

@@ -285,9 +285,12 @@ def build_mesh(case: dict, layers, level: Level, quarter: bool) -> Mesh:
 # ccx input, run and results
 
 
-def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: int) -> None:
-    """A ccx deck: nodes, C3D20R elements by layer, materials (mm, N, t, s -> MPa, t/mm^3),
-    orientations for turned plies, mirror conditions of a symmetry class, *FREQUENCY."""
+def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: int, materials=None,
+                extra: tuple[str, ...] = ()) -> None:
+    """A ccx deck: nodes, C3D20R elements by layer, materials (mm, N, t, s -> MPa, t/mm^3;
+    ``materials`` defaults to ``MATERIALS``), orientations for turned plies, mirror
+    conditions of a symmetry class, ``extra`` model lines (e.g. a point mass), *FREQUENCY."""
+    materials = MATERIALS if materials is None else materials
     ids, coords = mesh.lattice()
     elements = mesh.elements(ids)
     lines = ["*HEADING", f"layer-id 3-D reference, {path.stem}", "*NODE"]
@@ -300,7 +303,7 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
             lines.append(f"{e + 1}," + ",".join(map(str, nodes[:15])) + ",")
             lines.append(",".join(map(str, nodes[15:])))
     for name in sorted({m for m, _, _ in layers}):
-        c = MATERIALS[name]
+        c = materials[name]
         lines += [
             f"*MATERIAL, NAME={name.upper()}",
             "*ELASTIC, TYPE=ENGINEERING CONSTANTS",
@@ -328,7 +331,7 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
         lines.append("*BOUNDARY")
         lines += ["MIRRORX,1,1"] if sx == "S" else ["MIRRORX,2,3"]
         lines += ["MIRRORY,2,2"] if sy == "S" else ["MIRRORY,1,1", "MIRRORY,3,3"]
-    lines += ["*STEP", "*FREQUENCY", f"{n_eigen}", "*NODE FILE", "U", "*END STEP", ""]
+    lines += [*extra, "*STEP", "*FREQUENCY", f"{n_eigen}", "*NODE FILE", "U", "*END STEP", ""]
     path.write_text("\n".join(lines))
 
 
@@ -544,8 +547,10 @@ def _grid_list(a: np.ndarray, digits: int = 5) -> list:
     return [[_sig(v, digits) + 0.0 if abs(v) >= 1e-8 else 0.0 for v in row] for row in a]
 
 
-def spec_toml(name: str, case: dict) -> str:
-    """A project spec (the spec format of the docs) with the true properties."""
+def spec_toml(name: str, case: dict, materials=None) -> str:
+    """A project spec (the spec format of the docs) with the true properties (``materials``
+    defaults to ``MATERIALS``)."""
+    materials = MATERIALS if materials is None else materials
     used = []
     for m, _, _ in case["layers"]:
         if m not in used:
@@ -564,7 +569,7 @@ def spec_toml(name: str, case: dict) -> str:
     lines += [f"  {layer(*l)}," for l in case["layers"]]
     lines += ["]", ""]
     for m in used + added:
-        c = MATERIALS[m]
+        c = materials[m]
         lines += [f"[materials.{m}]", f"E1_GPa = {_sig(c['E1'])!r}", f"E2_GPa = {_sig(c['E2'])!r}",
                   f"G12_GPa = {_sig(c['G12'])!r}", f"nu12 = {_sig(c['nu12'])!r}",
                   f"density_kg_m3 = {_sig(c['density'])!r}", f"G13_GPa = {_sig(c['G13'])!r}",

@@ -1,0 +1,329 @@
+"""Blind diagnosis study: the diagnosis run on 3-D solid reference cases it was not tuned on.
+
+The cases are ``tests/data/solid3d/blind/*.json`` (made by ``tests/data/solid3d/blind.py``:
+CalculiX C3D20R full-plate models of thick hybrid laminates, cross-plies and foam-core
+sandwiches with misaligned plies, a sensor on half of them, soft bond lines; 10 flexural
+modes per configuration; split once at random into a development and a held-out half).
+
+Per case (everything seeded by the case's number):
+
+- measurements: the 3-D frequencies with Gaussian scatter of 0.02-0.1 % (drawn per case,
+  stated as std_hz), each numbered by the plate mode its shape paired with in the
+  generator, the nodal-line label given where a neighbour is within 1 % (as a lab would);
+- the user's spec: the nominal stack (0/90 deg, no sensor), the plies' E1, E2, G12, nu12
+  drawn 0.7-1.3 x the truth (handbook-like starts), G13/G23 not given; a foam core
+  identified through its shear moduli (``identify = ["G13", "G23"]``), started 0.7-1.3 x;
+- ``identify.diagnose`` through the public API (every registered effect a candidate);
+- the oracle floor: the project's model with the true properties, angles, sensor and the
+  shear theory (first-order shear with rotary inertia, or the layerwise model, whichever
+  fits better), its layer properties refitted; the true effects are those the oracle
+  cannot do without: an effect is true when the oracle without it ends above
+  ``TRUE_RATIO`` x the floor.
+
+Reported per half: the confusion table (true effects against selected), the RMS after the
+selection against the floor, each layer property's error in std, the time per case.
+
+    python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import time
+import tomllib
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import identify
+from fem.io import write_text
+from fem.spec import parse_spec
+from fem.specimen import Parameter
+from identify.measurements import Measurements, parse_measurements
+
+DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "solid3d" / "blind"
+#: Relative frequency scatter drawn per case (uniform).
+NOISE_RANGE = (2e-4, 1e-3)
+#: Start values drawn per property as this factor range times the truth.
+START_RANGE = (0.7, 1.3)
+#: An effect is "true" when the oracle without it ends above this times the floor (the
+#: acceptance criterion's own ratio: a model that misses it cannot meet the target).
+TRUE_RATIO = 1.5
+#: Acceptance (on the held-out half): RMS after selection within this times the floor,
+#: every layer property within ``Z_MAX`` std.
+FLOOR_RATIO = 1.5
+Z_MAX = 3.0
+#: Physics a selected effect brings (for "the selection contains the true effects").
+PHYSICS = {"transverse_shear": {"shear"}, "thick_plate": {"shear"}, "layerwise": {"shear", "layerwise"},
+           "point_mass": {"point_mass"}, "orientation": {"orientation"}}
+IN_PLANE = ("E1", "E2", "G12", "nu12")
+
+
+def index() -> dict:
+    return json.loads((DATA / "index.json").read_text())
+
+
+def case_names(half: str = "both") -> list[str]:
+    """The stored cases of a half ('dev', 'heldout' or 'both'), in name order."""
+    halves = index()["cases"]
+    return sorted(n for n, h in halves.items() if half in ("both", h) and (DATA / f"{n}.json").exists())
+
+
+def load(name: str) -> dict:
+    return json.loads((DATA / f"{name}.json").read_text())
+
+
+def _core(case: dict) -> str | None:
+    return "foam_core" if case["family"] == "sandwich" else None
+
+
+def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, sensor: bool = True):
+    """The project's model of the case with every true value (layer properties, G13/G23,
+    angles, the sensor as a fixed point mass); ``theory``: 'thick_plate' (first-order shear
+    with rotary inertia), 'layerwise' or 'clt'."""
+    text = case["truth_spec_toml"]
+    if _core(case):
+        text = re.sub(r"(\[materials\.foam_core\][^\[]*?)identify = \w+", r'\1identify = ["G13", "G23"]', text)
+    if not sensor:
+        text = text.split("\n[[effects]]")[0] + "\n"
+    if theory == "layerwise":
+        text = text.replace("[model]", '[model]\ntheory = "layerwise"')
+    model = parse_spec(tomllib.loads(text), case["case"])
+    if not angles:
+        model = _nominal_angles(model, case)
+    if theory != "clt":
+        model = model.with_options(transverse_shear=True, rotary_inertia=True)
+    return model
+
+
+def _nominal_angles(model, case: dict):
+    nominal = case["choices"]["nominal_layers"]
+    values = {Parameter("angle", layer.label): math.radians(n["angle_deg"])
+              for layer, n in zip(model.specimen.layers, nominal)}
+    return model.with_values(values)
+
+
+def start_model(case: dict, rng: np.random.Generator):
+    """The user's spec: nominal stack, no sensor, in-plane constants 0.7-1.3 x the truth,
+    G13/G23 not given (a core's shear moduli drawn like the others)."""
+    truth = truth_model(case, theory="clt", angles=False, sensor=False)
+    specimen = truth.specimen
+    values = {p: truth.value(p) * rng.uniform(*START_RANGE) for p in specimen.material_parameters()}
+    core = _core(case)
+    materials = [m if m.name == core else _without_shear(m) for m in specimen.identified_materials]
+    model = truth.with_specimen(specimen.with_materials(materials)).with_values(values)
+    return model
+
+
+def _without_shear(material):
+    from dataclasses import replace  # noqa: PLC0415
+
+    return replace(material, G13=None, G23=None)
+
+
+def measurements(case: dict, model, noise: float, rng: np.random.Generator) -> Measurements:
+    rows = []
+    for conf in case["configurations"]:
+        f = np.array([m["frequency_hz"] for m in conf["modes"]])
+        close = np.zeros(len(f), dtype=bool)
+        gaps = np.abs(np.diff(f)) / f[:-1] < 0.01
+        close[:-1] |= gaps
+        close[1:] |= gaps
+        noisy = f * (1 + noise * rng.standard_normal(len(f)))
+        rows += [{"configuration": conf["name"], "mode": m["plate_mode"], "frequency_hz": noisy[k],
+                  "std_hz": noise * f[k], "label": m["label"] if close[k] else ""}
+                 for k, m in enumerate(conf["modes"])]
+    frame = pd.DataFrame(rows).sort_values(["configuration", "mode"], kind="stable")
+    return parse_measurements(frame, model, f"<blind 3-D case {case['case']}, {100 * noise:.3g} % noise>")
+
+
+def _fit_from_truth(model, data) -> float:
+    return float(identify.fit(model, data).rms_rel_error)
+
+
+@dataclass(frozen=True)
+class Oracle:
+    """The floor (lowest refitted RMS of the true model) and its theory; the RMS without
+    each effect; the true effects."""
+
+    floor: float
+    theory: str
+    without: dict
+    true_effects: tuple[str, ...]
+
+
+def oracle(case: dict, data: Measurements) -> Oracle:
+    fits = {theory: _fit_from_truth(truth_model(case, theory), data) for theory in ("thick_plate", "layerwise")}
+    theory = min(fits, key=fits.get)
+    floor = fits[theory]
+    without = {"shear": _fit_from_truth(truth_model(case, "clt"), data)}
+    if theory == "layerwise":
+        without["layerwise"] = fits["thick_plate"]
+    if case["choices"]["sensor"]:
+        without["point_mass"] = _fit_from_truth(truth_model(case, theory, sensor=False), data)
+    if case["choices"]["misalignment_max_deg"] > 0:
+        without["orientation"] = _fit_from_truth(truth_model(case, theory, angles=False), data)
+    true = tuple(k for k, v in without.items() if v > TRUE_RATIO * floor)
+    return Oracle(floor, theory, without, true)
+
+
+@dataclass
+class Outcome:
+    case: str
+    family: str
+    half: str
+    noise: float
+    true_effects: tuple[str, ...] = ()
+    selected: tuple[str, ...] = ()
+    rms_baseline: float = math.nan
+    rms_after: float = math.nan
+    floor: float = math.nan
+    floor_theory: str = ""
+    max_z: float = math.nan
+    z: dict = field(default_factory=dict)
+    seconds: float = math.nan
+    error: str = ""
+
+    @property
+    def contains_truth(self) -> bool:
+        brought = set().union(*(PHYSICS.get(k, {k}) for k in self.selected)) if self.selected else set()
+        return not self.error and set(self.true_effects) <= brought
+
+    @property
+    def ratio(self) -> float:
+        return self.rms_after / self.floor if self.floor > 0 else math.inf
+
+    @property
+    def within_floor(self) -> bool:
+        return not self.error and self.ratio <= FLOOR_RATIO
+
+    @property
+    def within_std(self) -> bool:
+        return not self.error and self.max_z <= Z_MAX
+
+    def row(self) -> dict:
+        def num(x, digits=4):
+            return round(float(x), digits) if isinstance(x, float) and math.isfinite(x) else None
+
+        return {"case": self.case, "family": self.family, "half": self.half, "noise_pct": num(100 * self.noise),
+                "true": "+".join(self.true_effects), "selected": "+".join(self.selected),
+                "contains_true": self.contains_truth, "rms_baseline_pct": num(100 * self.rms_baseline),
+                "rms_after_pct": num(100 * self.rms_after), "floor_pct": num(100 * self.floor),
+                "floor_theory": self.floor_theory, "ratio": num(self.ratio, 3), "max_z": num(self.max_z, 2),
+                "seconds": num(self.seconds, 1), "error": self.error}
+
+
+def _z(fit, truth_values: dict) -> dict:
+    out = {}
+    for p in fit.parameters:
+        if p in truth_values:
+            sd = fit.std(p)
+            out[p.name] = abs(fit.value(p) - truth_values[p]) / sd if sd > 0 and math.isfinite(sd) else math.inf
+    return out
+
+
+def run_case(name: str, with_oracle: bool = True) -> Outcome:
+    case = load(name)
+    number = int(re.search(r"\d+", name).group())
+    rng = np.random.default_rng(1000 + number)
+    noise = float(rng.uniform(*NOISE_RANGE))
+    out = Outcome(name, case["family"], case["half"], noise)
+    try:
+        start = start_model(case, rng)
+        data = measurements(case, start, noise, rng)
+        truth = truth_model(case)
+        if with_oracle:
+            o = oracle(case, data)
+            out.floor, out.floor_theory, out.true_effects = o.floor, o.theory, o.true_effects
+        started = time.perf_counter()
+        result = identify.diagnose(start, data)
+        out.seconds = time.perf_counter() - started
+        out.selected = tuple(c.kind for c in result.selected)
+        out.rms_baseline = result.baseline.rms_rel_error
+        fitted = result.final or result.baseline
+        out.rms_after = fitted.rms_rel_error
+        wanted = {p: truth.value(p) for p in truth.specimen.material_parameters()
+                  if p.kind in IN_PLANE or p.target == _core(case)}
+        out.z = _z(fitted, wanted)
+        out.max_z = max(out.z.values()) if out.z else math.nan
+    except Exception as exc:  # noqa: BLE001 - the study reports every failure and goes on
+        out.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+        out.error += " | " + traceback.format_exc().strip().splitlines()[-3].strip()
+    return out
+
+
+def confusion(outcomes: list[Outcome]) -> pd.DataFrame:
+    """Per effect: cases where it is true and selected (hit), true and not (missed),
+    selected but not true (extra), neither."""
+    rows = []
+    for effect in ("shear", "layerwise", "point_mass", "orientation"):
+        hit = missed = extra = neither = 0
+        for o in outcomes:
+            brought = set().union(*(PHYSICS.get(k, {k}) for k in o.selected)) if o.selected else set()
+            true, chosen = effect in o.true_effects, effect in brought
+            hit += true and chosen
+            missed += true and not chosen
+            extra += chosen and not true
+            neither += not true and not chosen
+        rows.append({"effect": effect, "true & selected": hit, "true, missed": missed,
+                     "selected, not true": extra, "neither": neither})
+    return pd.DataFrame(rows)
+
+
+def summary(outcomes: list[Outcome]) -> dict:
+    n = len(outcomes)
+    if not n:
+        return {"cases": 0}
+    seconds = [o.seconds for o in outcomes if math.isfinite(o.seconds)]
+    return {"cases": n,
+            "contains_true_pct": round(100 * sum(o.contains_truth for o in outcomes) / n, 1),
+            "rms_within_1.5_floor_pct": round(100 * sum(o.within_floor for o in outcomes) / n, 1),
+            "every_property_within_3_std_pct": round(100 * sum(o.within_std for o in outcomes) / n, 1),
+            "tracebacks": sum(bool(o.error) for o in outcomes),
+            "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
+            "max_seconds": round(float(np.max(seconds)), 1) if seconds else None}
+
+
+def report(outcomes: list[Outcome], title: str) -> str:
+    table = pd.DataFrame([o.row() for o in outcomes])
+    lines = [f"== {title} ==", "", table.drop(columns=["half"]).to_string(index=False, na_rep="-"), "",
+             "confusion (per effect, over the cases):", confusion(outcomes).to_string(index=False), "",
+             json.dumps(summary(outcomes))]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m studies.blind_diagnosis", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--half", choices=("dev", "heldout", "both"), default="dev")
+    parser.add_argument("--case", action="append", help="run only these cases")
+    parser.add_argument("--out", type=Path, default=Path("reports") / "blind_diagnosis")
+    args = parser.parse_args(argv)
+    names = args.case or case_names(args.half)
+    outcomes = []
+    for name in names:
+        o = run_case(name)
+        print(json.dumps(o.row()), flush=True)
+        outcomes.append(o)
+    args.out.mkdir(parents=True, exist_ok=True)
+    texts = []
+    for half in ("dev", "heldout"):
+        part = [o for o in outcomes if o.half == half]
+        if part:
+            texts.append(report(part, f"{half} half ({len(part)} cases)"))
+    text = "\n\n".join(texts)
+    print(text)
+    write_text(args.out / f"blind_{args.half}.txt", text + "\n")
+    write_text(args.out / f"blind_{args.half}.json",
+               json.dumps({"cases": [o.row() for o in outcomes],
+                           "summary": {h: summary([o for o in outcomes if o.half == h]) for h in ("dev", "heldout")}},
+                          indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,340 @@
+#!/usr/bin/env python3
+"""Blind 3-D reference cases for the diagnosis study: a seeded random family of layered
+plates, solved with CalculiX (C3D20R full-plate models, ``generate.py``'s meshes).
+
+Each case draws, from one ``numpy`` generator seeded with ``SEED``:
+
+- a family, in turn: ``hybrid`` (GFRP/CFRP/GFRP or CFRP/GFRP/CFRP, all 0 deg, a/h 15-60),
+  ``cross_ply`` (CFRP 0 / GFRP or CFRP 90 / CFRP 0, a/h 15-60) or ``sandwich`` (woven CFRP
+  or glass skins 0.3-1.0 mm on a core of G = 10-200 MPa, log-uniform, 4-12 mm);
+- the plies' constants: the base materials of ``generate.MATERIALS`` scaled by 0.85-1.15
+  per constant, the transversely isotropic plies kept consistent (G13 = G12,
+  G23 = E2 / 2(1 + nu23), E3 = E2); the core isotropic (nu = 0.3, density from G);
+- misaligned plies: every orthotropic ply turned by +-U(0, d) deg with d = U(0, 8) per
+  case (the spec the user writes keeps the nominal 0/90 deg);
+- a sensor (half of the cases): 1-10 g on the top surface at a point in the middle 80 %
+  of the plate, as a ``*MASS`` element on the surface node nearest to the point (the point
+  stored is the node's);
+- the bonded configurations: a soft bond line of 0.05-0.3 mm and an aluminium plate of
+  1-2 mm under (``al_bottom``) or over (``al_top``) the specimen.
+
+Full-plate models (misaligned plies and the sensor break the mirror symmetries), the
+``coarse`` mesh of ``generate.LEVELS`` (24 elements along the length, one element per
+started 2 mm through every layer): checked against the ``medium`` mesh on one case of each
+family (``--check``, stored in ``mesh_check.json``).  The first ``FLEXURAL_MODES`` flexural
+modes of every configuration are stored with their nodal-line label and the rank of the
+plate mode (the project's first-order shear plate with rotary inertia at the true values,
+sensor and angles) their shape pairs with (MAC of w on a 13 x 11 grid, optimal
+assignment), so that the study can rank them without storing shapes.
+
+The split into a development and a held-out half is drawn once from ``SPLIT_SEED`` and
+stored in ``index.json`` with both seeds.
+
+    python tests/data/solid3d/blind.py [--cases N] [--only NAME ...] [--check]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shutil
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parents[2]))
+
+import generate as g  # noqa: E402
+
+OUT = HERE / "blind"
+SEED = 20_2026
+SPLIT_SEED = 20_2027
+N_CASES = 24
+FAMILIES = ("hybrid", "cross_ply", "sandwich")
+FLEXURAL_MODES = 10
+#: Elastic modes asked of the full model (after its six rigid-body modes).
+ELASTIC = 18
+LEVEL = g.LEVELS[0]
+CHECK_LEVEL = g.LEVELS[1]
+SCATTER = (0.85, 1.15)
+
+
+def _ply(rng, base: str) -> dict:
+    """A transversely isotropic ply: the base constants scaled, G13 = G12, E3 = E2,
+    G23 = E2 / 2(1 + nu23)."""
+    b = g.MATERIALS[base]
+    s = lambda: rng.uniform(*SCATTER)  # noqa: E731
+    e1, e2, g12, nu12, rho = b["E1"] * s(), b["E2"] * s(), b["G12"] * s(), b["nu12"] * s(), b["density"] * s()
+    nu23 = b["nu23"]
+    return dict(E1=e1, E2=e2, E3=e2, G12=g12, G13=g12, G23=e2 / (2 * (1 + nu23)), nu12=nu12, nu13=nu12,
+                nu23=nu23, density=rho, note=f"{base} scaled 0.85-1.15 per constant")
+
+
+def _fabric(rng, base: str) -> dict:
+    """A woven skin: in-plane constants scaled; through the thickness as the base."""
+    b = g.MATERIALS[base]
+    s = lambda: rng.uniform(*SCATTER)  # noqa: E731
+    e = b["E1"] * s()
+    return dict(b, E1=e, E2=e * b["E2"] / b["E1"] * s(), G12=b["G12"] * s(), nu12=b["nu12"] * s(),
+                density=b["density"] * s(), note=f"{base} scaled 0.85-1.15 per in-plane constant")
+
+
+GLASS_FABRIC = dict(E1=24.0, E2=23.0, E3=10.0, G12=4.0, G13=3.2, G23=3.2, nu12=0.12, nu13=0.3, nu23=0.3,
+                    density=1900.0, note="woven E-glass/epoxy skin")
+
+
+def _core(rng) -> dict:
+    """An isotropic foam core, G = 10-200 MPa log-uniform, nu = 0.3, density growing with G."""
+    shear = math.exp(rng.uniform(math.log(0.010), math.log(0.200)))
+    nu = 0.3
+    return dict(E1=2 * shear * (1 + nu), E2=2 * shear * (1 + nu), E3=2 * shear * (1 + nu), G12=shear, G13=shear,
+                G23=shear, nu12=nu, nu13=nu, nu23=nu, density=50.0 + 900.0 * shear,
+                note="isotropic foam core, E = 2G(1 + nu)")
+
+
+def draw_case(rng, index: int) -> dict:
+    """One random case (a ``generate.CASES``-like dict with its own materials and choices)."""
+    family = FAMILIES[index % len(FAMILIES)]
+    materials = {"aluminium": g.MATERIALS["aluminium"], "soft_adhesive": g.MATERIALS["soft_adhesive"]}
+    if family == "sandwich":
+        length = rng.uniform(200.0, 300.0)
+        skin_name = "cfrp_fabric" if rng.random() < 0.6 else "gfrp_fabric"
+        materials[skin_name] = _fabric(rng, "cfrp_fabric") if skin_name == "cfrp_fabric" else dict(GLASS_FABRIC)
+        materials["foam_core"] = _core(rng)
+        skin, core = rng.uniform(0.3, 1.0), rng.uniform(4.0, 12.0)
+        nominal = [(skin_name, skin, 0.0), ("foam_core", core, 0.0), (skin_name, skin, 0.0)]
+    else:
+        length = rng.uniform(150.0, 250.0)
+        slenderness = rng.uniform(15.0, 60.0)
+        h = length / slenderness
+        outer = h * rng.uniform(0.15, 0.3)
+        if family == "hybrid":
+            a, b = ("gfrp_ud", "cfrp_ud") if rng.random() < 0.5 else ("cfrp_ud", "gfrp_ud")
+            nominal = [(a, outer, 0.0), (b, h - 2 * outer, 0.0), (a, outer, 0.0)]
+        else:
+            a, b = "cfrp_ud", ("gfrp_ud" if rng.random() < 0.5 else "cfrp_ud")
+            nominal = [(a, outer, 0.0), (b, h - 2 * outer, 90.0), (a, outer, 0.0)]
+        for name in {a, b}:
+            materials[name] = _ply(rng, name)
+    width = length * rng.uniform(0.6, 0.9)
+    spread = rng.uniform(0.0, 8.0)
+    layers = []
+    for m, t, angle in nominal:
+        turn = 0.0 if m == "foam_core" else float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, spread))
+        layers.append((m, round(t, 3), round(angle + turn, 2)))
+    sensor = None
+    if rng.random() < 0.5:
+        sensor = dict(mass_g=round(rng.uniform(1.0, 10.0), 2), x_mm=rng.uniform(0.1, 0.9) * length,
+                      y_mm=rng.uniform(0.1, 0.9) * width)
+    bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
+    added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
+    return dict(
+        name=f"blind{index + 1:02d}_{family}", family=family, length_mm=round(length, 1), width_mm=round(width, 1),
+        layers=layers, nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal], materials=materials,
+        sensor=sensor, misalignment_max_deg=round(spread, 2), bond_line_mm=bond, aluminium_mm=plate,
+        configurations=[dict(name="original", bottom=[], top=[]), dict(name="al_bottom", bottom=added, top=[]),
+                        dict(name="al_top", bottom=[], top=added)],
+        description=f"blind {family} case {index + 1}",
+    )
+
+
+def draw_cases(n: int = N_CASES, seed: int = SEED) -> list[dict]:
+    rng = np.random.default_rng(seed)
+    return [draw_case(rng, i) for i in range(n)]
+
+
+def split(names: list[str], seed: int = SPLIT_SEED) -> dict[str, str]:
+    """Half 'dev', half 'heldout', at random, once."""
+    order = np.random.default_rng(seed).permutation(len(names))
+    return {names[k]: ("dev" if rank < len(names) // 2 else "heldout") for rank, k in enumerate(order)}
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def _sensor_lines(mesh: g.Mesh, case: dict, n_elements: int) -> tuple[tuple[str, ...], tuple[float, float]]:
+    """A *MASS element on the top-surface corner node nearest to the sensor point; the
+    node's (x, y) in mm."""
+    s = case["sensor"]
+    ids, coords = mesh.lattice()
+    i = 2 * int(round(s["x_mm"] / (mesh.lx / mesh.nx)))
+    j = 2 * int(round(s["y_mm"] / (mesh.ly / mesh.ny)))
+    node = int(ids[i, j, -1])
+    x, y, _ = coords[node - 1]
+    lines = ("*ELEMENT, TYPE=MASS, ELSET=SENSOR", f"{n_elements + 1},{node}", "*MASS, ELSET=SENSOR",
+             f"{s['mass_g'] * 1e-6:.10g}")
+    return lines, (float(x), float(y))
+
+
+def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> dict:
+    """Elastic frequencies, w-shares and mid-plane w grids of the full plate."""
+    mesh = g.build_mesh(case, layers, level, quarter=False)
+    ids, coords = mesh.lattice()
+    elements = mesh.elements(ids)
+    extra, where = ((), None)
+    if case["sensor"]:
+        extra, where = _sensor_lines(mesh, case, len(elements))
+    job = workdir / tag
+    g.write_input(job.with_suffix(".inp"), mesh, layers, None, 6 + ELASTIC, materials=case["materials"], extra=extra)
+    wall = g.run_ccx(job, 1)
+    lam = g.read_eigenvalues(job.with_suffix(".dat"))
+    disp = g.read_displacements(job.with_suffix(".frd"), len(coords))
+    order = np.argsort(lam)
+    lam, disp = lam[order], disp[order]
+    if np.abs(lam[:6]).max() > 1e-6 * lam[6]:
+        raise RuntimeError(f"{tag}: the 6 lowest modes are not rigid-body modes ({lam[:7]})")
+    lam, disp = lam[6:], disp[6:]
+    densities = np.repeat([case["materials"][m]["density"] * 1e-12 for m, _, _ in layers], 1)
+    shares = g.kinetic_shares(mesh, elements, np.repeat(densities[mesh.element_layer], mesh.nx * mesh.ny), disp)
+    solved = g.Solved(mesh, elements, lam, disp, None, shares, wall)
+    z_mid = sum(t for _, t, _ in layers) / 2
+    grid = g.sample(solved, case, z_mid, *g.GRID)
+    fine = g.sample(solved, case, z_mid, *g.LABEL_GRID)
+    flexural = [k for k in range(len(lam)) if shares[k] > g.FLEXURAL_SHARE][:FLEXURAL_MODES]
+    if len(flexural) < FLEXURAL_MODES:
+        raise RuntimeError(f"{tag}: only {len(flexural)} flexural modes among {len(lam)}")
+    return dict(frequency_hz=np.sqrt(lam[flexural]) / (2 * np.pi), w=grid[flexural, 2],
+                labels=[g.nodal_label(fine[k, 2]) for k in flexural], w_share=shares[flexural], wall_s=wall,
+                dofs=3 * len(coords), sensor_xy_mm=where,
+                elements=[mesh.nx, mesh.ny, [g.layer_elements(t, level.thickness_factor) for _, t, _ in layers]])
+
+
+def truth_spec(case: dict, sensor_xy=None) -> str:
+    """The project spec with every true value: true angles, G13/G23, the sensor as a fixed
+    point mass, first-order shear with rotary inertia left to the options."""
+    text = g.spec_toml(case["name"], case, materials=case["materials"])
+    if case["sensor"]:
+        x, y = sensor_xy
+        text += (f'\n[[effects]]\nkind = "point_mass"\nmass_g = {case["sensor"]["mass_g"]!r}\n'
+                 f"x_mm = {x:.6g}\ny_mm = {y:.6g}\n")
+    return text
+
+
+def pair_with_plate(spec_text: str, configuration: str, w3d: np.ndarray) -> tuple[list[int], list[float]]:
+    """Rank (1-based) of the plate mode each 3-D mode pairs with, and the MAC."""
+    from scipy.optimize import linear_sum_assignment  # noqa: PLC0415
+
+    from fem.spec import parse_spec  # noqa: PLC0415
+    from studies.hidden_effect import _grid_w  # noqa: PLC0415
+
+    model = parse_spec(tomllib.loads(spec_text), "<blind>").with_options(
+        modes=FLEXURAL_MODES + 8, transverse_shear=True, rotary_inertia=True)
+    solution = model.solve(configuration)
+    w = _grid_w(solution, model.specimen.length, model.specimen.width)
+    a = np.array([np.ravel(x) for x in w3d]).T
+    mac = (a.T @ w) ** 2 / np.outer(np.sum(a**2, axis=0), np.sum(w**2, axis=0))
+    rows, cols = linear_sum_assignment(-mac)
+    rank = cols[np.argsort(rows)]
+    return [int(r) + 1 for r in rank], [round(float(mac[k, rank[k]]), 4) for k in range(len(rank))]
+
+
+def run_case(case: dict, level: g.Level, half: str) -> dict:
+    started = time.perf_counter()
+    workdir = Path(tempfile.mkdtemp(prefix=f"ccx_{case['name']}_"))
+    try:
+        solved = {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
+                  for c in case["configurations"]}
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    sensor_xy = next(iter(solved.values()))["sensor_xy_mm"]
+    spec = truth_spec(case, sensor_xy)
+    g.check_spec(spec)
+    configurations = []
+    for c in case["configurations"]:
+        s = solved[c["name"]]
+        rank, mac = pair_with_plate(spec, c["name"], s["w"])
+        configurations.append(dict(
+            name=c["name"], total_thickness_mm=g._sig(sum(t for _, t, _ in g.stack(case, c))),
+            elements=s["elements"], dofs=s["dofs"], wall_s=round(s["wall_s"], 1),
+            modes=[dict(frequency_hz=g._sig(float(f)), label=lab, w_share=g._sig(float(sh), 4), plate_mode=r,
+                        mac=m)
+                   for f, lab, sh, r, m in zip(s["frequency_hz"], s["labels"], s["w_share"], rank, mac)]))
+    return dict(
+        case=case["name"], family=case["family"], half=half, seed=SEED, split_seed=SPLIT_SEED,
+        choices=dict(length_mm=case["length_mm"], width_mm=case["width_mm"],
+                     nominal_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["nominal_layers"]],
+                     true_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
+                     misalignment_max_deg=case["misalignment_max_deg"],
+                     sensor=None if not case["sensor"] else dict(case["sensor"], x_mm=sensor_xy[0],
+                                                                  y_mm=sensor_xy[1]),
+                     bond_line_mm=case["bond_line_mm"], aluminium_mm=case["aluminium_mm"]),
+        materials={m: {k: (g._sig(v) if isinstance(v, float) else v) for k, v in c.items()}
+                   for m, c in case["materials"].items()},
+        made_with=dict(solver=g.ccx_version(), element="C3D20R", model="full plate, free-free",
+                       mesh=dict(level=level.name, elements_along_length=level.n_length,
+                                 thickness_factor=level.thickness_factor),
+                       script="tests/data/solid3d/blind.py", wall_time_s=round(time.perf_counter() - started, 1)),
+        truth_spec_toml=spec,
+        configurations=configurations,
+    )
+
+
+def mesh_check(case: dict) -> dict:
+    """Relative change of the stored (coarse) frequencies against the medium mesh."""
+    workdir = Path(tempfile.mkdtemp(prefix=f"ccx_check_{case['name']}_"))
+    out = []
+    try:
+        for c in case["configurations"][:2]:
+            layers = g.stack(case, c)
+            coarse = solve_full(case, layers, LEVEL, workdir, f"c_{c['name']}")
+            medium = solve_full(case, layers, CHECK_LEVEL, workdir, f"m_{c['name']}")
+            change = coarse["frequency_hz"] / medium["frequency_hz"] - 1
+            out.append(dict(configuration=c["name"], max_abs_change=g._sig(float(np.abs(change).max()), 3),
+                            per_mode=[g._sig(float(x), 3) for x in change],
+                            wall_s=[round(coarse["wall_s"], 1), round(medium["wall_s"], 1)],
+                            dofs=[coarse["dofs"], medium["dofs"]]))
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return dict(case=case["name"], levels=[LEVEL.name, CHECK_LEVEL.name], configurations=out)
+
+
+def _write(path: Path, data) -> None:
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(g.dumps(data) + "\n")
+    tmp.replace(path)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--cases", type=int, default=N_CASES)
+    parser.add_argument("--only", action="append", help="case name(s) to (re)run")
+    parser.add_argument("--check", action="store_true", help="coarse against medium mesh, one case per family")
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args(argv)
+    if shutil.which("ccx") is None:
+        parser.error("ccx (CalculiX) is not on the PATH; on Debian: apt-get install calculix-ccx")
+    cases = draw_cases(args.cases)
+    halves = split([c["name"] for c in cases])
+    args.out.mkdir(parents=True, exist_ok=True)
+    if args.check:
+        checks = []
+        for family in FAMILIES:
+            case = next(c for c in cases if c["family"] == family)
+            checks.append(mesh_check(case))
+            print(json.dumps(checks[-1]), flush=True)
+        _write(args.out / "mesh_check.json", checks)
+        return 0
+    _write(args.out / "index.json", dict(seed=SEED, split_seed=SPLIT_SEED, cases=halves,
+                                         script="tests/data/solid3d/blind.py"))
+    for case in cases:
+        if args.only and case["name"] not in args.only:
+            continue
+        path = args.out / f"{case['name']}.json"
+        if path.exists() and not args.only:
+            continue
+        result = run_case(case, LEVEL, halves[case["name"]])
+        _write(path, result)
+        print(f"{case['name']}: {result['made_with']['wall_time_s']:.0f} s "
+              + " | ".join(f"{c['name']} {c['modes'][0]['frequency_hz']:.1f} Hz" for c in result["configurations"]),
+              flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
