@@ -1,0 +1,154 @@
+"""A campaign of bad and odd inputs, tried as a new user would: each once ended in a
+traceback or a silent wrong result; now each ends in a one-line error naming the value and
+the fix, or in a correct result, or is warned about where the user looks."""
+import math
+import os
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from designer.cli import main as plan_tests
+from designer.store import SolveStore
+from fem.errors import MeasurementError, OptionsError, SpecError
+from fem.io import REPORT_MARK
+from fem.model import ModelOptions
+from fem.spec import load_spec, parse_spec
+from identify.cli import main as identify_layers
+from identify.measurements import parse_measurements
+from identify.updating import FitOptions
+
+from .walk import check_report, run, write_files
+
+ROOT = Path(__file__).parent.parent
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    return write_files(tmp_path_factory.mktemp("campaign"))
+
+
+def one_line_error(result, *fragments):
+    assert result.code == 2, (result.code, result.err[-1500:])
+    lines = result.err.strip().splitlines()
+    assert lines[-1].startswith("error:") and "Traceback" not in result.err, result.err[-1500:]
+    for fragment in fragments:
+        assert fragment in lines[-1], lines[-1]
+    return lines[-1]
+
+
+# --- the API ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("options,fragment", [
+    (dict(modes=0), "ModelOptions.modes = 0"), (dict(modes=-2), "ModelOptions.modes = -2"),
+    (dict(modes=5.5), "ModelOptions.modes = 5.5"), (dict(divisions=1), "ModelOptions.divisions = 1"),
+])
+def test_model_options_out_of_range(options, fragment):
+    with pytest.raises(OptionsError, match=fragment.replace(".", r"\.")):
+        ModelOptions(**options)
+
+
+@pytest.mark.parametrize("options,fragment", [
+    (dict(max_iterations=-5), "FitOptions.max_iterations = -5"),
+    (dict(parameter_tolerance=math.nan), "FitOptions.parameter_tolerance = nan"),
+    (dict(max_log_step=0.0), "FitOptions.max_log_step = 0"),
+])
+def test_fit_options_out_of_range(options, fragment):
+    with pytest.raises(OptionsError, match=fragment.replace(".", r"\.")):
+        FitOptions(**options)
+
+
+def test_parse_spec_of_none():
+    with pytest.raises(SpecError, match="need the parsed TOML document"):
+        parse_spec(None)
+
+
+def test_measurements_as_rows(files):
+    """A list of row dicts is a table; a peak list longer than the modes a model can
+    match is refused at once (it ran out of memory after a minute)."""
+    model = load_spec(files.spec)
+    parsed = parse_measurements([{"configuration": "original", "frequency_hz": 183.8}], model)
+    assert len(parsed) == 1 and not parsed.ranked
+    many = pd.DataFrame({"configuration": "original", "frequency_hz": np.linspace(50, 5000, 10_000)})
+    with pytest.raises(MeasurementError, match="has 10000 peaks without mode numbers; at most 60"):
+        parse_measurements(many, model)
+
+
+# --- report folders ---------------------------------------------------------------------
+
+def test_report_into_the_current_folder_is_refused(files, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    one_line_error(run(identify_layers, ["fit", files.spec, files.measurements["labelled"], "--report", "."]),
+                   "is the current folder")
+    assert list(tmp_path.iterdir()) == [] and list(tmp_path.parent.glob(f".{tmp_path.name}.*")) == []
+
+
+def test_two_reports_into_one_folder_at_once(files, tmp_path):
+    """Two fits into the same report folder, the second started while the first runs:
+    both end cleanly and the folder holds one whole report."""
+    folder = tmp_path / "report"
+    argv = [sys.executable, "-m", "identify.cli", "fit", str(files.spec), str(files.measurements["labelled"]),
+            "--report", str(folder)]
+    first = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    time.sleep(0.8)
+    second = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    errors = [p.communicate(timeout=300)[1].decode() for p in (first, second)]
+    assert [first.returncode, second.returncode] == [0, 0], errors
+    check_report(folder)
+    assert (folder / "report.html").exists() and (folder / REPORT_MARK).exists()
+
+
+# --- plan-tests -------------------------------------------------------------------------
+
+def test_write_spec_onto_the_input_spec_is_refused(files, tmp_path):
+    spec = tmp_path / "plate.toml"
+    spec.write_text("# my notes\n" + files.spec.read_text())
+    before = spec.read_text()
+    one_line_error(run(plan_tests, ["recommend", spec, "--write-spec", spec]), "that is the input spec")
+    assert spec.read_text() == before
+
+
+def test_sweep_with_an_empty_value_list_is_refused(files, tmp_path):
+    one_line_error(run(plan_tests, ["sweep", files.spec, "--vary", "thickness=", "--out", tmp_path / "sweep"]),
+                   "no values after '='")
+
+
+def test_corrupt_cache_entries_are_solved_again(tmp_path):
+    store = SolveStore(tmp_path)
+    key = ("laminate", 1.0)
+    store.put(key, (np.array([100.0]), None, np.eye(1)))
+    path = store._path(key)
+    for damage in (b"", path.read_bytes()[:40], b"not a zip at all"):
+        path.write_bytes(damage)
+        assert store.get(key) is None
+    assert not zipfile.is_zipfile(path)
+
+
+def test_a_cache_that_cannot_be_written_is_only_a_lost_speed_up(tmp_path, monkeypatch):
+    import designer.store as store_module
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    store = SolveStore(tmp_path)
+    monkeypatch.setattr(store_module.tempfile, "mkstemp", refuse)
+    store.put(("k",), (np.array([1.0]), None, np.eye(1)))
+    assert store.written == 0 and "cannot be written (Permission denied)" in store.failed
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_cache_folder(files, tmp_path):
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    cache.chmod(0o555)
+    try:
+        result = run(plan_tests, ["sweep", files.spec, "--cache", cache, "--vary", "thickness=0.5,1",
+                                  "--out", tmp_path / "sweep"])
+        assert result.code == 0 and "is read-only" in result.err
+    finally:
+        cache.chmod(0o755)
