@@ -152,3 +152,23 @@ def test_a_read_only_cache_folder(files, tmp_path):
         assert result.code == 0 and "is read-only" in result.err
     finally:
         cache.chmod(0o755)
+
+
+# --- silent results of the fit ----------------------------------------------------------
+
+def test_a_scatter_that_determines_nothing_is_not_converged(files, tmp_path):
+    """std_hz = 1000 on every row: the frequencies fit, but every std exceeds its value;
+    it once said "converged" with "warnings: none"."""
+    table = pd.read_csv(files.measurements["labelled"]).assign(std_hz=1000.0)
+    table.to_csv(tmp_path / "std.csv", index=False)
+    result = run(identify_layers, ["fit", files.spec, tmp_path / "std.csv"])
+    assert result.code == 1
+    assert "not_identifiable" in result.out and "determines none of the parameters" in result.out
+
+
+def test_an_overstated_scatter_is_warned_about(files, tmp_path):
+    """std_hz 30 x the real scatter: converged, and the warnings say the std are too large."""
+    table = pd.read_csv(files.measurements["labelled"])
+    table.assign(std_hz=30 * table["std_hz"]).to_csv(tmp_path / "std.csv", index=False)
+    result = run(identify_layers, ["fit", files.spec, tmp_path / "std.csv"])
+    assert result.code == 0 and "is std_hz overstated?" in result.out
