@@ -1,6 +1,7 @@
 """A campaign of bad and odd inputs, tried as a new user would: each once ended in a
 traceback or a silent wrong result; now each ends in a one-line error naming the value and
 the fix, or in a correct result, or is warned about where the user looks."""
+import json
 import math
 import os
 import subprocess
@@ -172,3 +173,42 @@ def test_an_overstated_scatter_is_warned_about(files, tmp_path):
     table.assign(std_hz=30 * table["std_hz"]).to_csv(tmp_path / "std.csv", index=False)
     result = run(identify_layers, ["fit", files.spec, tmp_path / "std.csv"])
     assert result.code == 0 and "is std_hz overstated?" in result.out
+
+
+# --- recordings -------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def hits(files):
+    return [pd.read_csv(path) for path in files.recordings]
+
+
+def write(tmp_path, frames):
+    paths = []
+    for i, frame in enumerate(frames):
+        paths.append(tmp_path / f"hit{i + 1}.csv")
+        frame.to_csv(paths[-1], index=False)
+    return paths
+
+
+def test_an_all_zero_force_channel(hits, tmp_path):
+    paths = write(tmp_path, [hits[0].assign(force=0.0)])
+    one_line_error(run(identify_layers, ["peaks", *paths]), "the force channel is flat")
+
+
+def test_time_in_milliseconds(hits, tmp_path):
+    paths = write(tmp_path, [hits[0].assign(time_s=1000 * hits[0]["time_s"])])
+    one_line_error(run(identify_layers, ["peaks", *paths]), "is the time column in ms?")
+
+
+def test_the_same_hit_given_several_times_is_refused(files):
+    one_line_error(run(identify_layers, ["peaks", *[files.recordings[0]] * 5]), "holds the same samples as")
+
+
+def test_a_clipped_response_is_warned_about(hits, tmp_path):
+    clipped = [h.assign(acceleration=h["acceleration"].clip(-0.2 * h["acceleration"].abs().max(),
+                                                            0.2 * h["acceleration"].abs().max())) for h in hits]
+    result = run(identify_layers, ["peaks", *write(tmp_path, clipped), "--json"])
+    notes = json.loads(result.out)["notes"]
+    assert sum("the response is clipped" in note for note in notes) == len(hits), notes
+    clean = run(identify_layers, ["peaks", *write(tmp_path, hits), "--json"])
+    assert not any("clipped" in note for note in json.loads(clean.out)["notes"])
