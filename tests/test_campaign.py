@@ -212,3 +212,19 @@ def test_a_clipped_response_is_warned_about(hits, tmp_path):
     assert sum("the response is clipped" in note for note in notes) == len(hits), notes
     clean = run(identify_layers, ["peaks", *write(tmp_path, hits), "--json"])
     assert not any("clipped" in note for note in json.loads(clean.out)["notes"])
+
+
+# --- plan-tests advice --------------------------------------------------------------------
+
+@pytest.mark.parametrize("length,width,cut", [(0.300, 0.015, (18.0, 15.0)), (0.150, 0.120, (144.0, 120.0)),
+                                              (0.150, 0.200, (150.0, 125.0))])
+def test_poisson_plate_advice_never_needs_a_larger_plate(length, width, cut):
+    """Eq. 16 with length/width = 1.2: the plate to cut fits inside the one there is (a
+    300 x 15 mm strip was told to become 300 x 299.5 mm)."""
+    from designer.poisson import PoissonPlate
+
+    plate = PoissonPlate(length, width, 1.2)
+    got = tuple(1e3 * v for v in plate.cut_to)
+    assert got == pytest.approx(cut) and got[0] <= 1e3 * length + 1e-9 and got[1] <= 1e3 * width + 1e-9
+    assert got[0] / got[1] == pytest.approx(1.2)
+    assert f"cut it to {cut[0]:.1f} x {cut[1]:.1f} mm" in plate.report()
