@@ -228,3 +228,15 @@ def test_poisson_plate_advice_never_needs_a_larger_plate(length, width, cut):
     assert got == pytest.approx(cut) and got[0] <= 1e3 * length + 1e-9 and got[1] <= 1e3 * width + 1e-9
     assert got[0] / got[1] == pytest.approx(1.2)
     assert f"cut it to {cut[0]:.1f} x {cut[1]:.1f} mm" in plate.report()
+
+
+def test_a_point_mass_heavier_than_the_plate_is_refused(files):
+    """A 1 t 'sensor' on a 141 g plate (the walk plate) was solved without a word."""
+    import tomllib
+
+    spec = tomllib.loads(files.spec.read_text())
+    spec["effects"] = [{"kind": "point_mass", "mass_g": 1e6, "x_mm": 100.0, "y_mm": 50.0}]
+    with pytest.raises(SpecError, match=r"mass_g = 1e\+06 g is more than the plate itself \(141.3 g\)"):
+        parse_spec(spec)
+    spec["effects"][0]["mass_g"] = 6.0
+    assert parse_spec(spec).specimen.attachments[0].mass == pytest.approx(6e-3)
