@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -43,7 +44,11 @@ Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 ba
 
 def _problem(args) -> Problem:
     if hasattr(args, "no_cache"):
-        use_store(None if args.no_cache else SolveStore(args.cache))
+        store = None if args.no_cache else SolveStore(args.cache)
+        if store is not None and not os.access(store.folder, os.W_OK | os.X_OK):
+            print(f"note: the solve cache {str(store.folder)!r} is read-only: it is read, new solves are not kept "
+                  "(--cache DIR elsewhere to keep them)", file=sys.stderr)
+        use_store(store)
     model = load_spec(spec_or_example(args.spec))
     for note in model.notes:
         print(f"note: {note}", file=sys.stderr)
@@ -56,8 +61,22 @@ def _progress(args) -> Progress:
     return Progress(sys.stderr if show else None)
 
 
+def _not_the_input(spec, written) -> None:
+    """Refuse ``--write-spec`` onto the spec it reads: the user's file (and its comments)
+    would be replaced by the design."""
+    if written is None or spec is None:
+        return
+    same = Path(written).resolve() == Path(spec).resolve()
+    if not same and Path(written).exists() and Path(spec).exists():
+        same = os.path.samefile(written, spec)
+    if same:
+        raise DesignError(f"--write-spec {written}: that is the input spec; it would be overwritten (its comments "
+                          "lost): write the design to a new file, e.g. --write-spec plan.toml")
+
+
 def run_recommend(args) -> int:
     """Ranked designs with scores, predicted std and the frequencies to expect."""
+    _not_the_input(args.spec, args.write_spec)
     problem = _problem(args)
     tasks = len(candidates(problem.space, problem.specimen)) + 1
     with executor(args.workers, args.scheduler, tasks) as pool:

@@ -35,20 +35,30 @@ class PoissonPlate:
         return self.length / self.suggested_ratio
 
     @property
+    def cut_to(self) -> tuple[float, float]:
+        """(length, width) [m] of the Poisson plate cut from this one: the width trimmed,
+        or, where that would need a wider plate than there is, the length."""
+        if self.suggested_width <= self.width:
+            return self.length, self.suggested_width
+        return self.width * self.suggested_ratio, self.width
+
+    @property
     def complies(self) -> bool:
         return abs(self.ratio / self.suggested_ratio - 1) <= TOLERANCE
 
     def to_dict(self) -> dict:
+        length, width = self.cut_to
         return {"length_width_ratio": self.ratio, "suggested_ratio": self.suggested_ratio,
-                "suggested_width_mm": self.suggested_width * 1e3, "complies": self.complies}
+                "suggested_width_mm": self.suggested_width * 1e3, "cut_to_mm": [length * 1e3, width * 1e3],
+                "complies": self.complies}
 
     def report(self) -> str:
         head = (f"Poisson-plate rule (paper eq. 16): length/width = (D11/D22)^(1/4) = {self.suggested_ratio:.4f} "
                 f"at the nominal properties; this plate: {self.ratio:.4f}")
         if self.complies:
             return head + f" (within {100 * TOLERANCE:g} %: a Poisson plate)"
-        return head + (f"; cut it to {self.length * 1e3:.1f} x {self.suggested_width * 1e3:.1f} mm "
-                       "for modes sensitive to nu12")
+        length, width = self.cut_to
+        return head + f"; cut it to {length * 1e3:.1f} x {width * 1e3:.1f} mm for modes sensitive to nu12"
 
 
 def poisson_plate(specimen: Specimen) -> PoissonPlate:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import os
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +32,8 @@ def default_folder() -> Path:
 
 class SolveStore:
     """Solved configurations on disk: ``get(key)`` -> (frequencies, labels or None,
-    sensitivities) or None; ``put(key, result)``.  ``hits`` and ``written`` count."""
+    sensitivities) or None; ``put(key, result)``.  ``hits`` and ``written`` count;
+    ``failed`` says why entries could not be written ('' when they could)."""
 
     def __init__(self, folder: str | Path | None = None):
         self.folder = Path(folder) if folder is not None else default_folder()
@@ -41,8 +43,12 @@ class SolveStore:
             raise OutputError(f"solve cache folder {str(self.folder)!r} cannot be made ({exc.strerror}); give "
                               "--cache DIR elsewhere or --no-cache") from None
         for stale in self.folder.glob(".*.tmp"):
-            stale.unlink(missing_ok=True)
+            try:
+                stale.unlink(missing_ok=True)
+            except OSError:
+                pass  # a read-only store: its leftovers stay, it is still read
         self.hits = self.written = 0
+        self.failed = ""  # why entries could not be written, if they could not
 
     @staticmethod
     def digest(key) -> str:
@@ -57,14 +63,20 @@ class SolveStore:
             with np.load(path, allow_pickle=False) as data:
                 labels = tuple(str(x) for x in data["labels"]) if bool(data["labelled"]) else None
                 out = (data["frequencies"].copy(), labels, data["sensitivities"].copy())
-        except (OSError, KeyError, ValueError):
-            return None  # absent, or unreadable (then it is simply solved again)
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+            return None  # absent, or unreadable (truncated, empty, foreign: then it is simply solved again)
         self.hits += 1
         return out
 
     def put(self, key, result) -> None:
+        """Keep a solve; a store that cannot be written (read-only, disk full) is only a
+        lost speed-up: the run goes on and ``failed`` says why."""
         frequencies, labels, sensitivities = result
-        fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=".", suffix=".tmp")
+        try:
+            fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=".", suffix=".tmp")
+        except OSError as exc:
+            self.failed = self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
+            return
         os.close(fd)
         try:
             with open(tmp, "wb") as handle:
@@ -73,6 +85,8 @@ class SolveStore:
                          labelled=np.array(labels is not None))
             os.replace(tmp, self._path(key))
             self.written += 1
+        except OSError as exc:
+            self.failed = self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)

@@ -87,7 +87,10 @@ def _numbers(kind: str, text: str, where: str) -> tuple:
 def parse_variable(text: str, problem: Problem) -> Variable:
     """``KIND[=VALUES]`` or ``CONFIG.KIND[=VALUES]`` -> a validated ``Variable``."""
     where = f"--vary {text!r}"
-    name, _, values = text.partition("=")
+    name, equals, values = text.partition("=")
+    if equals and not values.strip():
+        raise DesignError(f"{where}: no values after '='; give them (e.g. {name}=0.5,1,2) or leave out '=' for the "
+                          "defaults")
     target, _, kind = name.rpartition(".")
     if kind not in KINDS:
         hint = (did_you_mean(kind, KINDS) + " ").lstrip()

@@ -7,7 +7,7 @@ Every command and API function takes that object.  Inside, all quantities are SI
 (Pa, m, kg); results print in the spec's units (GPa, mm, g).
 """
 from .effects import Effect, SwitchedOn, effect, register
-from .errors import DesignError, LayerIdError, MeasurementError, ModelError, SpecError
+from .errors import DesignError, LayerIdError, MeasurementError, ModelError, OptionsError, SpecError
 from .laminate import Laminate, Layer
 from .material import Material
 from .model import ModelOptions, SpecimenModel
@@ -17,5 +17,5 @@ from .specimen import Configuration, Parameter, Specimen
 __all__ = [
     "load_spec", "parse_spec", "SpecimenModel", "ModelOptions", "Specimen", "Configuration", "Layer", "Laminate",
     "Material", "Parameter", "Effect", "SwitchedOn", "effect", "register",
-    "LayerIdError", "SpecError", "MeasurementError", "ModelError", "DesignError",
+    "LayerIdError", "SpecError", "MeasurementError", "ModelError", "DesignError", "OptionsError",
 ]

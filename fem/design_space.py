@@ -194,7 +194,7 @@ def parse_design(design: dict, defined: dict[str, Material], n_identified: int) 
                           f"plus at least one added plate; the paper uses one per identified material, here {n_identified})")
 
     criterion = design.get("criterion", "condition")
-    if criterion not in CRITERIA:
+    if not isinstance(criterion, str) or criterion not in CRITERIA:
         raise DesignError(f"[design].criterion = {criterion!r}: allowed: {', '.join(map(repr, CRITERIA))}")
 
     std = _number(design, "frequency_std_rel", DEFAULT_FREQUENCY_STD_REL, 0.0, 0.1,

@@ -178,6 +178,11 @@ class RotaryInertia(Effect):
         return [self.fixed(model, {})]
 
 
+def _plate_mass(specimen) -> float:
+    """The original plate's mass [kg]."""
+    return specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
+
+
 class PointMassEffect(Effect):
     kind = "point_mass"
     description = "a mass at a point (an accelerometer, a glue blob): mass and position"
@@ -187,12 +192,16 @@ class PointMassEffect(Effect):
         self._check(table)
         mass = PointMass(self._number(table, "mass_g") * 1e-3, self._number(table, "x_mm") * 1e-3,
                          self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)))
+        plate = _plate_mass(model.specimen)
+        if mass.mass > plate:
+            raise SpecError(f"{self._where}.mass_g = {1e3 * mass.mass:g} g is more than the plate itself "
+                            f"({1e3 * plate:.4g} g): a point mass is a sensor or a glue blob; the mass is in grams")
         return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (mass,)))
 
     def free(self, model, hint=None):
         specimen = model.specimen
         hint = hint or {}
-        plate_mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
+        plate_mass = _plate_mass(specimen)
         mass = hint.get("mass_kg") or 0.01 * plate_mass
         x, y = hint.get("xy", (0.8 * specimen.length, 0.7 * specimen.width))
         # Start inside the plate, so that the first step may go either way.

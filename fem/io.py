@@ -68,17 +68,77 @@ def atomic_path(path: str | Path):
             os.unlink(tmp)
 
 
+def _manifest(folder: Path) -> set[str] | None:
+    """The files a report folder's mark lists as written by this tool (relative paths),
+    or None when the folder has no mark (not a report of this tool)."""
+    mark = folder / REPORT_MARK
+    if not mark.is_file():
+        return None
+    lines = mark.read_text(errors="replace").splitlines()
+    return {line[2:] for line in lines if line.startswith("- ")}
+
+
+def _files(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*") if not p.is_dir() and p.name != REPORT_MARK}
+
+
 def check_report_folder(path: str | Path) -> Path:
     """``path`` as a report folder to write, or a one-line error before any work: an
-    existing file, a folder that is not this tool's report, a place that cannot be written."""
+    existing file, the current folder or one above it, a folder that is not this tool's
+    report or holds files the tool did not write (its mark lists those it wrote), a place
+    that cannot be written."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"report folder {str(path)!r} is an existing file; give a folder name")
-    if path.is_dir() and any(path.iterdir()) and not (path / REPORT_MARK).exists():
-        raise OutputError(f"report folder {str(path)!r} exists and is not a report of this tool; choose a new or "
-                          "empty folder (its files are left alone)")
+    if path.exists() and Path.cwd().resolve().is_relative_to(path.resolve()):
+        raise OutputError(f"report folder {str(path)!r} is the current folder or holds it; a report replaces its "
+                          "folder whole: give a new subfolder, e.g. --report report")
+    if path.is_dir() and any(path.iterdir()):
+        written = _manifest(path)
+        if written is None:
+            raise OutputError(f"report folder {str(path)!r} exists and is not a report of this tool; choose a new or "
+                              "empty folder (its files are left alone)")
+        foreign = sorted(_files(path) - written)
+        if foreign:
+            listed = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
+            raise OutputError(f"report folder {str(path)!r} holds files this tool did not write ({listed}); a new "
+                              "report replaces the folder whole: move them out or choose another folder")
     _writable_parent(path, "report folder")
     return path
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _clear_leftovers(path: Path) -> None:
+    """Remove what killed runs left beside ``path`` (``.NAME.tmp-PID-*``, ``.NAME.old-PID-*``);
+    a running one's (its process still alive) is left alone."""
+    for stale in list(path.parent.glob(f".{path.name}.tmp-*")) + list(path.parent.glob(f".{path.name}.old-*")):
+        pid = stale.name.rsplit(".", 1)[-1].split("-")[1]
+        if not (pid.isdigit() and _alive(int(pid))):
+            shutil.rmtree(stale, ignore_errors=True)
+
+
+@contextmanager
+def _swap_lock(path: Path):
+    """One run at a time swaps its report into ``path`` (a lock on the folder that holds
+    it: nothing is left behind), so two runs into one folder end with one whole report,
+    the later one's."""
+    import fcntl
+
+    fd = os.open(path.parent, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @contextmanager
@@ -86,25 +146,29 @@ def report_folder(path: str | Path):
     """Yield a temporary folder beside ``path`` to write a report into; on success it
     replaces ``path`` whole (a previous report of this tool included: no stale files
     mix in), on any error or interruption it is removed.  ``path`` must be new, empty, or
-    a report this tool wrote (marked by ``REPORT_MARK``): anything else is refused
-    before work starts.  Leftovers of a run that was killed (``.NAME.tmp-*``,
-    ``.NAME.old-*`` beside it) are cleared first.  A kill between the two renames that
-    swap an old report for the new one leaves the old one as ``.NAME.old-*``."""
+    a report this tool wrote holding only files it wrote (the mark ``REPORT_MARK`` lists
+    them): anything else is refused before work starts, and again just before the swap.
+    Leftovers of a run that was killed (``.NAME.tmp-PID-*``, ``.NAME.old-PID-*`` beside
+    it) are cleared first; a concurrent run's are not.  A kill between the two renames
+    that swap an old report for the new one leaves the old one as ``.NAME.old-*``."""
     path = check_report_folder(path)
-    for stale in list(path.parent.glob(f".{path.name}.tmp-*")) + list(path.parent.glob(f".{path.name}.old-*")):
-        shutil.rmtree(stale, ignore_errors=True)
-    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-"))
+    _clear_leftovers(path)
+    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))
     try:
         yield tmp
-        (tmp / REPORT_MARK).write_text(f"written by layer-id {tool_version()}\n")
+        written = sorted(_files(tmp))
+        (tmp / REPORT_MARK).write_text(f"written by layer-id {tool_version()}; its files:\n"
+                                       + "".join(f"- {name}\n" for name in written))
         os.chmod(tmp, 0o777 & ~_permissions())
-        old = None
-        if path.exists():
-            old = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.old-"))
-            os.replace(path, old / "report")
-        os.replace(tmp, path)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        with _swap_lock(path):
+            check_report_folder(path)  # still ours to replace (nothing foreign put in meanwhile)
+            old = None
+            if path.exists():
+                old = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.old-{os.getpid()}-"))
+                os.replace(path, old / "report")
+            os.replace(tmp, path)
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

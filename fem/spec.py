@@ -160,6 +160,8 @@ def _input_std(data: dict, specimen: Specimen) -> tuple[InputStd, ...]:
 def _layer_material(name, where: str, materials: dict) -> Material:
     """A layer's material: the spec's own, else built-in stock by name (``brass`` or
     ``brass_stock``); a stock material used is added to ``materials``."""
+    if not isinstance(name, str):
+        raise SpecError(f"{where}.material = {name!r}: need a material's name (text), e.g. material = \"steel\"")
     if name in materials:
         return materials[name]
     stock = stock_name(name) if isinstance(name, str) else None
@@ -234,6 +236,9 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
     sp = data["specimen"]
     if not isinstance(sp, dict):
         raise SpecError("[specimen]: must be a table")
+    if not isinstance(data.get("configurations", []), list):
+        raise SpecError(f"configurations = {data['configurations']!r}: need a list of [[configurations]] tables, "
+                        "each with a name")
     check_keys(sp, ("name", "length_mm", "width_mm", "layers", "mass_g", "length_mm_std", "width_mm_std",
                     "mass_g_std"), "[specimen]")
     length = _positive(sp, "length_mm", "[specimen]")

@@ -32,7 +32,7 @@ def check_keys(table: dict, allowed: Iterable[str], where: str, error: type[Laye
     allowed = list(allowed)
     for key in table:
         if key not in allowed:
-            raise error(f"{where}: unknown key '{key}'; {suggestion(key, allowed)}")
+            raise error(f"{where}: unknown key {str(key)!r}; {suggestion(key, allowed)}")
 
 
 def known_name(name, known: Iterable[str], where: str, what: str, error: type[LayerIdError] = SpecError) -> str:

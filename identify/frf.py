@@ -150,6 +150,8 @@ def _cut(hit: Hit) -> _Cut | Rejection:
         f = hit.force - np.median(hit.force[len(hit.force) // 2:])
         peak = int(np.argmax(np.abs(f)))
         noise = 1.4826 * np.median(np.abs(f[len(f) // 2:]))
+        if f[peak] == 0:
+            return Rejection(hit.source, "no hit: the force channel is flat (cable unplugged?)")
         if abs(f[peak]) < MIN_HIT_SNR * noise:
             return Rejection(hit.source, f"no hit: force peak only {abs(f[peak]) / noise:.1f} times the noise "
                                          f"(need {MIN_HIT_SNR:g})")

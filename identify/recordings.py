@@ -26,6 +26,12 @@ CSV_COLUMNS = ("time_s", "force") + RESPONSE_COLUMNS
 MIN_SAMPLES = 256
 #: Relative disagreement allowed between a stated sample rate and the time column's.
 RATE_TOLERANCE = 1e-4
+#: Lowest sample rate [Hz] a plate's modes can be recorded at (a 150 mm plate's first mode
+#: lies near 100 Hz); below it a time column is in ms, or the rate is mistyped.
+MIN_SAMPLE_RATE = 500.0
+#: A channel is clipped when its extreme value is held by at least this many samples (a
+#: free decay peaks at one sample; a saturated converter or amplifier holds its limit).
+CLIPPED_SAMPLES = 3
 #: UFF58 specific data types (ordinate): response quantity by code, and the force codes.
 UFF_RESPONSE = {8: "displacement", 11: "velocity", 12: "acceleration"}
 UFF_FORCE = (9, 13)
@@ -128,6 +134,9 @@ def _rate_from_time(source, time: np.ndarray, stated: float | None, quantum: np.
                     f"column's printed precision ({allowed[i]:.2g} s): samples dropped? the samples must be evenly "
                     "spaced: re-export without gaps")
     rate = _snap(1.0 / dt)
+    if rate < MIN_SAMPLE_RATE:
+        raise _fail(source, f"time_s gives a sample rate of {rate:.6g} Hz, below {MIN_SAMPLE_RATE:g} Hz; is the time "
+                    "column in ms? give time_s in seconds (or drop it and give --sample-rate)")
     if stated is not None and abs(rate / stated - 1) > RATE_TOLERANCE:
         raise _fail(source, f"time_s gives a sample rate of {rate:.6g} Hz but sample_rate = {stated:g} Hz; "
                     "drop the stated rate or the time_s column")
@@ -143,6 +152,8 @@ def _snap(rate: float) -> float:
 def _check_rate(source, rate) -> float:
     if rate is None or not np.isfinite(rate) or rate <= 0:
         raise _fail(source, f"sample_rate = {rate!r} must be a positive number of Hz, e.g. 48000")
+    if rate < MIN_SAMPLE_RATE:
+        raise _fail(source, f"sample_rate = {rate:g} Hz is below {MIN_SAMPLE_RATE:g} Hz; give it in Hz, e.g. 48000")
     return float(rate)
 
 
@@ -309,9 +320,35 @@ def read_recordings(paths, sample_rate: float | None = None) -> list[Recording]:
     return check_together(out)
 
 
+def _same_samples(a: Hit, b: Hit) -> bool:
+    return (np.array_equal(a.response, b.response)
+            and (a.force is None) == (b.force is None) and (a.force is None or np.array_equal(a.force, b.force)))
+
+
+def check_clipping(hit: Hit) -> list[str]:
+    """A note per clipped channel of a hit: its extreme value held by at least
+    ``CLIPPED_SAMPLES`` samples (the converter's or amplifier's limit).  Clipping bends
+    the spectrum: peaks appear at harmonics and true modes are lost."""
+    notes = []
+    for name, channel in (("force", hit.force), ("response", hit.response)):
+        if channel is None or not len(channel):
+            continue
+        extreme = np.max(np.abs(channel))
+        held = int(np.count_nonzero(np.abs(channel) == extreme))
+        if extreme > 0 and held >= CLIPPED_SAMPLES:
+            notes.append(f"{hit.source}: the {name} is clipped ({held} samples at its limit {extreme:g}): the peaks "
+                         "are not to be trusted; lower the gain or hit softer and record again")
+    return notes
+
+
+def recording_notes(records: list[Recording]) -> list[str]:
+    """What the user must know about the recordings themselves (clipped channels)."""
+    return [note for r in records if isinstance(r, Hit) for note in check_clipping(r)]
+
+
 def check_together(records: list[Recording]) -> list[Recording]:
     """The recordings of one configuration: one kind (time hits or FRFs), one sample
-    rate, one response quantity, a force channel in all or none."""
+    rate, one response quantity, a force channel in all or none, no hit given twice."""
     out = list(records)
     if not out:
         raise MeasurementError("no recordings given; pass at least one CSV, WAV or UFF file")
@@ -323,6 +360,11 @@ def check_together(records: list[Recording]) -> list[Recording]:
         if r.quantity != out[0].quantity:
             raise _fail(r.source, f"response is {r.quantity} but {out[0].source} has {out[0].quantity}; "
                         "give one sensor's recordings per configuration")
+    for i, h in enumerate(hits):
+        twin = next((g for g in hits[:i] if _same_samples(g, h)), None)
+        if twin is not None:
+            raise _fail(h.source, f"holds the same samples as {twin.source}: one hit given twice would fake a "
+                        "zero scatter; give each hit once")
     for h in hits[1:]:
         if abs(h.sample_rate / hits[0].sample_rate - 1) > RATE_TOLERANCE:
             raise _fail(h.source, f"sample rate {h.sample_rate:g} Hz differs from {hits[0].source}'s "

@@ -13,6 +13,7 @@ from enum import Enum
 from typing import Callable
 
 import numpy as np
+from scipy.stats import chi2 as chi2_distribution
 
 from fem.errors import MeasurementError, OptionsError
 from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
@@ -23,9 +24,9 @@ from .ambiguity import settle_pairings
 from .repair import quick_repair
 from .measurements import Measurements
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
-from .parameters import display
+from .parameters import UNITS, display
 from .result import FitResult, FitStatus, Iteration
-from .statistics import FitStatistics
+from .statistics import CHI2_TEST_LEVEL, FitStatistics
 from .uncertainty import Uncertainty
 
 #: The updating stops once the misfit has stalled (falls by less than this fraction) and
@@ -34,6 +35,9 @@ STALLED = 1e-4
 STEP_PER_STD = 0.01
 #: Steps the ``FitOptions.stall_chi2`` test looks back over.
 STALL_ITERATIONS = 3
+#: A parameter whose std in z reaches this is not determined by the data (a modulus
+#: +- 100 %, nu12 +- 1): what the stated scatter allows spans every plausible value.
+UNDETERMINED_Z = 1.0
 #: A parameter this close to a bound in z (relative for log parameters) is on it.
 BOUND_TOLERANCE = 1e-9
 
@@ -211,7 +215,15 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             progress(history[-1])
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
-    status, message = _status(stop, uncertainty, statistics, options)
+    vague = undetermined(objective.space, current.values, uncertainty.std)
+    status, message = _status(stop, uncertainty, statistics, options, vague.all())
+    if vague.any() and not vague.all():
+        warnings.append(f"not determined by the stated scatter (std above {UNDETERMINED_Z:g} x the parameter's own "
+                        f"scale): {_listed(parameters, current.values, uncertainty.std, vague)}; fix them or "
+                        "measure more modes or configurations")
+    elif vague.all() and status is FitStatus.NOT_IDENTIFIABLE:
+        message += f": {_listed(parameters, current.values, uncertainty.std, vague)}"
+    warnings += _overstated(statistics)
     if repaired:
         message += f"; re-paired {repaired}"
     return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
@@ -220,10 +232,37 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
                      dict(effect_of or {}))
 
 
+def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:
+    """Which parameters the data do not determine: a std of at least ``UNDETERMINED_Z``
+    in z (the value itself for a modulus, a thickness or a mass, i.e. 100 %; 1 for nu12,
+    1 rad for an angle, a plate length for a position), or none at all."""
+    std_z = np.asarray(std, dtype=float) / np.abs(space.dvalue_dz(np.asarray(values, dtype=float)))
+    return ~np.isfinite(std_z) | (std_z >= UNDETERMINED_Z)
+
+
+def _overstated(statistics: FitStatistics) -> list[str]:
+    """A warning when the misfit is far below the stated scatter (chi^2 in the lower tail
+    at the test level): std_hz overstated, so every std reported is too large."""
+    if not (statistics.scatter_known and statistics.dof > 0):
+        return []
+    p_low = float(chi2_distribution.cdf(statistics.chi2, statistics.dof))
+    if p_low >= CHI2_TEST_LEVEL:
+        return []
+    return [f"the misfit is far below the stated scatter (reduced chi^2 {statistics.reduced_chi2:.2g}; an honest "
+            f"std_hz gives one this small with chance {p_low:.1g}): is std_hz overstated? The std above scale with it"]
+
+
+def _listed(parameters, values, std, mask) -> str:
+    shown = [f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip()
+             for p, v, s, m in zip(parameters, values, std, mask) if m]
+    return ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
+
+
 def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
-            options: FitOptions) -> tuple[FitStatus, str]:
+            options: FitOptions, all_undetermined: bool = False) -> tuple[FitStatus, str]:
     """The status of a finished fit and its message: converged only when the misfit is
-    consistent with the scatter (``FitStatistics.consistent``)."""
+    consistent with the scatter (``FitStatistics.consistent``) and the scatter determines
+    at least one parameter."""
     if not stop.converged:
         if stop is Stop.MAX_ITERATIONS:
             return FitStatus.NOT_CONVERGED, f"not converged in {options.max_iterations} iterations"
@@ -238,6 +277,10 @@ def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
         return FitStatus.NOT_IDENTIFIABLE, (
             f"not identifiable: the frequencies fit but the sensitivity matrix is singular (condition number "
             f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data")
+    if all_undetermined:
+        return FitStatus.NOT_IDENTIFIABLE, ("not identifiable: the frequencies fit, but the stated scatter determines "
+                                            f"none of the parameters (each std at least {UNDETERMINED_Z:g} x its own "
+                                            "scale; is std_hz in Hz?)")
     return FitStatus.CONVERGED, f"converged: {stop.value}; {statistics.describe()}"
 
 

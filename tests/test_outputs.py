@@ -59,13 +59,21 @@ def test_interrupted_fit_report_leaves_the_previous_one(tmp_path, signal_number)
     assert temporaries(folder) == [] and (folder / "report.html").exists()
 
 
-def test_a_second_report_replaces_the_first_whole(tmp_path):
-    """A stale file of an earlier report does not survive the next one."""
+def test_a_second_report_replaces_the_first_whole(tmp_path, capsys):
+    """A file an earlier report wrote (listed in its mark) does not survive the next one;
+    a file the user put in the folder makes the next run refuse, and it is kept."""
     folder = tmp_path / "report"
     assert identify_layers(["fit", "--report", str(folder)]) == 0
     (folder / "stale.png").write_bytes(b"old")
+    with open(folder / REPORT_MARK, "a") as mark:  # as if an earlier run (with --effect) had written it
+        mark.write("- stale.png\n")
     assert identify_layers(["fit", "--report", str(folder)]) == 0
     assert not (folder / "stale.png").exists()
+    (folder / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    assert identify_layers(["fit", "--report", str(folder)]) == 2
+    assert "holds files this tool did not write (notes.txt)" in capsys.readouterr().err
+    assert (folder / "notes.txt").read_text() == "mine" and (folder / "report.html").exists()
 
 
 def test_killed_sweep_resumes_solving_only_what_is_missing(tmp_path, monkeypatch):
