@@ -257,17 +257,34 @@ def read_uff(path: str | Path, sample_rate: float | None = None) -> list[Recordi
     return out
 
 
+#: Relative precision of an uneven-abscissa UFF58 record's printed x values (E13.5: 6 digits).
+UFF_X_PRECISION = 1e-5
+
+
+def _uff_step(source: str, r: dict) -> float:
+    """The record's abscissa step: ``abscissa_inc`` when evenly spaced (abscissa_spacing
+    1); for abscissa_spacing 0 (x values listed, as some front ends write even data) the
+    least-squares step of the listed x, which must be even to their printed precision."""
+    if int(r.get("abscissa_spacing", 1)) == 1:
+        return float(r["abscissa_inc"])
+    x = np.asarray(r["x"], dtype=float)
+    try:
+        return 1.0 / _rate_from_time(source, x, None, UFF_X_PRECISION * np.abs(x))
+    except MeasurementError as error:
+        raise _fail(source, f"record '{r.get('id1', '')}': abscissa_spacing = 0 and the listed abscissa is uneven "
+                    f"({str(error).split(': ', 1)[1].split(';')[0]}); export the record on evenly spaced "
+                    "lines") from None
+
+
 def _uff_frf(source: str, r: dict) -> MeasuredFRF:
-    if int(r.get("abscissa_spacing", 1)) != 1:
-        raise _fail(source, f"record '{r.get('id1', '')}': abscissa_spacing = 0 (uneven); need evenly spaced "
-                    "frequencies: export the FRF on its analysis lines")
+    step = _uff_step(source, r)
     frf = np.asarray(r["data"], dtype=complex)
     bad = np.flatnonzero(~np.isfinite(frf))
     if bad.size or len(frf) < 16:
         raise _fail(source, f"record '{r.get('id1', '')}': FRF has {bad.size} non-finite values of {len(frf)} "
                     "(need at least 16 finite lines); re-export the FRF")
     quantity = _uff_quantity(source, r, "ordinate_spec_data_type")
-    return MeasuredFRF(source, np.asarray(r["x"], dtype=float), frf, quantity)
+    return MeasuredFRF(source, float(np.asarray(r["x"], dtype=float)[0]) + step * np.arange(len(frf)), frf, quantity)
 
 
 def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
@@ -276,7 +293,7 @@ def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
     if len(force) != 1 or len(response) != 1 or len(times) != 2:
         raise _fail(source, f"{len(times)} time records with {len(force)} force and {len(response)} response; "
                     "need one force record (data type 13) and one response record (8, 11 or 12) per file")
-    rates = [_snap(1.0 / float(r["abscissa_inc"])) for r in (force[0], response[0])]
+    rates = [_snap(1.0 / _uff_step(source, r)) for r in (force[0], response[0])]
     if abs(rates[0] / rates[1] - 1) > RATE_TOLERANCE:
         raise _fail(source, f"force sampled at {rates[0]:g} Hz, response at {rates[1]:g} Hz; record both channels "
                     "at one rate")

@@ -182,3 +182,46 @@ def test_mat_and_tdms_errors_name_the_file_and_the_fix(tmp_path):
     junk.write_bytes(b"not a tdms file" * 20)
     with pytest.raises(MeasurementError, match=r"hit.tdms: cannot read as TDMS"):
         read_recordings([junk])
+
+
+def _uff58(func_type, data, x, binary, spacing, ordinate, denominator, name):
+    import pyuff
+
+    return pyuff.prepare_58(
+        binary=binary, func_type=func_type, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3, data=data, x=x,
+        abscissa_spacing=spacing, abscissa_min=float(x[0]), abscissa_inc=float(x[1] - x[0]),
+        abscissa_spec_data_type=17 if func_type == 1 else 18, ordinate_spec_data_type=ordinate,
+        orddenom_spec_data_type=denominator)
+
+
+@pytest.mark.parametrize("spacing", [1, 0])
+def test_uff58_variants_give_the_csv_peaks(tmp_path, hits, spacing):
+    """Time records (function type 1) in ASCII UFF58 with the abscissa as start and
+    increment (spacing 1) or listed point by point (spacing 0, printed with 6 digits):
+    the CSV's peaks within 0.01 %.  (Binary UFF58 is read by pyuff, but pyuff 2.4 writes
+    an empty file for binary=1, so no binary file is made here.)"""
+    binary = 0
+    import pyuff
+
+    paths = []
+    for hit in hits:
+        t = np.arange(len(hit.force)) / hit.sample_rate
+        path = tmp_path / f"{hit.source}.uff"
+        pyuff.UFF(str(path)).write_sets([_uff58(1, hit.force, t, binary, spacing, 13, 0, "force"),
+                                         _uff58(1, hit.response, t, binary, spacing, 12, 0, "acceleration")],
+                                        mode="overwrite")
+        paths.append(path)
+    reference = extract_peaks(hits).table["frequency_hz"].to_numpy()
+    np.testing.assert_allclose(extract_peaks(paths).table["frequency_hz"], reference, rtol=1e-4)
+
+
+def test_uff58_uneven_listed_abscissa_is_refused(tmp_path, hits):
+    import pyuff
+
+    f = np.arange(400) * 0.5 + 100.0
+    f[200:] += 0.25  # a jump of half a line
+    path = tmp_path / "frf.uff"
+    pyuff.UFF(str(path)).write_sets([_uff58(4, np.ones(400) + 0j, f, 0, 0, 12, 13, "frf")], mode="overwrite")
+    with pytest.raises(MeasurementError, match=r"frf.uff: record 'frf': abscissa_spacing = 0 and the listed abscissa "
+                                               r"is uneven \(line 202: .*\); export the record on evenly spaced"):
+        read_recordings([path])
