@@ -106,7 +106,7 @@ def beam_coefficients(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
     to unit length per mode (shares c^2 sum to 1 over the basis)."""
     _, weight, phi = _gauss()
     w = (deflection_sampler(units) @ shapes).reshape(POINTS, POINTS, -1)  # (x, y, mode)
-    c = np.einsum("xym,ix,jy,x,y->mij", w, phi, phi, weight, weight)
+    c = np.einsum("xym,ix,jy->mij", w, phi * weight, phi * weight, optimize=True)
     norm = np.sqrt(np.sum(c**2, axis=(1, 2)))
     return c / np.where(norm > 0, norm, 1.0)[:, None, None]
 

@@ -173,10 +173,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=run_predict)
     p = sub.add_parser("peaks", help="modal peaks of one configuration from tap recordings")
     p.add_argument("recordings", nargs="+", metavar="REC",
-                   help="impact-test recordings of one configuration: CSV (time_s, force, a response column), WAV or "
-                        "UFF58; several files are several hits")
+                   help="impact-test recordings of one configuration: CSV (time_s, force, a response column), WAV, "
+                        "UFF58, MATLAB .mat or NI TDMS; several files are several hits")
     p.add_argument("--configuration", default="original", help="the configuration recorded (default: original)")
-    p.add_argument("--sample-rate", type=float, metavar="HZ", help="for CSV files without a time_s column")
+    p.add_argument("--sample-rate", type=float, metavar="HZ",
+                   help="for CSV or MAT files without a time_s column (e.g. integer ADC counts)")
     p.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="frequency band searched [Hz]")
     p.add_argument("--spec", help="a spec: its predicted frequencies of the configuration guide the search")
     p.add_argument("--out", metavar="CSV", help="write the peak list (configuration,frequency_hz,std_hz,damping_ratio)")

@@ -20,7 +20,7 @@ windowed FRF exactly H(s + r): every pole moves left by r, and
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import fft, signal
@@ -43,6 +43,16 @@ SUSPENSION_HZ = 20.0
 #: Upper band edge by default: where the mean force spectrum falls this far below its
 #: level at the lower edge (the hammer tip no longer excites the plate).
 FORCE_DROP_DB = 10.0
+#: A channel is clipped (the ADC's or amplifier's limit) when this many consecutive
+#: samples sit at its extreme value: a smooth signal's maximum is one sample.
+CLIP_RUN = 3
+#: Mains frequencies [Hz] looked for, how far each may drift [Hz], and the level of a
+#: harmonic above its neighbourhood in the record's tail that counts as hum [dB].
+MAINS_HZ = (50.0, 60.0)
+MAINS_DRIFT_HZ = 0.2
+HUM_DB = 15.0
+#: Hum is steady: its amplitude over the tail's second half within these factors of the first's.
+HUM_STEADY = (0.7, 1.4)
 
 
 @dataclass(frozen=True)
@@ -138,9 +148,92 @@ def _double_hit(f: np.ndarray, start: int, end: int, fs: float) -> str | None:
     return None
 
 
+def clipped_run(x: np.ndarray) -> tuple[int, int] | None:
+    """(first sample, length) of the longest run of at least ``CLIP_RUN`` samples at the
+    channel's maximum or minimum value, if any (a clipped channel).  Only an extreme at
+    least half the largest excursion from the baseline (median) counts: a noise-free
+    channel rests at its baseline for long runs."""
+    best = None
+    baseline = np.median(x)
+    reach = np.abs(x - baseline).max()
+    for extreme in (x.max(), x.min()):
+        if reach == 0 or abs(extreme - baseline) < 0.5 * reach:
+            continue
+        at = np.concatenate([[0], (x == extreme).astype(np.int8), [0]])
+        edges = np.flatnonzero(np.diff(at))
+        starts, lengths = edges[0::2], edges[1::2] - edges[0::2]
+        if lengths.size and lengths.max() >= CLIP_RUN and (best is None or lengths.max() > best[1]):
+            best = (int(starts[np.argmax(lengths)]), int(lengths.max()))
+    return best
+
+
+def _clipping(hit: Hit) -> str | None:
+    """Why a hit is refused for clipping, naming the channel, if it is."""
+    for name, x in (("force", hit.force), ("response", hit.response)):
+        run = None if x is None else clipped_run(x)
+        if run:
+            return (f"{name} clipped: {run[1]} consecutive samples at its limit {x[run[0]]:g} from "
+                    f"{run[0] / hit.sample_rate * 1e3:.1f} ms (overload: the peak is cut off, H1 would be wrong); "
+                    "repeat the hit softer or raise the input range")
+    return None
+
+
+def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
+    """Mains hum (50 or 60 Hz and harmonics up to the Nyquist frequency) on the response,
+    removed: the harmonics standing ``HUM_DB`` above their neighbourhood in the spectrum
+    of the record's last half (the modes have decayed there, the hum has not) are fitted
+    as sinusoids there (fundamental refined within ``MAINS_DRIFT_HZ``) and, if steady
+    over the tail (``HUM_STEADY``: a mode ringing near a harmonic decays), subtracted
+    from the whole record.  Returns the hit and a note, or the hit unchanged and None."""
+    fs, y = hit.sample_rate, hit.response
+    tail = y[len(y) // 2:] - np.median(y[len(y) // 2:])
+    n = len(tail)
+    spectrum = np.abs(fft.rfft(tail * signal.windows.hann(n)))
+    f = fft.rfftfreq(n, 1 / fs)
+    step = f[1]
+    found = None
+    for mains in MAINS_HZ:
+        k = np.arange(1, int(0.5 * fs / mains))
+        lines = np.rint(k * mains / step).astype(int)
+        k, lines = k[(lines >= 12) & (lines + 12 < len(f))], lines[(lines >= 12) & (lines + 12 < len(f))]
+        if not len(lines):
+            continue
+        level = np.array([spectrum[i - 1:i + 2].max() for i in lines])
+        around = np.array([np.median(np.r_[spectrum[i - 12:i - 3], spectrum[i + 4:i + 13]]) for i in lines])
+        standing = (level >= 10 ** (HUM_DB / 20) * around) & (level > 0)
+        if standing[:3].sum() >= 1 and (found is None or standing.sum() > found[1].sum()):
+            found = (mains, standing, k)
+    if found is None:
+        return hit, None
+    mains, standing, k = found
+    t = np.arange(len(y)) / fs
+    t_tail = t[len(y) // 2:]
+
+    def fitted(f0, part=slice(None)):
+        harmonics = k[standing] * f0
+        phase = 2 * np.pi * t_tail[part, None] * harmonics
+        basis = np.hstack([np.cos(phase), np.sin(phase)])
+        c = np.linalg.lstsq(basis, tail[part], rcond=None)[0]
+        return float(np.sum((basis @ c - tail[part]) ** 2)), harmonics, c
+
+    drift = np.linspace(mains - MAINS_DRIFT_HZ, mains + MAINS_DRIFT_HZ, 41)
+    f0 = drift[int(np.argmin([fitted(x)[0] for x in drift]))]
+    _, harmonics, c = fitted(f0)
+    amplitude = [np.hypot(*fitted(f0, part)[2].reshape(2, -1)).sum() for part in (slice(None, n // 2), slice(n // 2, None))]
+    if not HUM_STEADY[0] <= amplitude[1] / amplitude[0] <= HUM_STEADY[1]:
+        return hit, None  # decaying over the tail: a mode's ring-down near a harmonic, not hum
+    hum = np.hstack([np.cos(2 * np.pi * t[:, None] * harmonics), np.sin(2 * np.pi * t[:, None] * harmonics)]) @ c
+    return (replace(hit, response=y - hum),
+            f"{hit.source}: mains hum at {f0:.2f} Hz removed ({len(harmonics)} harmonic(s) up to "
+            f"{harmonics.max():.0f} Hz, fitted on the record's last half)")
+
+
 def _cut(hit: Hit) -> _Cut | Rejection:
     """Cut a hit at its onset, window the force, measure the response's decay."""
     fs = hit.sample_rate
+    clipping = _clipping(hit)
+    if clipping:
+        return Rejection(hit.source, clipping)
     pre = round(PRE_TRIGGER_S * fs)
     level_n = max(int(LEVEL_WINDOW_S * fs), 8)
     if hit.force is None:
@@ -212,8 +305,10 @@ def _all_rejected(rejected: list[Rejection]) -> MeasurementError:
 def average_hits(hits: list[Hit], band_hz: tuple[float, float]) -> AveragedFRF:
     """Cut, check, window and average the hits of one configuration (H1)."""
     fs = hits[0].sample_rate
-    cuts, rejected = [], []
+    cuts, rejected, notes = [], [], []
     for hit in hits:
+        hit, hum = remove_hum(hit)
+        notes += [hum] if hum else []
         cut = _cut(hit)
         (rejected if isinstance(cut, Rejection) else cuts).append(cut)
     n = fft.next_fast_len(max((len(c.response) for c in cuts), default=1), real=True)
@@ -229,21 +324,21 @@ def average_hits(hits: list[Hit], band_hz: tuple[float, float]) -> AveragedFRF:
                                                 f"{notch[1]:.1f} Hz within the band"))
     if not kept:
         raise _all_rejected(rejected)
-    notes, rate = [], 0.0
+    rate = 0.0
     worst = max(kept, key=lambda c: c.decay_ratio)
     if worst.decay_ratio > DECAYED:
         rate = np.log(worst.decay_ratio / WINDOW_TARGET) * fs / len(worst.response)
         notes.append(f"{worst.source}: response at {worst.decay_ratio:.1%} of its start level at the record's end "
                      f"(not decayed): exponential window exp(-{rate:.3g} t) on every hit, damping corrected for it")
     window = [np.exp(-rate * np.arange(len(c.response)) / fs) for c in kept]
-    y = np.array([fft.rfft(c.response * w, n) for c, w in zip(kept, window)])
+    y = np.array([fft.rfft(c.response * w, n) for c, w in zip(kept, window, strict=True)])
     sources = tuple(c.source for c in kept)
     if kept[0].force is None:
         notes.append("no force channel: peaks are picked on the response spectrum (no FRF, coherence or damping)")
         syy = np.sum(np.abs(y) ** 2, axis=0)
         return AveragedFRF(frequency, np.sqrt(syy / len(y)), np.full(len(frequency), np.nan), y, np.abs(y) ** 2 / syy,
                            sources, tuple(rejected), rate, False, hits[0].quantity, tuple(notes))
-    x = np.array([fft.rfft(c.force * w[:len(c.force)], n) for c, w in zip(kept, window)])
+    x = np.array([fft.rfft(c.force * w[:len(c.force)], n) for c, w in zip(kept, window, strict=True)])
     sxx = np.sum(np.abs(x) ** 2, axis=0)
     sxy = np.sum(y * x.conj(), axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):

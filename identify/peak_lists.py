@@ -28,6 +28,7 @@ from .matching import Match, align, label_permits, match
 from .measurements import Measurements
 from .result import FitResult, Iteration
 from .statistics import ASSUMED_SCATTER_REL
+from .objective import solving_model
 from .updating import FitOptions, update
 
 #: Model modes solved beyond the number of peaks of a configuration (spurious peaks and
@@ -84,9 +85,27 @@ class PeakAssignment:
         return out
 
 
-def _solver(model: SpecimenModel, peaks: Measurements) -> SpecimenModel:
-    counts = peaks.table.groupby("configuration").size()
-    return model.with_options(modes=int(counts.max()) + EXTRA_MODES)
+def _by_rank(peaks: Measurements) -> Measurements:
+    """The peaks as if each configuration's were its modes 1, 2, ... (before any matching)."""
+    table = peaks.table.assign(mode=peaks.table.groupby("configuration").cumcount() + 1)
+    return Measurements(table, peaks.source)
+
+
+def _options(options: FitOptions, peaks: Measurements, ranked: Measurements) -> FitOptions:
+    """The fit's options with enough extra modes that it solves every mode the matching
+    needs (the most peaks of a configuration + ``EXTRA_MODES``).  The matching then
+    solves the fit's own model (:func:`_solver`) and, at a solution, reuses its solves
+    (``fem.model.solve_laminate`` is cached) instead of solving a second model."""
+    most = int(peaks.table.groupby("configuration").size().max())
+    highest = int(ranked.table["mode"].max())
+    return replace(options, extra_modes=max(options.extra_modes, most + EXTRA_MODES - highest))
+
+
+def _solver(model: SpecimenModel, peaks: Measurements, options: FitOptions,
+            ranked: Measurements | None = None) -> SpecimenModel:
+    """The model as the fit of ``ranked`` (the peaks as matched; None: by rank) solves it."""
+    ranked = _by_rank(peaks) if ranked is None else ranked
+    return solving_model(model, ranked, _options(options, peaks, ranked).extra_modes)
 
 
 def _match_all(solver: SpecimenModel, peaks: Measurements, tolerance: float | None) -> dict[str, Match]:
@@ -144,27 +163,32 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
     ``start_matches`` skips the alignment (e.g. a baseline fit's final matching)."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
     notes = []
-    matches = start_matches or _match_all(_solver(model, peaks), peaks, None)
+    matches = start_matches or _match_all(_solver(model, peaks, options), peaks, None)
     if start_matches is None:
         first = peaks.configurations[0]
         model, note = _rescaled_start(model, matches[first].scale, parameters)
         notes += [note] if note else []
-        matches = _match_all(_solver(model, peaks), peaks, None) if note else matches
+        matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
     seen = [_signature(matches)]
     history: list[Iteration] = []
+    result = None
     for round_ in range(MAX_ROUNDS + len(TIGHTENING)):
-        # Rounds while the matching moves skip the pairing checks; the settled one does them.
-        result = update(model, _ranked(peaks, matches), parameters, options, progress, effect_of, settle=False)
-        history += _renumbered(result.history, history)
+        ranked = _ranked(peaks, matches)
+        if result is None:  # a round whose matching is the last fit's would refit the same problem
+            # Rounds while the matching moves skip the pairing checks; the settled one does them.
+            result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of,
+                            settle=False)
+            history += _renumbered(result.history, history)
         tightening = round_ < len(TIGHTENING)
         tolerance = TIGHTENING[round_] if tightening else _model_error(result)
-        again = _match_all(_solver(result.model, peaks), peaks, tolerance)
+        again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
+        unchanged = all(np.array_equal(again[c].modes, matches[c].modes) for c in matches)
         if not tightening and _signature(again) == seen[-1]:
             matches = again
             break
         if tightening:  # a peak left out while the model was still far off gets another chance
             seen.append(_signature(again))
-            matches, model = again, result.model
+            matches, model, result = again, result.model, (result if unchanged else None)
             continue
         if _signature(again) in seen:  # the matching cycles: keep the last fit and say so
             notes.append("the peak matching did not settle (it cycles between alternatives): check the "
@@ -172,12 +196,13 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             break
         seen.append(_signature(again))
         notes.append("peaks re-matched at the solution (a different set of peaks or modes fits): refitted")
-        matches, model = again, result.model
+        matches, model, result = again, result.model, None
     else:
         notes.append(f"the peak matching had not settled after {MAX_ROUNDS} rounds at the final tolerance")
-    result = update(result.model, _ranked(peaks, matches), parameters, options, progress, effect_of)
+    ranked = _ranked(peaks, matches)
+    result = update(result.model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
     history += _renumbered(result.history, history)
-    assignment = _assignment(result.model, peaks, matches)
+    assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
     return replace(result, warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings, peaks=assignment,
                    history=tuple(history))
 
@@ -200,11 +225,12 @@ def _renumbered(rounds: tuple[Iteration, ...], before: list[Iteration]) -> list[
 def matched_at(model: SpecimenModel, peaks: Measurements) -> Measurements:
     """The peaks matched to the model as it stands (laid over by the best scale), ranked:
     for comparing a peak list without fitting."""
-    return _ranked(peaks, _match_all(_solver(model, peaks), peaks, None))
+    return _ranked(peaks, _match_all(_solver(model, peaks, FitOptions()), peaks, None))
 
 
-def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Match]) -> PeakAssignment:
-    solver = _solver(model, peaks)
+def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Match], options: FitOptions,
+                ranked: Measurements) -> PeakAssignment:
+    solver = _solver(model, peaks, options, ranked)
     table = peaks.table
     modes = np.zeros(len(table), dtype=int)
     model_hz = np.zeros(len(table))

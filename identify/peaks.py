@@ -50,7 +50,9 @@ are left out and named in the notes), ``low_coherence`` (gamma^2 < ``COHERENCE_M
 the peak), ``weak`` (prominence < ``WEAK_DB`` in |H1| or no local maximum of its own,
 or SNR < 3 x ``SNR_MIN``), ``close`` (another mode within two half-power bandwidths),
 ``single_hit`` (fewer than two hit estimates), ``guided`` (found only by looking near a
-``guide_hz`` frequency), ``std_pooled``.  Peaks picked on |H1| with no stable pole (a
+``guide_hz`` frequency), ``std_pooled``, ``unpicked`` (no peak picked on |H1| within
+the mode's half-power half-bandwidth: ``peak_hz`` is missing, null in JSON and blank in
+the report, never NaN).  Peaks picked on |H1| with no stable pole (a
 suspension, an anti-resonance's neighbour, a cable) are left out and named in the notes.
 """
 from __future__ import annotations
@@ -100,7 +102,7 @@ GUIDE_REL = 0.03
 #: Spurious peaks named in the notes (the most prominent).
 NOTED_PEAKS = 8
 CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio"]
-FLAG_ORDER = ("suspension", "low_coherence", "weak", "close", "single_hit", "guided", "std_pooled")
+FLAG_ORDER = ("suspension", "low_coherence", "weak", "close", "single_hit", "guided", "std_pooled", "unpicked")
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,7 +171,7 @@ class PeakList:
                 columns={"damping_ratio": "damping_%"}).drop(columns="quality")
             formats = {"frequency_hz": "{:.3f}", "std_hz": "{:.3f}", "damping_%": "{:.3f}", "coherence": "{:.4f}",
                        "prominence_db": "{:.1f}", "snr": "{:.0f}", "peak_hz": "{:.2f}"}
-            lines.append(shown.to_string(index=False, formatters={k: v.format for k, v in formats.items()}))
+            lines.append(shown.to_string(index=False, formatters={k: _blank_if_missing(v) for k, v in formats.items()}))
         else:
             lines.append("no peaks found")
         if self.rejected:
@@ -184,6 +186,11 @@ class PeakList:
 
     def plot(self, directory: str | Path) -> list[Path]:
         return plot_peaks(self, directory)
+
+
+def _blank_if_missing(form: str):
+    """A formatter printing a missing (NaN) value blank: its flag or a note says why."""
+    return lambda v: form.format(v) if np.isfinite(v) else ""
 
 
 # --- local pole-residue fit ------------------------------------------------------------
@@ -626,6 +633,7 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
         "single_hit": n < 2,
         "guided": guided,
         "std_pooled": pooled,
+        "unpicked": np.isnan(peak_hz),
     }
     names = [[k for k in FLAG_ORDER if flags[k][j]] for j in range(len(f))]
     left = picked.drop(index=list(used)).nlargest(NOTED_PEAKS, "prominence_db").sort_values("frequency_hz")

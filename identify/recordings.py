@@ -1,4 +1,5 @@
-"""Impact-test recordings (CSV, WAV, UFF type 58) read into hits, validated at the entry.
+"""Impact-test recordings (CSV, WAV, UFF type 58, MATLAB .mat, NI TDMS) read into hits,
+validated at the entry.
 
 A *hit* is one tap: the force and the response sampled at one rate, in the recording's
 own (arbitrary) units.  A UFF58 FRF record (function type 4) is already averaged by the
@@ -267,17 +268,34 @@ def read_uff(path: str | Path, sample_rate: float | None = None) -> list[Recordi
     return out
 
 
+#: Relative precision of an uneven-abscissa UFF58 record's printed x values (E13.5: 6 digits).
+UFF_X_PRECISION = 1e-5
+
+
+def _uff_step(source: str, r: dict) -> float:
+    """The record's abscissa step: ``abscissa_inc`` when evenly spaced (abscissa_spacing
+    1); for abscissa_spacing 0 (x values listed, as some front ends write even data) the
+    least-squares step of the listed x, which must be even to their printed precision."""
+    if int(r.get("abscissa_spacing", 1)) == 1:
+        return float(r["abscissa_inc"])
+    x = np.asarray(r["x"], dtype=float)
+    try:
+        return 1.0 / _rate_from_time(source, x, None, UFF_X_PRECISION * np.abs(x))
+    except MeasurementError as error:
+        raise _fail(source, f"record '{r.get('id1', '')}': abscissa_spacing = 0 and the listed abscissa is uneven "
+                    f"({str(error).split(': ', 1)[1].split(';')[0]}); export the record on evenly spaced "
+                    "lines") from None
+
+
 def _uff_frf(source: str, r: dict) -> MeasuredFRF:
-    if int(r.get("abscissa_spacing", 1)) != 1:
-        raise _fail(source, f"record '{r.get('id1', '')}': abscissa_spacing = 0 (uneven); need evenly spaced "
-                    "frequencies: export the FRF on its analysis lines")
+    step = _uff_step(source, r)
     frf = np.asarray(r["data"], dtype=complex)
     bad = np.flatnonzero(~np.isfinite(frf))
     if bad.size or len(frf) < 16:
         raise _fail(source, f"record '{r.get('id1', '')}': FRF has {bad.size} non-finite values of {len(frf)} "
                     "(need at least 16 finite lines); re-export the FRF")
     quantity = _uff_quantity(source, r, "ordinate_spec_data_type")
-    return MeasuredFRF(source, np.asarray(r["x"], dtype=float), frf, quantity)
+    return MeasuredFRF(source, float(np.asarray(r["x"], dtype=float)[0]) + step * np.arange(len(frf)), frf, quantity)
 
 
 def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
@@ -286,7 +304,7 @@ def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
     if len(force) != 1 or len(response) != 1 or len(times) != 2:
         raise _fail(source, f"{len(times)} time records with {len(force)} force and {len(response)} response; "
                     "need one force record (data type 13) and one response record (8, 11 or 12) per file")
-    rates = [_snap(1.0 / float(r["abscissa_inc"])) for r in (force[0], response[0])]
+    rates = [_snap(1.0 / _uff_step(source, r)) for r in (force[0], response[0])]
     if abs(rates[0] / rates[1] - 1) > RATE_TOLERANCE:
         raise _fail(source, f"force sampled at {rates[0]:g} Hz, response at {rates[1]:g} Hz; record both channels "
                     "at one rate")
@@ -300,11 +318,86 @@ def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
     return Hit(source, rates[0], y, f, _uff_quantity(source, response[0], "ordinate_spec_data_type"))
 
 
-READERS = {".csv": read_csv, ".wav": read_wav, ".uff": read_uff, ".unv": read_uff}
+def _hit_from_channels(source: str, channels: dict, sample_rate: float | None, kind: str) -> Hit:
+    """A hit from named channels (MAT variables, TDMS channels): ``force``, one response
+    channel, and ``time_s`` or a sample rate."""
+    responses = [c for c in RESPONSE_COLUMNS if c in channels]
+    if "force" not in channels or len(responses) != 1:
+        raise _fail(source, f"{kind} holds {', '.join(sorted(channels)) or 'nothing'}; need 'force' and exactly one "
+                    f"of {', '.join(RESPONSE_COLUMNS)} (and 'time_s' or a sample rate): rename the channels")
+    force = _check_samples(source, "force", np.ravel(channels["force"]))
+    response = _check_samples(source, responses[0], np.ravel(channels[responses[0]]))
+    if len(force) != len(response):
+        raise _fail(source, f"force has {len(force)} samples, {responses[0]} {len(response)}; export both over the "
+                    "same time")
+    stated = None if sample_rate is None else _check_rate(source, sample_rate)
+    if "time_s" in channels:
+        stored = np.ravel(channels["time_s"])
+        quantum = 2 * np.spacing(np.abs(stored)).astype(float) if stored.dtype.kind == "f" else None  # float32 time
+        rate = _rate_from_time(source, _check_samples(source, "time_s", stored), stated, quantum)
+    elif stated is None:
+        raise _fail(source, f"no time_s and no sample rate in the {kind}; add a sample_rate variable or give "
+                    "--sample-rate HZ")
+    else:
+        rate = stated
+    return Hit(source, rate, response, force, responses[0])
+
+
+def read_mat(path: str | Path, sample_rate: float | None = None) -> Hit:
+    """One hit from a MATLAB file (v4-v7, scipy.io.loadmat): vectors ``force`` and one
+    response (acceleration, velocity, displacement or response), and ``time_s`` or a
+    scalar ``sample_rate`` [Hz] (or the ``sample_rate`` argument)."""
+    from scipy.io import loadmat
+
+    source = Path(path).name
+    try:
+        data = loadmat(path, squeeze_me=True)
+    except NotImplementedError:
+        raise _fail(source, "MATLAB v7.3 (HDF5) file; save it with save(..., '-v7')") from None
+    except (OSError, ValueError, TypeError) as exc:
+        raise _fail(source, f"cannot read as a MAT file ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+                    "save the hit's vectors with MATLAB's save or scipy.io.savemat") from None
+    channels = {k: v for k, v in data.items() if not k.startswith("__")}
+    if "sample_rate" in channels:
+        rate = float(np.ravel(channels.pop("sample_rate"))[0])
+        if sample_rate is not None and abs(rate / _check_rate(source, sample_rate) - 1) > RATE_TOLERANCE:
+            raise _fail(source, f"the file says sample_rate = {rate:g} Hz but {sample_rate:g} Hz was given; drop one")
+        sample_rate = _check_rate(source, rate)
+    return _hit_from_channels(source, channels, sample_rate, "MAT file")
+
+
+def read_tdms(path: str | Path, sample_rate: float | None = None) -> Hit:
+    """One hit from an NI TDMS file (npTDMS): channels named ``force`` and one response
+    (any group); the sample rate from the channels' ``wf_increment`` [s] (or
+    ``sample_rate``)."""
+    from nptdms import TdmsFile
+
+    source = Path(path).name
+    try:
+        tdms = TdmsFile.read(path)
+    except Exception as exc:  # noqa: BLE001 - npTDMS raises bare errors of several kinds on damaged files
+        raise _fail(source, f"cannot read as TDMS ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
+                    "give a TDMS file written by LabVIEW, DAQmx or npTDMS") from None
+    found = {ch.name.strip().lower(): ch for group in tdms.groups() for ch in group.channels()}
+    steps = {float(ch.properties["wf_increment"]) for ch in found.values() if "wf_increment" in ch.properties}
+    if len(steps) > 1:
+        raise _fail(source, f"channels sampled at different rates ({', '.join(f'{1 / d:g}' for d in sorted(steps))} Hz); "
+                    "record force and response at one rate")
+    if steps:
+        rate = _snap(1.0 / steps.pop())
+        if sample_rate is not None and abs(rate / _check_rate(source, sample_rate) - 1) > RATE_TOLERANCE:
+            raise _fail(source, f"wf_increment gives {rate:g} Hz but sample_rate = {sample_rate:g} Hz; drop the "
+                        "stated rate")
+        sample_rate = rate
+    return _hit_from_channels(source, {k: ch[:] for k, ch in found.items()}, sample_rate, "TDMS file")
+
+
+READERS = {".csv": read_csv, ".wav": read_wav, ".uff": read_uff, ".unv": read_uff, ".mat": read_mat,
+           ".tdms": read_tdms}
 
 
 def read_recordings(paths, sample_rate: float | None = None) -> list[Recording]:
-    """Read every file (CSV, WAV, UFF/UNV) of one configuration and check they belong
+    """Read every file (CSV, WAV, UFF/UNV, MAT, TDMS) of one configuration and check they belong
     together (:func:`check_together`)."""
     paths = [paths] if isinstance(paths, (str, Path)) else list(paths)
     out: list[Recording] = []
