@@ -65,8 +65,9 @@ class DampingResult:
     """Identified loss factors: ``targets`` (material, damping parameter) with ``values``
     and ``std`` [-] (NaN when not identifiable); ``status`` one of ``STATUSES`` and a
     ``message``; ``condition_number`` of the loss-factor columns and its ``verdict``;
-    ``residuals``: one row per measured mode used (configuration, mode, group, measured
-    and model damping ratio, the measured one's std); chi^2 against the scatter with
+    ``residuals``: one row per measured mode used (configuration, mode, measured and model
+    damping ratio, the measured one's std, its group of close modes and lambda share in it:
+    within a group only the weighted mean is modelled, mode by mode damping mixes them); chi^2 against the scatter with
     ``dof`` and ``p_value``; ``method``: "first_order" or "complex"; ``notes``."""
 
     status: str
@@ -95,7 +96,10 @@ class DampingResult:
         r = self.residuals
         if r.empty or r["model_damping_ratio"].isna().all():
             return math.nan
-        return float(np.sqrt(np.mean((r["model_damping_ratio"] / r["measured_damping_ratio"] - 1) ** 2)))
+        # close modes are one group (their lambda-weighted mean is what the model predicts)
+        weighted = r[["measured_damping_ratio", "model_damping_ratio"]].mul(r["weight"], axis=0)
+        groups = weighted.groupby(r["group"]).sum()
+        return float(np.sqrt(np.mean((groups["model_damping_ratio"] / groups["measured_damping_ratio"] - 1) ** 2)))
 
     def value(self, material: str, kind: str) -> float:
         return float(self.values[self.targets.index((material, kind))])
@@ -115,7 +119,7 @@ class DampingResult:
             return float(x) if x is not None and np.isfinite(x) else None
 
         rows = [{"configuration": r.configuration, "mode": int(r.mode), "measured_damping_ratio": float(r.measured),
-                 "damping_std": float(r.std), "model_damping_ratio": finite(r.model)}
+                 "damping_std": float(r.std), "model_damping_ratio": finite(r.model), "group": int(r.group)}
                 for r in self.residuals.rename(columns={"measured_damping_ratio": "measured", "damping_std": "std",
                                                         "model_damping_ratio": "model"}).itertuples()]
         return {"status": self.status, "message": self.message, "method": self.method,
@@ -208,9 +212,10 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     nothing = np.full(len(targets), math.nan)
     rows, notes = _rows(model, measurements, pairings)
     empty = pd.DataFrame(columns=["configuration", "mode", "measured_damping_ratio", "damping_std",
-                                  "model_damping_ratio"])
+                                  "model_damping_ratio", "group", "weight"])
     if rows.table.empty:
-        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the loss factors "
+        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the loss "
+                             "factors "
                              "cannot be identified", tuple(targets), nothing, nothing, math.nan, "singular", empty,
                              notes=tuple(notes))
     index = rows.table["row"].to_numpy()
@@ -261,7 +266,8 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     vague = [f"{m}.{k}" for (m, k), sd in zip(targets, std) if not sd <= UNDETERMINED_STD]
     if vague:
         return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: the std of "
-                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number {condition:.3g}); "
+                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number "
+                             f"{condition:.3g}); "
                              "add configurations that change the layers' share of the strain energy (plan-tests "
                              "check)", tuple(targets), nothing, nothing, condition, verdict,
                              _residual_table(rows, None), notes=tuple(notes), scatter_stated=scatter_stated)
@@ -318,5 +324,7 @@ def _complex_refit(model, rows: _Rows, targets, start, weighted, sigma, iteratio
 def _residual_table(rows: _Rows, model_eta: np.ndarray | None) -> pd.DataFrame:
     t = rows.table
     model = ratio_from_loss(model_eta) if model_eta is not None else np.full(len(t), np.nan)
+    weight = t["lambda"] / t.groupby("group")["lambda"].transform("sum")
     return pd.DataFrame({"configuration": t["configuration"], "mode": t["mode"], "measured_damping_ratio": t["zeta"],
-                         "damping_std": t["zeta_std"], "model_damping_ratio": model})
+                         "damping_std": t["zeta_std"], "model_damping_ratio": model, "group": t["group"],
+                         "weight": weight})
