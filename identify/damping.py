@@ -9,20 +9,21 @@ with the weights at the identified stiffness.  The known materials' share is sub
 and the unknown loss factors solved by weighted linear least squares bounded at
 0 <= eta <= ``fem.material.MAX_LOSS_FACTOR`` (scipy ``lsq_linear``), rows weighted by
 the damping scatter: the measurements' ``damping_std``, or ``ASSUMED_DAMPING_STD_REL``
-of each damping ratio.  The condition number of the loss-factor columns gets the paper's
-verdict (``fem.sensitivity.condition_verdict``); a singular one, fewer measured modes than
-loss factors, or a std above ``UNDETERMINED_STD`` gives ``not_identifiable`` and no values.  A chi^2 test against the
-damping scatter (``identify.statistics.CHI2_TEST_LEVEL``) tells ``converged`` from
-``poor_fit``.  When a mode's energy-weighted RMS loss factor exceeds ``LARGE_LOSS`` and
-first order errs (by
+of each damping ratio (the std then scaled up by the misfit when it exceeds that: the
+scatter estimated from the residual).  The condition number of the loss-factor columns
+gets the paper's verdict (``fem.sensitivity.condition_verdict``); a singular one, fewer
+measured modes than loss factors, or a std above ``UNDETERMINED_STD`` gives
+``not_identifiable`` and no values.  A chi^2 test against the damping scatter
+(``identify.statistics.CHI2_TEST_LEVEL``) tells ``converged`` from ``poor_fit``.  When a
+mode's energy-weighted RMS loss factor exceeds ``LARGE_LOSS`` and first order errs (by
 O(eta^2)) beyond ``REFINE_SHARE`` of the scatter, the fit is refined on the complex
 eigenproblem (``fem.complex_modes``).
 
 Damping ratio and loss factor: ``fem.damping.loss_from_ratio`` (eta = 2 zeta for light
 damping, exact for a pole of lambda* = omega^2 (1 + i eta)).
 
-Close modes (``fem.damping.close_groups``) are mixed by
-damping: only their lambda-weighted sum follows the layers' loss factors, so such a group
+Close modes (``fem.damping.close_groups``) are mixed by damping: only their
+lambda-weighted sum follows the layers' loss factors, so such a group
 enters as one row; a group with a mode not measured is left out (and said so).
 """
 from __future__ import annotations
@@ -214,10 +215,9 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     empty = pd.DataFrame(columns=["configuration", "mode", "measured_damping_ratio", "damping_std",
                                   "model_damping_ratio", "group", "weight"])
     if rows.table.empty:
-        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the loss "
-                             "factors "
-                             "cannot be identified", tuple(targets), nothing, nothing, math.nan, "singular", empty,
-                             notes=tuple(notes))
+        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the "
+                             "loss factors cannot be identified", tuple(targets), nothing, nothing, math.nan,
+                             "singular", empty, notes=tuple(notes))
     index = rows.table["row"].to_numpy()
     columns = loss_columns(model, targets)[index]
     known = known_targets(model)
@@ -263,6 +263,10 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     jacobian = weighted
     covariance = np.linalg.pinv(jacobian.T @ jacobian)
     std = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    if not scatter_stated and dof > 0 and chi2 > dof:
+        std *= math.sqrt(chi2 / dof)
+        notes.append(f"no damping_std given: the std are scaled by the misfit (reduced chi^2 {chi2 / dof:.3g} "
+                     f"against the assumed {100 * ASSUMED_DAMPING_STD_REL:g} %)")
     vague = [f"{m}.{k}" for (m, k), sd in zip(targets, std) if not sd <= UNDETERMINED_STD]
     if vague:
         return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: the std of "
