@@ -129,3 +129,15 @@ def test_without_damping_std_the_assumed_scatter(fitted):
     d = identify_damping(fitted.model, Measurements(noisy, "<noisy>"), fitted.pairings)
     assert d.status == "poor_fit" and any("scaled by the misfit" in n for n in d.notes)
     assert np.mean(d.std / stated.std) > 1.5
+
+
+def test_report_folder_has_the_damping_table_and_figure(fitted, tmp_path):
+    from identify.report import write_report
+
+    folder = write_report(fitted, tmp_path / "report")
+    page = (folder / "report.html").read_text()
+    assert "Damping" in page and "damping.png" not in page, "figures are embedded, not linked"
+    assert (folder / "damping.png").stat().st_size > 1000
+    table = pd.read_csv(folder / "damping.csv")
+    assert len(table) == 30 and table["model_damping_ratio"].notna().all()
+    assert "top_coating.eta_E1" in (folder / "parameters.csv").read_text()
