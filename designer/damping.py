@@ -52,10 +52,13 @@ class DampingScores:
         def finite(x):
             return float(x) if math.isfinite(x) else None
 
+        nominal: dict[str, dict] = {}
+        predicted: dict[str, dict] = {}
+        for (m, k), v, s in zip(self.targets, self.nominal, self.predicted_std):
+            nominal.setdefault(m, {})[k] = float(v)
+            predicted.setdefault(m, {})[k] = finite(s)
         return {"condition_number": finite(self.condition_number), "verdict": self.verdict,
-                "damping_std_rel": self.damping_std_rel,
-                "nominal": dict(zip(self.names, map(float, self.nominal))),
-                "predicted_std": {n: finite(s) for n, s in zip(self.names, self.predicted_std)},
+                "damping_std_rel": self.damping_std_rel, "nominal": nominal, "predicted_std": predicted,
                 "useless_for": self.useless}
 
     def report(self) -> str:

@@ -36,7 +36,8 @@ DESCRIPTION = """identify-layers: the stiffness of every layer of a laminated pl
   compare   where the model fails: residual patterns and plots
   diagnose  which physical effect is the model missing?
 
-Exit status: 0 done (fit: converged), 1 fit did not converge or is not identifiable, 2 bad input."""
+Exit status: 0 done (fit: converged, and its loss factors too when asked for), 1 fit (or its damping
+identification) did not converge, is a poor fit or is not identifiable, 2 bad input."""
 
 
 def _say(text: str) -> None:
@@ -113,7 +114,8 @@ def run_fit(args) -> int:
     if args.report:
         _say(f"report written to {write_report(result, args.report)}/")
     print(to_json(result.to_dict()) if args.json else result.report())
-    return 0 if result.converged else 1
+    damping_ok = result.damping is None or result.damping.converged
+    return 0 if result.converged and damping_ok else 1
 
 
 def run_compare(args) -> int:

@@ -9,20 +9,21 @@ with the weights at the identified stiffness.  The known materials' share is sub
 and the unknown loss factors solved by weighted linear least squares bounded at
 0 <= eta <= ``fem.material.MAX_LOSS_FACTOR`` (scipy ``lsq_linear``), rows weighted by
 the damping scatter: the measurements' ``damping_std``, or ``ASSUMED_DAMPING_STD_REL``
-of each damping ratio.  The condition number of the loss-factor columns gets the paper's
-verdict (``fem.sensitivity.condition_verdict``); a singular one, fewer measured modes than
-loss factors, or a std above ``UNDETERMINED_STD`` gives ``not_identifiable`` and no values.  A chi^2 test against the
-damping scatter (``identify.statistics.CHI2_TEST_LEVEL``) tells ``converged`` from
-``poor_fit``.  When a mode's energy-weighted RMS loss factor exceeds ``LARGE_LOSS`` and
-first order errs (by
+of each damping ratio (the std then scaled up by the misfit when it exceeds that: the
+scatter estimated from the residual).  The condition number of the loss-factor columns
+gets the paper's verdict (``fem.sensitivity.condition_verdict``); a singular one, fewer
+measured modes than loss factors, or a std above ``UNDETERMINED_STD`` gives
+``not_identifiable`` and no values.  A chi^2 test against the damping scatter
+(``identify.statistics.CHI2_TEST_LEVEL``) tells ``converged`` from ``poor_fit``.  When a
+mode's energy-weighted RMS loss factor exceeds ``LARGE_LOSS`` and first order errs (by
 O(eta^2)) beyond ``REFINE_SHARE`` of the scatter, the fit is refined on the complex
 eigenproblem (``fem.complex_modes``).
 
 Damping ratio and loss factor: ``fem.damping.loss_from_ratio`` (eta = 2 zeta for light
 damping, exact for a pole of lambda* = omega^2 (1 + i eta)).
 
-Close modes (``fem.damping.close_groups``) are mixed by
-damping: only their lambda-weighted sum follows the layers' loss factors, so such a group
+Close modes (``fem.damping.close_groups``) are mixed by damping: only their
+lambda-weighted sum follows the layers' loss factors, so such a group
 enters as one row; a group with a mode not measured is left out (and said so).
 """
 from __future__ import annotations
@@ -65,8 +66,9 @@ class DampingResult:
     """Identified loss factors: ``targets`` (material, damping parameter) with ``values``
     and ``std`` [-] (NaN when not identifiable); ``status`` one of ``STATUSES`` and a
     ``message``; ``condition_number`` of the loss-factor columns and its ``verdict``;
-    ``residuals``: one row per measured mode used (configuration, mode, group, measured
-    and model damping ratio, the measured one's std); chi^2 against the scatter with
+    ``residuals``: one row per measured mode used (configuration, mode, measured and model
+    damping ratio, the measured one's std, its group of close modes and lambda share in it:
+    within a group only the weighted mean is modelled, mode by mode damping mixes them); chi^2 against the scatter with
     ``dof`` and ``p_value``; ``method``: "first_order" or "complex"; ``notes``."""
 
     status: str
@@ -95,7 +97,10 @@ class DampingResult:
         r = self.residuals
         if r.empty or r["model_damping_ratio"].isna().all():
             return math.nan
-        return float(np.sqrt(np.mean((r["model_damping_ratio"] / r["measured_damping_ratio"] - 1) ** 2)))
+        # close modes are one group (their lambda-weighted mean is what the model predicts)
+        weighted = r[["measured_damping_ratio", "model_damping_ratio"]].mul(r["weight"], axis=0)
+        groups = weighted.groupby(r["group"]).sum()
+        return float(np.sqrt(np.mean((groups["model_damping_ratio"] / groups["measured_damping_ratio"] - 1) ** 2)))
 
     def value(self, material: str, kind: str) -> float:
         return float(self.values[self.targets.index((material, kind))])
@@ -115,7 +120,7 @@ class DampingResult:
             return float(x) if x is not None and np.isfinite(x) else None
 
         rows = [{"configuration": r.configuration, "mode": int(r.mode), "measured_damping_ratio": float(r.measured),
-                 "damping_std": float(r.std), "model_damping_ratio": finite(r.model)}
+                 "damping_std": float(r.std), "model_damping_ratio": finite(r.model), "group": int(r.group)}
                 for r in self.residuals.rename(columns={"measured_damping_ratio": "measured", "damping_std": "std",
                                                         "model_damping_ratio": "model"}).itertuples()]
         return {"status": self.status, "message": self.message, "method": self.method,
@@ -208,11 +213,11 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     nothing = np.full(len(targets), math.nan)
     rows, notes = _rows(model, measurements, pairings)
     empty = pd.DataFrame(columns=["configuration", "mode", "measured_damping_ratio", "damping_std",
-                                  "model_damping_ratio"])
+                                  "model_damping_ratio", "group", "weight"])
     if rows.table.empty:
-        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the loss factors "
-                             "cannot be identified", tuple(targets), nothing, nothing, math.nan, "singular", empty,
-                             notes=tuple(notes))
+        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the "
+                             "loss factors cannot be identified", tuple(targets), nothing, nothing, math.nan,
+                             "singular", empty, notes=tuple(notes))
     index = rows.table["row"].to_numpy()
     columns = loss_columns(model, targets)[index]
     known = known_targets(model)
@@ -258,10 +263,15 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     jacobian = weighted
     covariance = np.linalg.pinv(jacobian.T @ jacobian)
     std = np.sqrt(np.clip(np.diag(covariance), 0, None))
+    if not scatter_stated and dof > 0 and chi2 > dof:
+        std *= math.sqrt(chi2 / dof)
+        notes.append(f"no damping_std given: the std are scaled by the misfit (reduced chi^2 {chi2 / dof:.3g} "
+                     f"against the assumed {100 * ASSUMED_DAMPING_STD_REL:g} %)")
     vague = [f"{m}.{k}" for (m, k), sd in zip(targets, std) if not sd <= UNDETERMINED_STD]
     if vague:
         return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: the std of "
-                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number {condition:.3g}); "
+                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number "
+                             f"{condition:.3g}); "
                              "add configurations that change the layers' share of the strain energy (plan-tests "
                              "check)", tuple(targets), nothing, nothing, condition, verdict,
                              _residual_table(rows, None), notes=tuple(notes), scatter_stated=scatter_stated)
@@ -318,5 +328,7 @@ def _complex_refit(model, rows: _Rows, targets, start, weighted, sigma, iteratio
 def _residual_table(rows: _Rows, model_eta: np.ndarray | None) -> pd.DataFrame:
     t = rows.table
     model = ratio_from_loss(model_eta) if model_eta is not None else np.full(len(t), np.nan)
+    weight = t["lambda"] / t.groupby("group")["lambda"].transform("sum")
     return pd.DataFrame({"configuration": t["configuration"], "mode": t["mode"], "measured_damping_ratio": t["zeta"],
-                         "damping_std": t["zeta_std"], "model_damping_ratio": model})
+                         "damping_std": t["zeta_std"], "model_damping_ratio": model, "group": t["group"],
+                         "weight": weight})

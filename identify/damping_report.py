@@ -91,7 +91,8 @@ def text_section(damping: "DampingResult") -> list[str]:
         shown = f"{value:.4g} +- {sd:.2g}" if math.isfinite(value) else "not identifiable"
         lines.append(f"  {name + '.' + kind:28s} {shown}")
     if not damping.residuals.empty:
-        lines += ["", "damping residuals", damping.residuals.to_string(index=False, float_format=lambda x: f"{x:.4g}")]
+        lines += ["", "damping residuals (group: close modes, whose lambda-weighted mean is modelled)",
+                  damping.residuals.drop(columns="weight").to_string(index=False, float_format=lambda x: f"{x:.4g}")]
     lines += [f"  - {n}" for n in damping.notes]
     return lines
 

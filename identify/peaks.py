@@ -101,7 +101,7 @@ FIT_HALF_WIDTHS = 4.0
 GUIDE_REL = 0.03
 #: Spurious peaks named in the notes (the most prominent).
 NOTED_PEAKS = 8
-CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio"]
+CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
 FLAG_ORDER = ("suspension", "low_coherence", "weak", "close", "single_hit", "guided", "std_pooled", "unpicked")
 
 
@@ -167,9 +167,11 @@ class PeakList:
         lines = [title, ""]
         if len(self):
             shown = self.table.assign(damping_ratio=100 * self.table["damping_ratio"],
+                                      damping_std=100 * self.table["damping_std"],
                                       flags=self.table["flags"].replace("", "good")).rename(
-                columns={"damping_ratio": "damping_%"}).drop(columns="quality")
-            formats = {"frequency_hz": "{:.3f}", "std_hz": "{:.3f}", "damping_%": "{:.3f}", "coherence": "{:.4f}",
+                columns={"damping_ratio": "damping_%", "damping_std": "damping_std_%"}).drop(columns="quality")
+            formats = {"frequency_hz": "{:.3f}", "std_hz": "{:.3f}", "damping_%": "{:.3f}", "damping_std_%": "{:.4f}",
+                       "coherence": "{:.4f}",
                        "prominence_db": "{:.1f}", "snr": "{:.0f}", "peak_hz": "{:.2f}"}
             lines.append(shown.to_string(index=False, formatters={k: _blank_if_missing(v) for k, v in formats.items()}))
         else:
@@ -181,7 +183,7 @@ class PeakList:
         return "\n".join(lines)
 
     def write_csv(self, path: str | Path) -> None:
-        """The peak-list CSV: configuration,frequency_hz,std_hz,damping_ratio."""
+        """The peak-list CSV: configuration,frequency_hz,std_hz,damping_ratio,damping_std."""
         write_text(path, self.to_frame()[CSV_COLUMNS].to_csv(index=False, float_format="%.7g"))
 
     def plot(self, directory: str | Path) -> list[Path]:
@@ -575,23 +577,52 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
     return pole, snr, guided
 
 
-def _per_hit(frf: AveragedFRF, pole: np.ndarray) -> np.ndarray:
-    """(hits, modes) frequency [Hz] of every mode fitted on each hit's FRF (NaN: failed)."""
-    out = np.full((frf.n_hits, len(pole)), np.nan)
+def _per_hit(frf: AveragedFRF, pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(hits, modes) frequency [Hz] and damping ratio [-] (window-corrected) of every mode
+    fitted on each hit's FRF (NaN: failed)."""
+    out, damping = np.full((frf.n_hits, len(pole)), np.nan), np.full((frf.n_hits, len(pole)), np.nan)
     if frf.n_hits < 2:
-        return out
+        return out, damping
     for k in range(frf.n_hits):
         p, _, ok = _fit_all(frf, frf.per_hit[k], pole)
         f, zeta = correct_for_window(p, frf.decay_rate)
         near = np.abs(p.imag - pole.imag) < FIT_HALF_WIDTHS * np.abs(pole.real)
         good = ok & near & (zeta > 0) & (zeta < MAX_DAMPING)
-        out[k, good] = f[good]
+        out[k, good], damping[k, good] = f[good], zeta[good]
+    return out, damping
+
+
+def broadening(frf: AveragedFRF, per_hit_hz: np.ndarray, frequency_hz: np.ndarray,
+               damping_ratio: np.ndarray) -> np.ndarray:
+    """How much wider than each hit's the H1 peak is [damping ratio]: averaging hits
+    whose peaks scatter in frequency, s_f^2 / (zeta f^2), s_f^2 the H1-weighted variance of
+    the (hits, modes) per-hit frequencies (NaN with fewer than two)."""
+    line = frf.line(frequency_hz)
+    out = np.full(len(frequency_hz), np.nan)
+    for j in range(len(frequency_hz)):
+        have = np.isfinite(per_hit_hz[:, j])
+        if have.sum() >= 2:
+            w = frf.weights[have, line[j]] / frf.weights[have, line[j]].sum()
+            spread = (w @ (per_hit_hz[have, j] - w @ per_hit_hz[have, j]) ** 2) / (1 - np.sum(w**2))
+            out[j] = spread / (damping_ratio[j] * frequency_hz[j] ** 2)
     return out
 
 
+def damping_std(frf: AveragedFRF, per_hit_damping: np.ndarray, frequency_hz: np.ndarray,
+                broadened: np.ndarray) -> np.ndarray:
+    """damping_std [-] of the damping ratio corrected for ``broadening``: the standard error
+    of the per-hit damping ratios (each hit's exponential window corrected; the formula of
+    std_hz, module docstring) and the uncertainty of the broadening, a sample variance of
+    n hits (relative std sqrt(2 / (n - 1))), added in quadrature."""
+    standard_error, n = _std(frf, per_hit_damping, frequency_hz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.hypot(standard_error, broadened * np.sqrt(2 / (n - 1)))
+
+
 def _std(frf: AveragedFRF, per_hit: np.ndarray, frequency_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """std_hz (module docstring) from the (hits, modes) per-hit frequencies, and the
-    number of hit estimates per mode; the weights are H1's at ``frequency_hz``."""
+    """std_hz (module docstring) from the (hits, modes) per-hit frequencies (or the
+    standard error of another per-hit estimate), and the number of hit estimates per
+    mode; the weights are H1's at ``frequency_hz``."""
     line = frf.line(frequency_hz)
     n = np.sum(np.isfinite(per_hit), axis=0)
     std = np.full(len(frequency_hz), np.nan)
@@ -606,11 +637,16 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
     order = np.argsort(pole.imag)
     pole, snr, guided = pole[order], snr[order], guided[order]
     f, zeta = correct_for_window(pole, frf.decay_rate)
-    std, n = _std(frf, _per_hit(frf, pole), pole.imag / (2 * np.pi))
+    per_hit_f, per_hit_zeta = _per_hit(frf, pole)
+    std, n = _std(frf, per_hit_f, pole.imag / (2 * np.pi))
+    broadened = broadening(frf, per_hit_f, f, zeta)
+    zeta = np.where(np.isfinite(broadened) & (broadened < 0.5 * zeta), zeta - broadened, zeta)
+    zeta_std = damping_std(frf, per_hit_zeta, f, np.nan_to_num(broadened))
     half_bw = np.abs(pole.real) / (2 * np.pi)
     pooled = np.isnan(std) & np.isfinite(std).any()
     if pooled.any():
         std[pooled] = np.nanmedian(std / f) * f[pooled]
+        zeta_std[pooled] = np.nanmedian(zeta_std / zeta) * zeta[pooled]
     line = frf.line(pole.imag / (2 * np.pi))
     peak_hz = np.full(len(f), np.nan)
     used = set()
@@ -643,7 +679,8 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
         notes.append(f"peaks picked on |H1| without a stable pole (spurious: suspension, anti-resonance, cable, "
                      f"noise?) left out: {listed}" + (f" and {more} smaller ones" if more else ""))
     return pd.DataFrame({
-        "frequency_hz": f, "std_hz": std, "damping_ratio": zeta, "coherence": frf.coherence[line],
+        "frequency_hz": f, "std_hz": std, "damping_ratio": zeta, "damping_std": zeta_std,
+        "coherence": frf.coherence[line],
         "prominence_db": prominence, "snr": snr, "hits": n, "peak_hz": peak_hz,
         "quality": [k[0] if k else "good" for k in names], "flags": [",".join(k) for k in names],
     })
@@ -661,7 +698,7 @@ def _response_only(frf: AveragedFRF, configuration: str, band, picked: pd.DataFr
                 per_hit[k, j] = one["frequency_hz"].iloc[np.argmin(np.abs(one["line"] - line))]
     std, n = _std(frf, per_hit, picked["frequency_hz"].to_numpy())
     table = pd.DataFrame({
-        "frequency_hz": picked["frequency_hz"].to_numpy(), "std_hz": std, "damping_ratio": np.nan,
+        "frequency_hz": picked["frequency_hz"].to_numpy(), "std_hz": std, "damping_ratio": np.nan, "damping_std": np.nan,
         "coherence": np.nan, "prominence_db": picked["prominence_db"].to_numpy(), "snr": np.nan, "hits": n,
         "peak_hz": picked["frequency_hz"].to_numpy(), "quality": "response_only", "flags": "response_only",
     })

@@ -329,8 +329,8 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
                  ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
                   "with; label: its nodal pattern; error_%: (model - measured) / measured in %</p>"
                   + h.table(shown_residuals(residuals))),
-                 *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}",
-                                         *result.damping.notes]) + h.table(result.damping.residuals, "{:.4g}"))]
+                 *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}", *result.damping.notes])
+                     + h.table(result.damping.residuals.drop(columns="weight"), "{:.4g}"))]
                    if result.damping is not None else []),
                  ("Figures", "".join(h.figure(path, caption) for path, caption in figures)),
                  ("Warnings and notes", h.notes(result.warnings))]

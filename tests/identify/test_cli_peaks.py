@@ -30,7 +30,7 @@ def test_peaks_writes_the_peak_list_and_fit_reads_it(tmp_path, capsys):
     np.testing.assert_allclose(found, MODES.frequencies_hz, rtol=2e-3)
     assert len(data["rejected"]) == 1 and "hit2" in data["rejected"][0]["source"]
     table = pd.read_csv(out_csv)
-    assert list(table.columns) == ["configuration", "frequency_hz", "std_hz", "damping_ratio"]
+    assert list(table.columns) == ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
     measurements = load_measurements(out_csv, load_spec(COATED_PLATE))
     assert not measurements.ranked and len(measurements) == 3
     assert (tmp_path / "report" / "frf.png").exists()

@@ -112,3 +112,32 @@ def test_oberst_beam_against_astm_e756():
     assert strip.closed_form == pytest.approx(np.full(3, strip.truth), rel=1e-3)
     assert strip.tool == pytest.approx(strip.truth, rel=1e-3)
     assert abs(strip.tool - strip.truth) < 3 * strip.tool_std
+
+
+def test_without_damping_std_the_assumed_scatter(fitted):
+    """No damping_std: 3 % of each damping ratio is assumed (the data's own scatter here),
+    so the std match the stated case's to the misfit's scaling (chi^2 / dof <= 1.3 here);
+    with 3x the noise the std are scaled up by the misfit and the fit is a poor one."""
+    table = fitted.measurements.table
+    stated = fitted.damping
+    d = identify_damping(fitted.model, Measurements(table.assign(damping_std=np.nan), "<no std>"), fitted.pairings)
+    assert not d.scatter_stated and "assumed 3 %" in d.to_dict()["scatter"]
+    assert d.std == pytest.approx(stated.std, rel=0.15)
+    rng = np.random.default_rng(5)
+    noisy = table.assign(damping_std=np.nan, damping_ratio=table["damping_ratio"] * (1 + 0.09 * rng.standard_normal(
+        len(table))))
+    d = identify_damping(fitted.model, Measurements(noisy, "<noisy>"), fitted.pairings)
+    assert d.status == "poor_fit" and any("scaled by the misfit" in n for n in d.notes)
+    assert np.mean(d.std / stated.std) > 1.5
+
+
+def test_report_folder_has_the_damping_table_and_figure(fitted, tmp_path):
+    from identify.report import write_report
+
+    folder = write_report(fitted, tmp_path / "report")
+    page = (folder / "report.html").read_text()
+    assert "Damping" in page and "damping.png" not in page, "figures are embedded, not linked"
+    assert (folder / "damping.png").stat().st_size > 1000
+    table = pd.read_csv(folder / "damping.csv")
+    assert len(table) == 30 and table["model_damping_ratio"].notna().all()
+    assert "top_coating.eta_E1" in (folder / "parameters.csv").read_text()

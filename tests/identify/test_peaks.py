@@ -170,7 +170,8 @@ def test_outputs(session, tmp_path):
     _, result = session
     result.write_csv(tmp_path / "peaks.csv")
     written = pd.read_csv(tmp_path / "peaks.csv")
-    assert list(written.columns) == CSV_COLUMNS == ["configuration", "frequency_hz", "std_hz", "damping_ratio"]
+    assert list(written.columns) == CSV_COLUMNS == ["configuration", "frequency_hz", "std_hz", "damping_ratio",
+                                                 "damping_std"]
     assert len(written) == len(result) and (written["configuration"] == "original").all()
     np.testing.assert_allclose(written["frequency_hz"], result.table["frequency_hz"], rtol=1e-6)
     data = json.loads(to_json(result.to_dict()))
