@@ -29,7 +29,8 @@ from fem.model import SpecimenModel
 
 from .measurements import Measurements
 from .objective import Objective, solving_model
-from .report import residual_table
+from .report import residual_table, shown_residuals
+from .rounding import percent
 from .result import FitResult
 from .statistics import FitStatistics
 from .fitting import fit_layers
@@ -94,10 +95,10 @@ class Comparison:
     def report(self) -> str:
         chi2 = self.statistics.reduced_chi2
         lines = ["== model against measurement ==", "",
-                 f"RMS relative error {100 * self.rms_rel_error:.4f} %"
+                 f"RMS relative error {percent(self.rms_rel_error, 3)}"
                  + (f", reduced chi^2 {chi2:.3g} (1 = the measurement scatter)"
                     if self.statistics.scatter_known and np.isfinite(chi2) else ""),
-                 "", self.table.to_string(index=False, float_format=lambda x: f"{x:.6g}"), "",
+                 "", shown_residuals(self.table).to_string(index=False), "",
                  "residual patterns (share of the misfit each explains)"]
         for p in sorted(self.patterns, key=lambda p: -p.share):
             mark = "*" if p.share > PATTERN_SHARE and not self.at_noise_level else " "

@@ -289,7 +289,8 @@ class Diagnosis:
                       f"  RMS relative error {percent(final.rms_rel_error, 3)}"]
             added = [p for p in final.parameters if p not in self.baseline.parameters]
             for p in added:
-                lines.append(f"  {p.name:40s} {with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])}")
+                shown = with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])
+                lines.append(f"  {p.name:40s} {shown}")
             notes = [text for _, text in final.effect_notes]
             lines += [f"  - {text}" for text in notes]
         if math.isfinite(self.seconds):

@@ -228,7 +228,8 @@ def report_text(result: FitResult) -> str:
     the error per mode before and after the effects (when they were free), warnings."""
     u, st = result.uncertainty, result.statistics
     before = result.baseline
-    chi2 = (f"  reduced chi^2          {st.reduced_chi2:.3g} (1 = the stated scatter)" if st.scatter_known else
+    reduced = f"{st.reduced_chi2:.3g}" if math.isfinite(st.reduced_chi2) else "n/a (as many unknowns as frequencies)"
+    chi2 = (f"  reduced chi^2          {reduced} (1 = the stated scatter)" if st.scatter_known else
             f"  misfit / scatter       {st.misfit_over_scatter:.3g} (against an assumed 0.1 %: no std_hz given)")
     lines = ["== identification ==", f"   {status_line(result.status.value, result.message)}"]
     if result.causes:
