@@ -229,12 +229,18 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     starts = SHEAR_STARTS if defaulted else SHEAR_STARTS[:1]
     best = None
     for f13, f23 in starts:
-        trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
-                                   for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
-        sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+        try:
+            trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
+                                       for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
+            sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+        except LayerIdError:
+            continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
         left = sensitivities.predicted_sum_squares(parameters)
         if best is None or left < best[0]:
             best = (left, trial, sensitivities, (f13, f23))
+    if best is None:
+        raise LayerIdError("no transverse-shear start is a valid material: " + ", ".join(
+            f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted))
     _, trial, sensitivities, (f13, f23) = best
     note = "" if (f13, f23) == (1.0, 1.0) else (
         f"the refit started at G13 = {f13:.3g} G12, G23 = {f23:.3g} G12 for "
