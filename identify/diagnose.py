@@ -13,8 +13,11 @@ refit leaves (a misfit made of model error, not noise, shrinks every chi^2 diffe
 weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the conditioning
 of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
 identifiable and never iterated.  An estimate that is physically unlikely
-(``plausibility``) is marked and not preferred over a plausible rival whose criterion is
-within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
+(``plausibility``), or whose refit ends singular (``Candidate.singular``), is never
+selected whatever its gain, nor may it keep another candidate from being refitted: it is
+reported as a sign of what is missing (``SIGNS``; ``docs/diagnosis.md`` states every rule
+and threshold).  Implausible estimates are also ranked behind plausible rivals whose
+criterion is within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
 parameters, the one with more of the physics every plate has (``thick_plate`` over
 ``transverse_shear``) is preferred unless the other is better by ``COMPLETE_MARGIN``.
 Candidates are refitted with the pairing re-checked at their solution (``repair``), in
