@@ -19,7 +19,7 @@ complement of the fit's Jacobian).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -34,6 +34,7 @@ from .rounding import percent
 from .result import FitResult
 from .statistics import FitStatistics
 from .fitting import fit_layers
+from .global_start import global_fit
 from .peak_lists import matched_at
 
 #: A signature explaining more than this share of the misfit is reported as present.
@@ -200,6 +201,10 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
 def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
     """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
     fitted = fit_layers(model, measurements, explain=False) if refit else None
+    if fitted is not None:
+        fitted, note = global_fit(model, measurements, fitted)
+        if note:
+            fitted = replace(fitted, warnings=fitted.warnings + (note,))
     if fitted is not None:
         now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
         pairings, jacobian = fitted.pairings, fitted.jacobian

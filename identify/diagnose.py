@@ -13,8 +13,11 @@ refit leaves (a misfit made of model error, not noise, shrinks every chi^2 diffe
 weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the conditioning
 of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
 identifiable and never iterated.  An estimate that is physically unlikely
-(``plausibility``) is marked and not preferred over a plausible rival whose criterion is
-within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
+(``plausibility``), or whose refit ends singular (``Candidate.singular``), is never
+selected whatever its gain, nor may it keep another candidate from being refitted: it is
+reported as a sign of what is missing (``SIGNS``; ``docs/diagnosis.md`` states every rule
+and threshold).  Implausible estimates are also ranked behind plausible rivals whose
+criterion is within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
 parameters, the one with more of the physics every plate has (``thick_plate`` over
 ``transverse_shear``) is preferred unless the other is better by ``COMPLETE_MARGIN``.
 Candidates are refitted with the pairing re-checked at their solution (``repair``), in
@@ -37,6 +40,7 @@ import numpy as np
 from fem.effects import REGISTRY, effect
 from fem.io import html_pre
 from fem.model import SpecimenModel
+from fem.sensitivity import SINGULAR_ABOVE
 
 from .causes import with_causes
 from .compare import Comparison, compare
@@ -45,7 +49,7 @@ from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, poi
 from .measurements import Measurements
 from .parameters import UNITS, display, json_key
 from .plausibility import plausible_first
-from .precheck import Precheck
+from .precheck import SINGULAR_GROWTH, Precheck
 from .result import FitResult, FitStatus
 from .rounding import percent, status_line, with_std
 from .ties import Tied
@@ -116,6 +120,24 @@ class Candidate:
     def eligible(self) -> bool:
         """Can be selected: refitted to a finished (converged or poor) fit."""
         return self.fit is not None and self.fit.finished
+
+    @property
+    def singular(self) -> bool:
+        """The refit ended where the frequencies do not determine its parameters: the
+        condition number at the solution above the paper's limit and ``SINGULAR_GROWTH``
+        times the start's without the effect (as ``precheck`` judges the start)."""
+        check, fit = self.precheck, self.fit
+        if fit is None or check is None:
+            return False
+        at = fit.uncertainty.condition_number
+        return bool(not at <= SINGULAR_ABOVE and not at <= SINGULAR_GROWTH * check.base_condition_number)
+
+    @property
+    def selectable(self) -> bool:
+        """Can be selected: finished, plausible and identifiable at its solution.  An
+        implausible or singular estimate is never an answer, whatever its BIC gain: it is
+        reported as a sign of what is missing (``SIGNS``)."""
+        return self.eligible and self.plausible and not self.singular
 
     @property
     def rms_rel_error(self) -> float:
@@ -298,6 +320,30 @@ class Diagnosis:
         return "\n".join(lines) + "\n\n" + self.comparison.report()
 
 
+#: What an implausible or singular estimate that would pay for itself is a sign of (it is
+#: reported, never selected): the misfit's pattern is real, the effect is the wrong one.
+SIGNS = {"thickness": "the misfit wants the neutral axis or the bending stiffness distribution to move: transverse "
+                      "shear or a layerwise effect?",
+         "point_mass": "the misfit grows with the mode number like shear, or a sensor heavier than plausible: "
+                       "transverse shear, or a mass measured and given in the spec?",
+         "orientation": "the twisting modes are off: a turned layer, or shear coupling?",
+         "suspension": "the lowest modes are off: the suspension, or a missing shear effect?",
+         "adhesive": "the bonded configurations are off: the bond line's shear (layerwise)?"}
+
+
+def _signs(ordered, best) -> str:
+    """Candidates not selectable (implausible, or singular at their solution) that explain
+    more than the chosen one would: reported as signs."""
+    floor = best.fit.statistics.sum_squares if best is not None else float("inf")
+    out = []
+    for c in ordered:
+        if c.eligible and not c.selectable and c.fit.statistics.sum_squares < floor and c.scaled_gain > MIN_GAIN:
+            why = "implausible" if not c.plausible else "singular at its solution"
+            out.append(f"{c.kind} would pay (gain / c = {c.scaled_gain:.1f}) but is {why}, not taken: "
+                       + SIGNS.get(c.kind, "read it as a sign of what is missing"))
+    return ("; " + "; ".join(out)) if out else ""
+
+
 def _canonical(kinds) -> frozenset:
     out = set()
     for k in kinds:
@@ -318,7 +364,7 @@ def _refine(kind: str, kinds, selected, candidates) -> bool:
 def _refined_start(kind: str, candidates) -> FitResult | None:
     """The fit a refinement's refit starts from: the lowest-criterion finished candidate
     among the effects ``kind`` refines (None: from the round's start)."""
-    refined = [c for c in candidates if c.kind in REFINES[kind] and c.eligible]
+    refined = [c for c in candidates if c.kind in REFINES[kind] and c.selectable]
     return min(refined, key=lambda c: c.bic).fit if refined else None
 
 
@@ -329,7 +375,7 @@ def _more_complete(best: Candidate | None, ordered, selected, c_hat: float) -> C
     if best is None:
         return None
     mine = _canonical(list(selected) + [best.kind])
-    fuller = [c for c in ordered if c is not best and c.eligible and c.plausible
+    fuller = [c for c in ordered if c is not best and c.selectable
               and _canonical(list(selected) + [c.kind]) > mine and c.fit.statistics.k == best.fit.statistics.k
               and c.bic - best.bic < COMPLETE_MARGIN * c_hat]
     return min(fuller, key=lambda c: c.bic) if fuller else best
@@ -406,7 +452,9 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
             ready.append(prepared)
     ready.sort(key=lambda r: -r.bound)
     for i in range(0, len(ready), n_workers if pool else 1):
-        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.eligible]
+        # Only an answer may prune: an implausible estimate that explains much must not
+        # keep the right physics from being refitted.
+        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.selectable]
         below = max(explained) if explained else None
         jobs = [(state, r.kind, measurements, nominal, hints, "quick", None, True, CANDIDATE_OPTIONS, below, r)
                 for r in ready[i:i + (n_workers if pool else 1)]]
@@ -469,7 +517,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                                       key=lambda c: c.bic, judged=lambda c: c.plausible,
                                       related=lambda a, b: _nested(a.kind, b.kind, names))  # noqa: B023 (used now)
             ordered += [c for c in candidates if c.fit is None]
-            best = next((c for c in ordered if c.eligible), None)
+            best = next((c for c in ordered if c.selectable), None)
             plausible_best = best
             best = _more_complete(best, ordered, names, c_hat)
             if best is not plausible_best:
@@ -479,9 +527,10 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                                        else c.error) + f" ({c.added.seconds:.1f} s)")
             before = tuple(c.kind for c in selected)
             if best is None or not best.scaled_gain > MIN_GAIN:
-                reason = ("stop: no candidate could be refitted" if best is None else
+                reason = ("stop: no plausible, identifiable candidate could be refitted" if best is None else
                           f"stop: the best, {best.kind}, does not pay for itself (gain / c = {best.scaled_gain:.1f} "
                           f"<= {MIN_GAIN:g})")
+                reason += _signs(ordered, best)
                 steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped)))
                 break
             reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
@@ -492,9 +541,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                            f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within {COMPLETE_MARGIN:g}")
             elif lowest is not best:
                 reason += (f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
-                           "whose estimate is implausible")
-            if not best.plausible:
-                reason += "; its estimate is implausible, but no plausible rival fits about as well"
+                           "whose estimate is implausible or singular")
+            reason += _signs(ordered, best)
             # The chosen refit is taken to convergence (the candidates stopped once their misfit
             # settled) before the next round looks again.
             polished = continued(best.fit, measurements, FINAL_OPTIONS)

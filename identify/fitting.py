@@ -43,6 +43,9 @@ POINT_MASS_CONTINUED = 2
 #: G12 / 10-20, and from G23 = G12 a refit stops in a local minimum there (the 3-D spruce
 #: reference: 1.1 % RMS left, against the noise level from G12 / 16).
 SHEAR_STARTS = ((1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
+#: The last start of a failed shear refit: shear moduli this many times G12, where the
+#: model is close to the one without shear (a continuation from the thin-plate fit).
+CONTINUATION_START = (8.0, 8.0)
 #: A candidate whose refit could explain, by its linearised estimate (or a point mass by the
 #: residual scan), less than 1 / PRUNE_FACTOR of what another one explained is not refitted.
 PRUNE_FACTOR = 2.0
@@ -236,12 +239,18 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     starts = SHEAR_STARTS if defaulted else SHEAR_STARTS[:1]
     best = None
     for f13, f23 in starts:
-        trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
-                                   for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
-        sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+        try:
+            trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
+                                       for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
+            sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+        except LayerIdError:
+            continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
         left = sensitivities.predicted_sum_squares(parameters)
         if best is None or left < best[0]:
             best = (left, trial, sensitivities, (f13, f23))
+    if best is None:
+        raise LayerIdError("no transverse-shear start is a valid material: " + ", ".join(
+            f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted))
     _, trial, sensitivities, (f13, f23) = best
     note = "" if (f13, f23) == (1.0, 1.0) else (
         f"the refit started at G13 = {f13:.3g} G12, G23 = {f23:.3g} G12 for "
@@ -294,6 +303,12 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
         else:
             result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
                                 explain=False, settle=settle, pairings=ready.pairings or state.pairings)
+            result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
+                                                options)
+            notes += restarted
+            result, new, held = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
+                                            settle, options)
+            notes += held
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
@@ -301,6 +316,67 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
     notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
     return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
                        tuple(notes), reasons)
+
+
+def _shear_targets(parameters) -> list[Parameter]:
+    return [p for p in parameters if p.kind in SHEAR_MODULI]
+
+
+def _worse(result: FitResult, state: FitResult) -> bool:
+    """A refit that ends with more misfit than the fit it started from (which is the same
+    model with the effect off) has failed: it stopped in a local minimum or diverged."""
+    return not result.statistics.sum_squares <= state.statistics.sum_squares
+
+
+def _restarted(state, ready: Prepared, result, new, measurements, base, effect_of, settle, options):
+    """A transverse-shear refit that ended worse than ``state`` is a failed start, not a
+    result: the other ``SHEAR_STARTS`` and ``CONTINUATION_START`` (shear moduli so stiff
+    that the model starts at the fit without shear, from where every step can only lower
+    the misfit) are tried, the lowest misfit kept.  Returns (result, parameters, notes)."""
+    shear = _shear_targets(new)
+    if not shear or not _worse(result, state):
+        return result, new, []
+    specimen = ready.model.specimen
+    tried = [(result, "the screened start")]
+    for f13, f23 in SHEAR_STARTS + (CONTINUATION_START,):
+        values = {}
+        for p in shear:
+            for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
+                values[Parameter(q.kind, q.target)] = (f13 if q.kind == "G13" else f23) * \
+                    specimen.materials[q.target].G12
+        trial = fit_layers(ready.model.with_values(values), measurements, base + list(new), options,
+                           effect_of=effect_of, like=state, explain=False, settle=settle,
+                           pairings=ready.pairings or state.pairings)
+        tried.append((trial, f"G13 = {f13:g} G12, G23 = {f23:g} G12"))
+        if not _worse(trial, state):
+            break
+    best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
+    note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
+            f"restarted {len(tried) - 1} time(s), kept {where}")
+    return best, new, [note]
+
+
+def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base, effect_of, settle, options):
+    """Freed shear moduli that ended implausible (at a bound, or beyond
+    ``plausibility.MAX_SHEAR_RATIO`` x G12) are ones the data do not see (a thin skin's
+    G13/G23 in a sandwich): they are held at their start values and the candidate refitted
+    without them, so that they cannot sink the candidate that holds the right physics."""
+    shear = _shear_targets(new)
+    if not shear:
+        return result, new, []
+    first_hz = float(state.measurements.table["frequency_hz"].min())
+    wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
+    if not wandered:
+        return result, new, []
+    kept = [p for p in new if not (p.kind in SHEAR_MODULI and p.target in wandered)]
+    specimen = result.model.specimen
+    for material in wandered:
+        specimen = with_shear_moduli(specimen, ready.model.specimen.materials[material])
+    refit = fit_layers(result.model.with_specimen(specimen), measurements, base + kept, options,
+                       effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
+    note = (f"G13, G23 of {', '.join(wandered)} ran out of the plausible range (the data do not see them): held at "
+            f"their start values and refitted without them")
+    return refit, kept, [note]
 
 
 def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
