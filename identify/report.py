@@ -1,74 +1,26 @@
-"""Reading an identification: text report, JSON (DESIGN.md shape), CSV tables and plots."""
+"""Reading an identification: text report, JSON (the fit JSON shape), CSV tables and plots.
+Formats the fit result it is handed (duck-typed: it imports no result module)."""
 from __future__ import annotations
 
 import html
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 import pandas as pd
 
 from fem.io import report_folder, to_json, write_text
+from fem.numbers import finite_or_none
 
-from .measurements import Measurements
 from .parameters import UNITS, display, json_key
 
-if TYPE_CHECKING:
-    from .result import FitResult
+from . import html_report as h
+from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
+from .residuals import fit_residuals
 
 
-def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
-    """Per measured mode: measured and model frequency, relative error, error / std."""
-    table = measurements.table
-    out = pd.DataFrame({
-        "configuration": table["configuration"], "mode": table["mode"],
-        "measured_hz": table["frequency_hz"], "model_hz": model_hz,
-        "rel_error": model_hz / table["frequency_hz"] - 1,
-    })
-    if measurements.has_std:
-        out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
-    return out
-
-
-def fit_residuals(result: FitResult) -> pd.DataFrame:
-    """The residual rows of a fit (DESIGN.md): every measured frequency with the model
-    mode it is paired with (1-based; None for a peak left out), measured and model (or,
-    left out, the nearest mode's) frequency, relative error, matched; ranked data also
-    keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
-    if result.peaks is not None:
-        from .peak_lists import peak_table
-
-        out = peak_table(result.peaks)
-    else:
-        table = result.measurements.table
-        configs = table["configuration"].to_numpy()
-        modes = np.zeros(len(table), dtype=int)
-        for name, pairing in result.pairings.items():
-            modes[configs == name] = pairing.indices + 1
-        out = residual_table(result.measurements, result.model_hz)
-        out.insert(1, "measured_mode", out.pop("mode"))
-        out.insert(1, "mode", modes)
-        out["matched"] = True
-    out.insert(2, "label", _model_labels(result, out))
-    return out
-
-
-def _model_labels(result: FitResult, rows: pd.DataFrame) -> list[str]:
-    """The nodal pattern of the model mode each residual row is paired with ('' when
-    left out)."""
-    from .objective import solving_model
-
-    solver = solving_model(result.model, result.measurements)
-    labels = {c: solver.solve(c).labels for c in result.measurements.configurations}
-    out = []
-    for name, mode in zip(rows["configuration"], rows["mode"]):
-        known = labels.get(name, ())
-        out.append(known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else "")
-    return out
-
-
-def parameter_table(result: FitResult) -> pd.DataFrame:
+def parameter_table(result) -> pd.DataFrame:
     """One row per identified parameter in display units: value, std, unit, relative
     std [%], flags, and what it belongs to (a material, or an effect)."""
     rows = []
@@ -81,7 +33,7 @@ def parameter_table(result: FitResult) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def history_table(result: FitResult) -> pd.DataFrame:
+def history_table(result) -> pd.DataFrame:
     """One row per iteration: parameter values (display units), RMS error, step, damping."""
     rows = []
     for it in result.history:
@@ -91,11 +43,7 @@ def history_table(result: FitResult) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _finite(x: float):
-    return float(x) if math.isfinite(x) else None
-
-
-def to_dict(result: FitResult) -> dict:
+def to_dict(result) -> dict:
     """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
     materials: dict[str, dict] = {}
     effects: dict[str, dict] = {}
@@ -108,12 +56,12 @@ def to_dict(result: FitResult) -> dict:
             entry = materials.setdefault(p.target, {"std": {}, "flags": {}})
             key = json_key(p)
         entry[key] = display(p, value)
-        entry["std"][key] = _finite(display(p, sd))
+        entry["std"][key] = finite_or_none(display(p, sd))
         if flags:
             entry["flags"][key] = list(flags)
         for follower, ratio in getattr(p, "followers", ()):  # a tied scale (``ties``): its members too
             entry[json_key(follower)] = display(follower, ratio * value)
-            entry["std"][json_key(follower)] = _finite(display(follower, ratio * sd))
+            entry["std"][json_key(follower)] = finite_or_none(display(follower, ratio * sd))
             entry["flags"][json_key(follower)] = [f"tied: {follower.kind} = {ratio:.4g} x {p.kind}"]
     for kind, text in result.effect_notes:  # every effect switched on, with what was decided
         effects.setdefault(kind, {"std": {}, "flags": {}}).setdefault("notes", []).append(text)
@@ -123,26 +71,27 @@ def to_dict(result: FitResult) -> dict:
         "status": result.status.value,
         "message": result.message,
         "iterations": result.iterations,
+        "stop_reason": result.stop.code if result.stop is not None else None,
         "materials": materials,
         "effects": effects,
         "residuals": fit_residuals(result).to_dict(orient="records"),
         "causes": [c.to_dict() for c in result.causes],
         "budget": result.budget.to_dict() if result.budget is not None else None,
         "rms_rel_error": result.rms_rel_error,
-        "condition_number": _finite(u.condition_number),
+        "condition_number": finite_or_none(u.condition_number),
         "verdict": u.verdict,
-        "reduced_chi2": _finite(st.reduced_chi2) if st.scatter_known else None,
+        "reduced_chi2": finite_or_none(st.reduced_chi2) if st.scatter_known else None,
         "noise_source": st.noise_source,
         "statistics": st.to_dict(),
         "weak_combinations": list(u.weak_combinations),
         "correlation": {"parameters": [p.name for p in result.parameters],
-                        "matrix": [[_finite(x) for x in row] for row in u.correlation]},
+                        "matrix": [[finite_or_none(x) for x in row] for row in u.correlation]},
         "warnings": list(result.warnings),
         "history": history_table(result).to_dict(orient="records"),
     }
 
 
-def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
+def before_after_table(before, after) -> pd.DataFrame:
     """Relative error per measured mode without and with the effects switched on."""
     table = before.measurements.table
     return pd.DataFrame({"configuration": table["configuration"], "mode": table["mode"],
@@ -150,7 +99,7 @@ def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
                          "rel_error_after": after.rel_error})
 
 
-def report_text(result: FitResult) -> str:
+def report_text(result) -> str:
     """Fixed sections: statistics, parameters +- std with flags, correlations, residuals,
     the error per mode before and after the effects (when they were free), warnings."""
     u, st = result.uncertainty, result.statistics
@@ -200,7 +149,7 @@ def report_text(result: FitResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_report(result: FitResult, folder: str | Path) -> Path:
+def write_report(result, folder: str | Path) -> Path:
     """A report folder (written whole or not at all, see ``fem.io.report_folder``):
     report.html (self-contained), report.txt, parameters.csv, fit.json, residuals.csv,
     history.csv and the figures (and the error per mode before and after the effects when
@@ -210,10 +159,7 @@ def write_report(result: FitResult, folder: str | Path) -> Path:
     return Path(folder)
 
 
-def _write_report_files(result: FitResult, folder: Path) -> None:
-    from . import html_report as h
-    from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
-
+def _write_report_files(result, folder: Path) -> None:
     write_text(folder / "report.txt", report_text(result))
     parameters = parameter_table(result)
     write_text(folder / "parameters.csv", parameters.to_csv(index=False))
@@ -267,8 +213,6 @@ def write_analysis_report(folder: str | Path, title: str, analysis: str, model, 
     .txt and as the body of report.html (with the provenance header and the figures
     embedded), ``files`` (name -> content) beside it, and each figure drawn by its
     callable into the file named (callable(path) -> path, file name, caption)."""
-    from . import html_report as h
-
     with report_folder(folder) as tmp:
         for name, content in files.items():
             write_text(tmp / name, content)

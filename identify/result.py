@@ -14,12 +14,14 @@ from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
 
 from .measurements import Measurements
+from .report import report_text, to_dict
 from .statistics import FitStatistics
+from .stopping import Stop
 from .uncertainty import Uncertainty
 
 if TYPE_CHECKING:
     from .budget import Budget
-    from .peak_lists import PeakAssignment
+    from .peak_assignment import PeakAssignment
 
 
 class FitStatus(str, Enum):
@@ -59,7 +61,8 @@ class FitResult:
     peaks: for a peak list, what became of every peak (``measurements`` then holds the
     matched ones, ranked); causes: for a poor fit, what is likely wrong, most likely first;
     budget: each known input's and the measurements' share of the std, when the spec
-    states the known inputs' std (``uncertainty`` then includes them).
+    states the known inputs' std (``uncertainty`` then includes them); stop: why the
+    iterations stopped (``stopping.Stop``; ``"stop_reason"`` in the JSON).
     """
 
     status: FitStatus
@@ -82,6 +85,7 @@ class FitResult:
     peaks: "PeakAssignment | None" = None
     causes: tuple = ()
     budget: "Budget | None" = None
+    stop: Stop | None = None
 
     @property
     def converged(self) -> bool:
@@ -121,14 +125,10 @@ class FitResult:
     def report(self) -> str:
         """Fixed sections: statistics, parameters +- std with flags, correlations,
         residuals, warnings (display units)."""
-        from .report import report_text
-
         return report_text(self)
 
     def to_dict(self) -> dict:
         """The ``fit --json`` document (DESIGN.md), display units."""
-        from .report import to_dict
-
         return to_dict(self)
 
     def _repr_html_(self) -> str:
