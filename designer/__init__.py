@@ -16,9 +16,10 @@ The public API takes the model a spec file loads into (``fem.load_spec``)::
 ``relaxation``; ``mirror`` collapses mirror designs), ``refine`` tunes thicknesses to
 stock, ``check`` and ``sweep`` judge and explore the spec's own design, ``sheet`` says
 how to carry out the test, ``spec_file`` writes a design as a spec; ``cli`` is plan-tests.
-The names are imported when first used, so that ``plan-tests --help`` starts without loading the planner.
+The names are imported when first used, so that ``plan-tests --help`` starts without
+loading the planner.
 """
-from importlib import import_module
+from fem.lazy import lazy_package
 
 #: Public name -> the module that defines it.
 _HOMES = {
@@ -31,13 +32,7 @@ _HOMES = {
 __all__ = ["check", "recommend", "sweep", "refine", "write_spec", "Problem", "CheckResult", "Recommendation",
            "SweepResult", "TestSheet"]
 
-
-def __getattr__(name: str):
-    if name not in _HOMES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_package(__name__, _HOMES)
 
 
 def __dir__():

@@ -8,7 +8,7 @@ Every command and API function takes that object.  Inside, all quantities are SI
 when first used, so that a command line that needs only a part (its version, its help)
 starts fast.
 """
-from importlib import import_module
+from .lazy import lazy_package
 
 #: Public name -> the module that defines it.
 _HOMES = {
@@ -26,13 +26,7 @@ __all__ = [
     "LayerIdError", "SpecError", "MeasurementError", "ModelError", "DesignError",
 ]
 
-
-def __getattr__(name: str):
-    if name not in _HOMES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_package(__name__, _HOMES)
 
 
 def __dir__():

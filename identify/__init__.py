@@ -14,7 +14,7 @@ Values are SI inside (Pa, m, kg); reports and ``to_dict()`` use the spec's units
 (GPa, mm, g).  The names are imported when first used, so that the command line
 (``identify.cli``) starts without loading the whole fit and diagnosis.
 """
-from importlib import import_module
+from fem.lazy import lazy_package
 
 #: Public name -> the module that defines it.
 _HOMES = {
@@ -33,13 +33,7 @@ __all__ = [
     "FitOptions", "Comparison", "Diagnosis",
 ]
 
-
-def __getattr__(name: str):
-    if name not in _HOMES:
-        raise AttributeError(f"module 'identify' has no attribute {name!r}")
-    value = getattr(import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_package(__name__, _HOMES)
 
 
 def __dir__():

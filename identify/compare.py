@@ -8,9 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from fem.io import html_pre
 from fem.model import SpecimenModel
 
+from . import html_report as h
 from .fitting import fit_layers
 from .measurements import Measurements
 from .objective import Objective, solving_model
@@ -53,8 +53,23 @@ class Comparison:
                              for p in self.patterns],
                 "residuals": self.table.to_dict(orient="records")}
 
+    def sections(self) -> list[tuple[str, str]]:
+        """(heading, HTML) sections of the notebook view: the misfit, the residual patterns
+        and the residual table, drawn by the HTML report's code."""
+        chi2 = self.statistics.reduced_chi2
+        summary = (f"RMS relative error {100 * self.rms_rel_error:.4f} %"
+                   + (f", reduced chi^2 {chi2:.3g} (1 = the measurement scatter)"
+                      if self.statistics.scatter_known and np.isfinite(chi2) else "")
+                   + ("; the misfit is at the level of the measurement scatter: nothing is clearly missing"
+                      if self.at_noise_level else ""))
+        patterns = pd.DataFrame([{"pattern": p.name, "share [%]": 100 * p.share, "detail": p.detail,
+                                  "suggests": ", ".join(p.suggests)}
+                                 for p in sorted(self.patterns, key=lambda p: -p.share)])
+        return [("Misfit", h.paragraph(summary)), ("Residual patterns (share of the misfit each explains)",
+                                                    h.table(patterns, "{:.3g}")), ("Residuals", h.table(self.table))]
+
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        return h.view("Model against measurement", None, self.sections())
 
     def report(self) -> str:
         chi2 = self.statistics.reduced_chi2

@@ -32,12 +32,13 @@ import time
 from dataclasses import dataclass, replace
 from typing import Callable
 
+import pandas as pd
 
 from fem.effects import REGISTRY, effect
-from fem.io import html_pre
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 
+from . import html_report as h
 from .causes import with_causes
 from .compare import Comparison, compare
 from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, point_mass_hints,
@@ -250,7 +251,20 @@ class Diagnosis:
         }
 
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        """The notebook view: the verdict, every round's candidates and the comparison's
+        tables, drawn by the HTML report's code."""
+        rounds = [(f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
+                   h.table(pd.DataFrame([{"effect": c.kind, "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
+                                          "BIC gain": finite_or_none(c.gain),
+                                          "status": c.fit.status.value if c.fit else _not_fitted(c),
+                                          "parameters": ", ".join(f"{k} = {v:.4g}"
+                                                                  for k, v in c.effect_values().items()),
+                                          "note": " ".join(x for x in (c.note, c.error) if x)}
+                                         for c in s.candidates]), "{:.4g}") + h.paragraph(f"-> {s.reason}"))
+                  for s in self.steps]
+        good = self.explained
+        return h.view("Diagnosis", ("explained" if good else "not explained", self.verdict, good),
+                      rounds + self.comparison.sections())
 
     def report(self) -> str:
         base = self.baseline.statistics

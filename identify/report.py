@@ -149,6 +149,42 @@ def report_text(result) -> str:
     return "\n".join(lines) + "\n"
 
 
+def fit_sections(result, parameters: pd.DataFrame | None = None, residuals: pd.DataFrame | None = None
+                 ) -> list[tuple[str, str]]:
+    """The (heading, HTML) sections of a fit, as report.html and the notebook view show
+    them: likely causes, parameters, budget, statistics, residuals, warnings."""
+    parameters = parameter_table(result) if parameters is None else parameters
+    residuals = fit_residuals(result) if residuals is None else residuals
+    st, u = result.statistics, result.uncertainty
+    statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
+                                            "iterations", "RMS relative error [%]",
+                                            "misfit / scatter", "chi^2 test p-value", "scatter from",
+                                            "condition number", "verdict"],
+                               "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
+                                         str(result.iterations), f"{100 * st.rms_rel_error:.4g}",
+                                         f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
+                                         f"{u.condition_number:.3g}", u.verdict]})
+    sections = []
+    if result.causes:
+        sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
+    sections += [("Parameters (value +- 1 std)", h.table(parameters))]
+    if result.budget is not None:
+        sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
+                         "scatter's share of each parameter's std (display units); total = the std above</p>"
+                         + h.table(result.budget.table(), "{:.3g}")))
+    sections += [("Statistics", h.table(statistics)),
+                 ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
+                  "with; label: its nodal pattern</p>" + h.table(residuals)),
+                 ("Warnings and notes", h.notes(result.warnings))]
+    return sections
+
+
+def fit_view(result) -> str:
+    """The notebook view of a fit (``FitResult._repr_html_``): its status and sections."""
+    return h.view(f"Layer identification: {result.specimen.name}",
+                  (result.status.value, result.message, result.converged), fit_sections(result))
+
+
 def write_report(result, folder: str | Path) -> Path:
     """A report folder (written whole or not at all, see ``fem.io.report_folder``):
     report.html (self-contained), report.txt, parameters.csv, fit.json, residuals.csv,
@@ -177,29 +213,8 @@ def _write_report_files(result, folder: Path) -> None:
         write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
         figures.append((plot_before_after(result.baseline, result, kinds, folder / "before_after.png"),
                         f"error per mode without and with {kinds}"))
-    st, u = result.statistics, result.uncertainty
-    statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
-                                            "iterations", "RMS relative error [%]",
-                                            "misfit / scatter", "chi^2 test p-value", "scatter from",
-                                            "condition number", "verdict"],
-                               "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
-                                         str(result.iterations), f"{100 * st.rms_rel_error:.4g}",
-                                         f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
-                                         f"{u.condition_number:.3g}", u.verdict]})
-    sections = []
-    if result.causes:
-        sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
-    sections += [("Parameters (value +- 1 std)", h.table(parameters))]
-    if result.budget is not None:
-        sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
-                         "scatter's share of each parameter's std (display units); total = the std above</p>"
-                         + h.table(result.budget.table(), "{:.3g}")))
-    sections += [
-                 ("Statistics", h.table(statistics)),
-                 ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
-                  "with; label: its nodal pattern</p>" + h.table(residuals)),
-                 ("Figures", "".join(h.figure(path, caption) for path, caption in figures)),
-                 ("Warnings and notes", h.notes(result.warnings))]
+    sections = fit_sections(result, parameters, residuals)
+    sections.insert(-1, ("Figures", "".join(h.figure(path, caption) for path, caption in figures)))
     header = h.provenance("identification (identify-layers fit)", result.specimen.name, result.model.source,
                           result.measurements.source)
     page = h.document(f"Layer identification: {result.specimen.name}", header,

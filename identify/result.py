@@ -9,12 +9,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fem.io import html_pre
 from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
 
 from .measurements import Measurements
-from .report import report_text, to_dict
+from .report import fit_view, report_text, to_dict
 from .statistics import FitStatistics
 from .stopping import Stop
 from .uncertainty import Uncertainty
@@ -132,7 +131,8 @@ class FitResult:
         return to_dict(self)
 
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        """The notebook view: the report's status box and tables (``report.fit_view``)."""
+        return fit_view(self)
 
 
 __all__ = ["FitStatus", "FitResult", "Iteration"]
