@@ -10,7 +10,8 @@ from pathlib import Path
 
 from fem.design_space import CRITERIA
 from fem.errors import DesignError
-from fem.io import add_common_arguments, add_version, check_report_folder, report_folder, run_cli, to_json
+from fem.io import check_report_folder, report_folder, to_json
+from identify.command_line import add_common_arguments, add_version, run_cli
 from identify.examples import spec_or_example
 
 from .methods import METHODS

@@ -9,8 +9,9 @@ import sys
 
 from fem.effect_kinds import BUILT_IN
 from fem.errors import MeasurementError
-from fem.io import add_common_arguments, add_version, check_report_folder, report_folder, run_cli, to_json, write_text
+from fem.io import check_report_folder, report_folder, to_json, write_text
 
+from .command_line import add_common_arguments, add_version, run_cli
 from .examples import COATED_PLATE_MEASURED, spec_or_example
 
 DESCRIPTION = """identify-layers: the stiffness of every layer of a laminated plate from its resonances.
