@@ -16,10 +16,11 @@ from pathlib import Path
 
 from fem.io import tool_version, write_text
 
-from . import core, damping, designer, diagnosis, identification, layerwise, peaks
+from . import core, damping, designer, diagnosis, identification, layerwise, peaks, startup
 
 #: The benchmarks in the order they run, each with the heading of its section.
-SECTIONS = (("Physics core: accuracy against time, solve and sensitivity cost", core),
+SECTIONS = (("Start-up of the command lines", startup),
+            ("Physics core: accuracy against time, solve and sensitivity cost", core),
             ("Test planner", designer),
             ("Identification", identification),
             ("Diagnosis against one baseline fit", diagnosis),

@@ -16,14 +16,24 @@ The public API takes the model a spec file loads into (``fem.load_spec``)::
 ``relaxation``; ``mirror`` collapses mirror designs), ``refine`` tunes thicknesses to
 stock, ``check`` and ``sweep`` judge and explore the spec's own design, ``sheet`` says
 how to carry out the test, ``spec_file`` writes a design as a spec; ``cli`` is plan-tests.
+The names are imported when first used, so that ``plan-tests --help`` starts without
+loading the planner.
 """
-from .check import CheckResult, check
-from .problem import Problem
-from .refine import refine
-from .search import Recommendation, recommend
-from .sheet import TestSheet
-from .spec_file import write_spec
-from .sweep import SweepResult, sweep
+from fem.lazy import lazy_package
+
+#: Public name -> the module that defines it.
+_HOMES = {
+    "CheckResult": "designer.check", "check": "designer.check", "Problem": "designer.problem",
+    "refine": "designer.refine", "Recommendation": "designer.search", "recommend": "designer.search",
+    "TestSheet": "designer.sheet", "write_spec": "designer.spec_file", "SweepResult": "designer.sweep",
+    "sweep": "designer.sweep",
+}
 
 __all__ = ["check", "recommend", "sweep", "refine", "write_spec", "Problem", "CheckResult", "Recommendation",
            "SweepResult", "TestSheet"]
+
+__getattr__ = lazy_package(__name__, _HOMES)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,4 +1,7 @@
-"""``plan-tests``: plan the bonded test configurations of a laminated plate."""
+"""``plan-tests``: plan the bonded test configurations of a laminated plate.
+
+Each command imports the planner parts it runs when it runs, so that ``--version`` and
+``--help`` start without loading them."""
 from __future__ import annotations
 
 import argparse
@@ -8,30 +11,11 @@ from pathlib import Path
 
 from fem.design_space import CRITERIA
 from fem.errors import DesignError
-from fem.io import (
-    add_common_arguments,
-    add_version,
-    check_report_folder,
-    report_folder,
-    run_cli,
-    to_json,
-)
-from fem.model import MAX_MODES
-from fem.spec import load_spec
-from fem.validation import whole
+from fem.io import check_report_folder, report_folder, to_json
+from identify.command_line import add_common_arguments, add_version, run_cli
 from identify.examples import spec_or_example
 
-from .candidates import candidates
-from .check import check
-from .damping import damping_scores
-from .parallel import executor
-from .problem import Problem, use_store
-from .progress import Progress
-from .refine import refine
-from .search import METHODS, recommend
-from .spec_file import write_spec
-from .store import SolveStore
-from .sweep import parse_variable, sweep
+from .methods import METHODS
 
 DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
 
@@ -42,21 +26,29 @@ DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated 
 Exit status: 0 done (check: feasible), 1 check found the design infeasible, 2 bad input."""
 
 
-def _problem(args) -> Problem:
-    if hasattr(args, "no_cache"):
-        store = None if args.no_cache else SolveStore(args.cache)
-        if store is not None and not os.access(store.folder, os.W_OK | os.X_OK):
-            print(f"note: the solve cache {str(store.folder)!r} is read-only: it is read, new solves are not kept "
-                  "(--cache DIR elsewhere to keep them)", file=sys.stderr)
-        use_store(store)
+def _problem(args):
+    from fem.model import MAX_MODES
+    from fem.spec import load_spec
+    from fem.validation import whole
+
+    from .problem import Problem
+    from .store import SolveStore
+
+    store = SolveStore(args.cache) if hasattr(args, "no_cache") and not args.no_cache else None
+    if store is not None and not os.access(store.folder, os.W_OK | os.X_OK):
+        print(f"note: the solve cache {str(store.folder)!r} is read-only: it is read, new solves are not kept "
+              "(--cache DIR elsewhere to keep them)", file=sys.stderr)
     model = load_spec(spec_or_example(args.spec))
     for note in model.notes:
         print(f"note: {note}", file=sys.stderr)
     modes = None if args.modes is None else whole(args.modes, "--modes", 1, MAX_MODES, "", DesignError)
-    return Problem.of(model, modes, getattr(args, "criterion", None), getattr(args, "prior_range", None))
+    return Problem.of(model, modes, getattr(args, "criterion", None), getattr(args, "prior_range", None),
+                      store)
 
 
-def _progress(args) -> Progress:
+def _progress(args):
+    from .progress import Progress
+
     show = sys.stderr.isatty() if args.progress is None else args.progress
     return Progress(sys.stderr if show else None)
 
@@ -77,6 +69,13 @@ def _not_the_input(spec, written) -> None:
 def run_recommend(args) -> int:
     """Ranked designs with scores, predicted std and the frequencies to expect."""
     _not_the_input(args.spec, args.write_spec)
+    from .candidates import candidates
+    from .damping import damping_scores
+    from .parallel import executor
+    from .refine import refine
+    from .search import recommend
+    from .spec_file import write_spec
+
     problem = _problem(args)
     tasks = len(candidates(problem.space, problem.specimen)) + 1
     with executor(args.workers, args.scheduler, tasks) as pool:
@@ -110,6 +109,8 @@ def run_recommend(args) -> int:
 
 def run_check(args) -> int:
     """Feasibility of the spec's configurations; exit status 1 when infeasible."""
+    from .check import check
+
     if args.out:
         check_report_folder(args.out)
     problem = _problem(args)
@@ -135,6 +136,9 @@ def run_check(args) -> int:
 
 def run_sweep(args) -> int:
     """A report folder: CSV, plots, summary."""
+    from .parallel import executor
+    from .sweep import parse_variable, sweep
+
     check_report_folder(args.out)  # refuse a bad --out before the solves, not after
     problem = _problem(args)
     variables = [parse_variable(v, problem) for v in (args.vary or ["thickness", "material"])]

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.limits import added_mass
+from fem.numbers import finite_or_none
 from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration, Parameter
 
@@ -35,11 +36,6 @@ def describe(configuration: Configuration) -> str:
         if layers:
             parts.append(f"{face}: " + ", ".join(f"{l.material.name} {l.thickness * 1e3:g} mm" for l in layers))
     return "; ".join(parts) or "-"
-
-
-def finite_or_none(value: float) -> float | None:
-    """JSON has no infinity: an infinite score (rank deficient) is null."""
-    return float(value) if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@ configurations solved once each, cached by content, possibly in parallel."""
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -16,6 +16,7 @@ from fem.sensitivity import normalised
 from fem.specimen import Configuration, Parameter, Specimen
 
 from .parallel import chunked, run_chunks
+from .prior import Prior
 from .progress import Progress
 
 #: Solved configurations kept in this process (a few kB each: no mode shapes).
@@ -25,16 +26,6 @@ _CACHE: OrderedDict = OrderedDict()
 MAX_TASKS = 64
 #: Model options that choose the plate theory, passed on to the solve when the model has them.
 THEORY_OPTIONS = ("theory", "layer_groups", "core_stretch")
-#: Solved configurations kept on disk too (``store.SolveStore``), when set (``use_store``).
-_STORE: list = [None]
-
-
-def use_store(store) -> None:
-    """Keep solved configurations in ``store`` (a ``store.SolveStore``) too, or nowhere but
-    in memory (None): an interrupted sweep or search then resumes, a repeated one is fast."""
-    _STORE[0] = store
-
-
 @dataclass(frozen=True)
 class Solved:
     """One configuration at one parameter point (the nominal one unless scored over a
@@ -86,10 +77,14 @@ def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters
 class Problem:
     """What test sets are scored against: the ``model`` at its nominal (start)
     properties (its options: modes measured per plate, mesh, effects) and the design
-    ``space``."""
+    ``space``.  ``store``: where solved configurations are kept on disk too (a
+    ``store.SolveStore``; None: only in this process's memory), so an interrupted sweep
+    or search resumes and a repeated one is fast; every problem derived from this one
+    (other values, prior samples) shares it."""
 
     model: SpecimenModel
     space: DesignSpace
+    store: object = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         if not self.specimen.identified_materials:
@@ -112,15 +107,15 @@ class Problem:
 
     @classmethod
     def of(cls, model: "SpecimenModel | Problem", modes: int | None = None, criterion: str | None = None,
-           prior_range: float | None = None) -> "Problem":
+           prior_range: float | None = None, store=None) -> "Problem":
         """The planning problem of a model (its ``[design]`` table, or the defaults);
         ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion,
-        ``prior_range`` its ``prior_range_rel``."""
+        ``prior_range`` its ``prior_range_rel``, ``store`` the disk store of solves."""
         if isinstance(model, Problem):
-            problem = model
+            problem = model if store is None else replace(model, store=store)
         else:
             space = model.design or parse_design({}, model.defined_materials, len(model.specimen.identified_materials))
-            problem = cls(model, space)
+            problem = cls(model, space, store)
         if modes is not None:
             problem = problem.with_options(modes=modes)
         if criterion is not None:
@@ -193,10 +188,8 @@ class Problem:
 
     @cached_property
     def prior(self):
-        """The prior parameter points robust scores use (``designer.robust.Prior``), or
+        """The prior parameter points robust scores use (``prior.Prior``), or
         None when ``[design] prior_range_rel`` is 0 (scores at the nominal values only)."""
-        from .robust import Prior  # robust imports this module
-
         return Prior.of(self) if self.space.prior_range > 0 else None
 
     def points(self) -> list["Problem"]:
@@ -241,7 +234,7 @@ def solve_points(problems: list[Problem], configurations, pool=None, progress: P
     labelled = set(keys[0])
     found = {key: _CACHE[key] for row in keys for key in row
              if key in _CACHE and (_CACHE[key][1] is not None or key not in labelled)}
-    store = _STORE[0]
+    store = first.store
     if store is not None:
         for row in keys:
             for key in row:

@@ -22,6 +22,7 @@ from fem.specimen import Configuration
 
 from .candidates import candidates
 from .design import Design, score_design
+from .methods import METHODS
 from .mirror import collapse, is_mirror_symmetric
 from .poisson import PoissonPlate, poisson_plate
 from .problem import Problem, Solved, solve_points, unmeasurable
@@ -33,7 +34,6 @@ from .scoring import loss, singular_values
 EXHAUSTIVE_LIMIT = 50_000
 #: Sets scored per batched SVD (bounds memory to ~20 MB).
 BATCH = 4096
-METHODS = ("auto", "exhaustive", "relaxation")
 ORIGINAL = Configuration("original")
 
 

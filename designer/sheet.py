@@ -47,7 +47,7 @@ from fem.model import one_blas_thread
 from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved
-from .robust import prior_factors
+from .prior import prior_factors
 
 #: Points per side of the sampling grid (1 % spacing).
 GRID = 101

@@ -1,12 +1,11 @@
 """Output helpers shared by the command-line tools: files and report folders written
-whole or not at all, clean one-line errors, the tool's version."""
+whole or not at all, JSON, the tool's version."""
 from __future__ import annotations
 
 import html
 import json
 import os
 import shutil
-import sys
 import tempfile
 from contextlib import contextmanager
 from functools import lru_cache
@@ -14,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LayerIdError, OutputError
+from .errors import OutputError
 
 #: The file that marks a folder as a report this tool wrote (so it may replace it whole).
 REPORT_MARK = ".layer-id-report"
@@ -196,28 +195,3 @@ def _plain(value):
 def to_json(data) -> str:
     """JSON text with numpy values converted."""
     return json.dumps(data, indent=2, default=_plain, allow_nan=False)
-
-
-def run_cli(build_parser, argv=None) -> int:
-    """Parse the command line and run the chosen command (``args.run``): user errors
-    become one line on stderr and exit status 2."""
-    try:
-        args = build_parser().parse_args(argv)
-        return args.run(args) or 0
-    except LayerIdError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
-
-
-def add_version(parser) -> None:
-    """``--version`` on a tool's top-level parser."""
-    parser.add_argument("--version", action="version", version=f"%(prog)s {tool_version()}")
-
-
-def add_common_arguments(parser, spec_help: str = "specimen spec (TOML); default: the bundled example") -> None:
-    """The options every command of both tools has: the spec file and ``--json``."""
-    parser.add_argument("spec", nargs="?", help=spec_help)
-    parser.add_argument("--json", action="store_true", help="machine-readable output on stdout")

@@ -22,8 +22,6 @@ VOIGT_PAIRS = ((0, 0), (0, 1), (1, 1), (2, 2), (0, 2), (1, 2))
 _PAIR_NAMES = ("11", "12", "22", "66", "16", "26")
 #: Names of the 18 laminate stiffness coefficients, in the order used everywhere.
 COEFFICIENTS = tuple(f"{m}{p}" for m in "ABD" for p in _PAIR_NAMES)
-#: Names of the three inertia terms: mass per area, its first and second moments about z = 0.
-INERTIA_TERMS = ("I0", "I1", "I2")
 
 # Off-axis transformation Qbar6 = T(theta) @ [Q11, Q12, Q22, Q66] written as
 # polynomials in m = cos(theta), n = sin(theta): entry -> [(coefficient, power of m, power of n)].

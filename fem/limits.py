@@ -3,10 +3,12 @@ measurement chain and the separation two modes need to be told apart."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .specimen import Configuration
+if TYPE_CHECKING:  # annotations only: the design space's help needs no finite-element code
+    from .specimen import Configuration
 
 #: Modes closer than this (relative) are flagged: with the loss factors of bonded
 #: plates (0.2-1 %, the adhesive adds damping) their resonance peaks overlap.

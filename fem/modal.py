@@ -11,7 +11,6 @@ import scipy.sparse.linalg as spla
 from .assembly import UnitMatrices
 from .errors import ModelError
 
-N_RIGID_BODY = 6
 #: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
 RIGID_LEAK = 1e-9
 #: The first elastic omega^2 must exceed this fraction of the first-bending estimate.
@@ -114,8 +113,8 @@ def solve_modes(
     )
     start = deflate(np.random.default_rng(0).standard_normal(n_dofs))
     try:
-        # tol bounds the Ritz-vector residual; eigenvalues converge quadratically and
-        # come out accurate to ~1e-12 relative (benchmarks/solver_tolerance).
+        # tol bounds the Ritz-vector residual; eigenvalues converge quadratically in it,
+        # so they come out accurate to ~1e-12 relative.
         lam, phi = spla.eigsh(
             stiffness, k=k, M=mass, sigma=sigma, which="LM", v0=start, tol=1e-8, OPinv=shift_invert
         )

@@ -33,8 +33,8 @@ from .validation import whole
 
 #: Elements along the longer side per sqrt(modes x aspect ratio).  The element converges
 #: at O(h^4); with this density the highest requested mode of the paper's plate is within
-#: about 0.01 % of the converged value (benchmarks/mesh_accuracy.py: 5 modes -> 11
-#: divisions, 0.006 %; 15 modes -> 18 divisions, 0.010 %).
+#: about 0.01 % of the converged value (benchmarks/core.py, ``accuracy_against_time``:
+#: 5 modes -> 11 divisions, 0.006 %; 15 modes -> 18 divisions, 0.010 %).
 DIVISIONS_PER_ROOT_MODE = 4.5
 MIN_DIVISIONS = 8
 #: Inertia terms (I0, I1, I2) kept by the classical (Kirchhoff) baseline: translational

@@ -35,14 +35,6 @@ def check_keys(table: dict, allowed: Iterable[str], where: str, error: type[Laye
             raise error(f"{where}: unknown key {str(key)!r}; {suggestion(key, allowed)}")
 
 
-def known_name(name, known: Iterable[str], where: str, what: str, error: type[LayerIdError] = SpecError) -> str:
-    """``name`` if it is one of ``known``, else "``where`` = 'x' is not ``what``; did you mean ..."."""
-    known = list(known)
-    if name not in known:
-        raise error(f"{where} = {name!r} is not {what}; {suggestion(name, known)}")
-    return name
-
-
 def number(table: dict, key: str, where: str, *, required: bool = True, default=None, low: float | None = None,
            high: float | None = None, low_inclusive: bool = False, hint: str = "",
            error: type[LayerIdError] = SpecError) -> float | None:
@@ -73,4 +65,4 @@ def whole(value, where: str, low: int, high: int, what: str, error: type[LayerId
     return int(value)
 
 
-__all__ = ["did_you_mean", "suggestion", "check_keys", "known_name", "number", "whole"]
+__all__ = ["did_you_mean", "suggestion", "check_keys", "number", "whole"]

@@ -11,22 +11,30 @@ The public API (each result has ``report()``, ``to_dict()`` and a notebook view)
     identify.diagnose(model, data)                       # which effect is missing
 
 Values are SI inside (Pa, m, kg); reports and ``to_dict()`` use the spec's units
-(GPa, mm, g).
+(GPa, mm, g).  The names are imported when first used, so that the command line
+(``identify.cli``) starts without loading the whole fit and diagnosis.
 """
-from fem.model import ModelOptions, SpecimenModel
-from fem.spec import load_spec
+from fem.lazy import lazy_package
 
-from .compare import Comparison, compare
-from .diagnose import Diagnosis, diagnose
-from .fitting import fit
-from .measurements import Measurements, load_measurements
-from .predict import Prediction, predict
-from .result import FitResult, FitStatus
-from .statistics import FitStatistics
-from .updating import FitOptions
+#: Public name -> the module that defines it.
+_HOMES = {
+    "load_spec": "fem.spec", "SpecimenModel": "fem.model", "ModelOptions": "fem.model",
+    "load_measurements": "identify.measurements", "Measurements": "identify.measurements",
+    "predict": "identify.predict", "Prediction": "identify.predict",
+    "fit": "identify.fitting", "FitOptions": "identify.updating",
+    "FitResult": "identify.result", "FitStatus": "identify.result", "FitStatistics": "identify.statistics",
+    "compare": "identify.compare", "Comparison": "identify.compare",
+    "diagnose": "identify.diagnose", "Diagnosis": "identify.diagnose",
+}
 
 __all__ = [
     "load_spec", "load_measurements", "predict", "fit", "compare", "diagnose",
     "SpecimenModel", "ModelOptions", "Measurements", "Prediction", "FitResult", "FitStatus", "FitStatistics",
     "FitOptions", "Comparison", "Diagnosis",
 ]
+
+__getattr__ = lazy_package(__name__, _HOMES)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

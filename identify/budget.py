@@ -23,7 +23,6 @@ from fem.specimen import Parameter
 
 from .objective import Objective
 from .parameters import UNITS, display
-from .result import FitResult
 
 #: Relative step of the central differences in the plate's length and width: the
 #: frequency error is O(step^2) ~ 1e-8, far below any input's effect.
@@ -99,7 +98,7 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
     return out
 
 
-def uncertainty_budget(result: FitResult) -> Budget | None:
+def uncertainty_budget(result) -> Budget | None:
     """The budget of a finished fit whose model states known inputs' std (None else)."""
     inputs = result.model.input_std
     if not inputs or not result.finished or not np.all(np.isfinite(result.uncertainty.std)):
@@ -112,7 +111,7 @@ def uncertainty_budget(result: FitResult) -> Budget | None:
     return Budget(result.parameters, inputs, result.uncertainty.std.copy(), sensitivity)
 
 
-def with_budget(result: FitResult) -> FitResult:
+def with_budget(result):
     """The result with its budget, and its uncertainty widened by the inputs' part."""
     budget = uncertainty_budget(result)
     if budget is None:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .objective import solving_model
+from .patterns import PATTERN_SHARE, residual_patterns
 from .result import FitResult, FitStatus
 from .statistics import weighted_residuals
 
@@ -128,8 +129,6 @@ def _pairing(result: FitResult) -> Cause | None:
 
 
 def _missing_physics(result: FitResult) -> Cause | None:
-    from .compare import PATTERN_SHARE, residual_patterns
-
     patterns, *_ = residual_patterns(solving_model(result.model, result.measurements), result.measurements,
                                      result.model_hz, result.pairings, result.jacobian)
     best = max(patterns, key=lambda p: p.share)

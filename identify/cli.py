@@ -1,32 +1,18 @@
-"""``identify-layers``: predict, fit, compare and diagnose laminated test plates."""
+"""``identify-layers``: predict, fit, compare and diagnose laminated test plates.
+
+Each command imports what it runs when it runs (the fit, the diagnosis, the plots), so
+that ``--version``, ``--help`` and ``predict`` start without loading them."""
 from __future__ import annotations
 
 import argparse
 import sys
 
-from fem.effects import REGISTRY
+from fem.effect_kinds import BUILT_IN
 from fem.errors import MeasurementError
-from fem.io import (
-    add_common_arguments,
-    add_version,
-    check_report_folder,
-    report_folder,
-    run_cli,
-    to_json,
-    write_text,
-)
-from fem.model import SpecimenModel
-from fem.spec import load_spec
+from fem.io import check_report_folder, report_folder, to_json, write_text
 
-from .compare import compare
-from .diagnose import diagnose
+from .command_line import add_common_arguments, add_version, run_cli
 from .examples import COATED_PLATE_MEASURED, spec_or_example
-from .fitting import fit
-from .measurements import Measurements, load_measurements
-from .peaks import extract_peaks
-from .plots import plot_before_after, plot_comparison, plot_point_map
-from .predict import predict
-from .report import write_analysis_report, write_report
 
 DESCRIPTION = """identify-layers: the stiffness of every layer of a laminated plate from its resonances.
 
@@ -44,14 +30,18 @@ def _say(text: str) -> None:
     print(text, file=sys.stderr)
 
 
-def _model(args) -> SpecimenModel:
+def _model(args):
+    from fem.spec import load_spec
+
     model = load_spec(spec_or_example(args.spec))
     for note in model.notes:
         _say(f"note: {note}")
     return model
 
 
-def _model_and_measurements(args) -> tuple[SpecimenModel, Measurements]:
+def _model_and_measurements(args):
+    from .measurements import load_measurements
+
     if args.spec is not None and args.measurements is None:
         raise MeasurementError("give both SPEC and MEASUREMENTS (or neither, for the bundled example)")
     model = _model(args)
@@ -71,6 +61,8 @@ def _progress(item) -> None:
 
 def run_predict(args) -> int:
     """First N elastic frequencies of every configuration."""
+    from .predict import predict
+
     prediction = predict(_model(args), args.modes)
     print(to_json(prediction.to_dict()) if args.json else prediction.report())
     return 0
@@ -78,6 +70,11 @@ def run_predict(args) -> int:
 
 def run_peaks(args) -> int:
     """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
+    from fem.spec import load_spec
+
+    from .peaks import extract_peaks
+    from .predict import predict
+
     guide = None
     if args.spec is not None:
         model = load_spec(args.spec)
@@ -102,6 +99,9 @@ def run_peaks(args) -> int:
 
 def run_fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
+    from .fitting import fit
+    from .report import write_report
+
     if args.report:
         check_report_folder(args.report)  # refuse a bad --report before the fit, not after
     model, measurements = _model_and_measurements(args)
@@ -120,6 +120,10 @@ def run_fit(args) -> int:
 
 def run_compare(args) -> int:
     """Where the model fails: residuals per mode and the patterns that point at causes."""
+    from .compare import compare
+    from .plots import plot_comparison, plot_point_map
+    from .report import write_analysis_report
+
     if args.report:
         check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
@@ -143,6 +147,10 @@ def run_compare(args) -> int:
 def run_diagnose(args) -> int:
     """Find the effects the model misses (forward selection); exit 0 only when the data
     are then explained (at the noise level, or the refit with the selection converged)."""
+    from .diagnose import diagnose
+    from .plots import plot_before_after, plot_point_map
+    from .report import write_analysis_report
+
     if args.report:
         check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
@@ -197,12 +205,12 @@ def build_parser() -> argparse.ArgumentParser:
         if name == "fit":
             p.add_argument("--effect", action="append", metavar="KIND",
                            help="switch an effect on with its parameters free (repeatable): "
-                                + ", ".join(REGISTRY))
+                                + ", ".join(BUILT_IN))
         if name == "compare":
             p.add_argument("--no-fit", action="store_true", help="compare at the spec's values, without fitting")
         if name == "diagnose":
             p.add_argument("--effects", metavar="K1,K2",
-                           help=f"only these candidate effects (default: all registered: {', '.join(REGISTRY)})")
+                           help=f"only these candidate effects (default: all registered: {', '.join(BUILT_IN)})")
     return parser
 
 

@@ -35,13 +35,14 @@ import time
 from dataclasses import dataclass, replace
 from typing import Callable
 
-import numpy as np
+import pandas as pd
 
 from fem.effects import REGISTRY, effect
-from fem.io import html_pre
 from fem.model import SpecimenModel
 from fem.sensitivity import SINGULAR_ABOVE
+from fem.numbers import finite_or_none
 
+from . import html_report as h
 from .causes import with_causes
 from .compare import Comparison, compare
 from .fitting import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, point_mass_hints,
@@ -158,11 +159,11 @@ class Candidate:
     def to_dict(self) -> dict:
         check = self.precheck
         return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
-                "bic_gain": _finite(self.gain), "gain_over_c": _finite(self.scaled_gain),
+                "bic_gain": finite_or_none(self.gain), "gain_over_c": finite_or_none(self.scaled_gain),
                 "status": self.fit.status.value if self.fit else _not_fitted(self),
                 "parameters": self.effect_values(), "std": self.effect_std(),
                 "plausible": self.plausible, "implausible": list(self.added.implausible),
-                "condition_number": _finite(check.condition_number) if check else None,
+                "condition_number": finite_or_none(check.condition_number) if check else None,
                 "note": " ".join(x for x in (self.note, self.error) if x)}
 
 
@@ -175,10 +176,6 @@ def _not_fitted(c: Candidate) -> str:
     return "not_refitted" if c.added.pruned else "failed"
 
 
-def _finite(x):
-    return float(x) if x is not None and math.isfinite(x) else None
-
-
 def _key(p) -> str:
     if p.kind in ("angle", "thickness", "G13", "G23"):
         return f"{p.target}.{json_key(p)}"
@@ -189,10 +186,10 @@ def _values(fit: FitResult, parameters, std: bool = False) -> dict:
     out = {}
     for p in parameters:
         value = fit.std(p) if std else fit.value(p)
-        out[_key(p)] = _finite(display(p, value)) if std else display(p, value)
+        out[_key(p)] = finite_or_none(display(p, value)) if std else display(p, value)
         if isinstance(p, Tied):  # a follower: its ratio to the leader
             for follower, ratio in p.followers:
-                out[_key(follower)] = _finite(display(follower, ratio * value)) if std else \
+                out[_key(follower)] = finite_or_none(display(follower, ratio * value)) if std else \
                     display(follower, ratio * value)
     return out
 
@@ -269,15 +266,28 @@ class Diagnosis:
             "at_noise_level": self.at_noise_level,
             "explained": self.explained,
             "ranking": [c.to_dict() for c in self.candidates],
-            "selected": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error, "bic_gain": _finite(c.gain),
+            "selected": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error, "bic_gain": finite_or_none(c.gain),
                           "parameters": c.effect_values(), "plausible": c.plausible} for c in self.selected],
             "path": [s.to_dict() for s in self.steps],
             "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
-            "seconds": _finite(self.seconds),
+            "seconds": finite_or_none(self.seconds),
         }
 
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        """The notebook view: the verdict, every round's candidates and the comparison's
+        tables, drawn by the HTML report's code."""
+        rounds = [(f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
+                   h.table(pd.DataFrame([{"effect": c.kind, "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
+                                          "BIC gain": finite_or_none(c.gain),
+                                          "status": c.fit.status.value if c.fit else _not_fitted(c),
+                                          "parameters": ", ".join(f"{k} = {v:.4g}"
+                                                                  for k, v in c.effect_values().items()),
+                                          "note": " ".join(x for x in (c.note, c.error) if x)}
+                                         for c in s.candidates]), "{:.4g}") + h.paragraph(f"-> {s.reason}"))
+                  for s in self.steps]
+        good = self.explained
+        return h.view("Diagnosis", ("explained" if good else "not explained", self.verdict, good),
+                      rounds + self.comparison.sections())
 
     def report(self) -> str:
         base = self.baseline.statistics
@@ -432,9 +442,9 @@ def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
     return max(1, min(2, os.cpu_count() or 1, tasks))
 
 
-def _add(args):
-    """One candidate's refit (module level: runs in a worker process)."""
-    return add_effect(*args)
+def _add(job: dict):
+    """One candidate's refit, ``add_effect(**job)`` (module level: runs in a worker process)."""
+    return add_effect(**job)
 
 
 def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal, hints, pool,
@@ -456,7 +466,8 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
         # keep the right physics from being refitted.
         explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.selectable]
         below = max(explained) if explained else None
-        jobs = [(state, r.kind, measurements, nominal, hints, "quick", None, True, CANDIDATE_OPTIONS, below, r)
+        jobs = [dict(state=state, kind=r.kind, measurements=measurements, nominal=nominal, hints=hints,
+                     settle="quick", skip_singular=True, options=CANDIDATE_OPTIONS, prune_below=below, prepared=r)
                 for r in ready[i:i + (n_workers if pool else 1)]]
         out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
     return out
@@ -555,7 +566,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped)))
             selected.append(best)
             state = best.fit
-            if _at_noise_level(state):
+            if state.statistics.consistent:
                 steps.append(Step(number + 1, tuple(c.kind for c in selected), state, (), None,
                                   "stop: the misfit is at the noise level"))
                 break
@@ -584,13 +595,6 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
         if not extended.eligible:
             break
     return candidates
-
-
-def _at_noise_level(fit: FitResult) -> bool:
-    from .compare import NOISE_CHI2
-
-    st = fit.statistics
-    return bool(st.scatter_known and np.isfinite(st.reduced_chi2) and st.reduced_chi2 < NOISE_CHI2)
 
 
 def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:

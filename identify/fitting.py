@@ -15,7 +15,9 @@ from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
 
 from .measurements import Measurements
+from .objective import solving_model
 from .parameters import display
+from .patterns import residual_patterns
 from .peak_lists import fit_peak_list
 from .budget import with_budget
 from .causes import with_causes
@@ -54,25 +56,33 @@ RIVAL_CHI2 = 4.0
 
 
 def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str] = (), *,
-        parameters=None, options: FitOptions = FitOptions(),
+        parameters=None, options: FitOptions | None = None,
         progress: Callable[[Iteration | str], None] | None = None) -> FitResult:
     """Identify E1, E2, G12, nu12 of every identified material of ``model`` (or the given
     ``parameters``) from the measured frequencies of all configurations at once.
 
     effects: kinds switched on with their parameters free (e.g. ``["point_mass"]``): the
-    layers are fitted first, then again with the effects; the result's ``baseline`` is
-    the fit without them.  Values are SI inside; ``report()`` and ``to_dict()`` print
-    in the spec's units (GPa, mm, g).  ``progress`` is called with every accepted
-    iteration (or, with effects, a line of text per refit).  When the spec states the
-    known inputs' std, the result carries the uncertainty budget and its std includes them.
+    layers (``parameters``) are fitted first, then again with the effects' parameters
+    added; the result's ``baseline`` is the fit without them.  options: the iteration
+    control of every fit (default ``FitOptions()``; the refits with effects
+    ``EFFECT_ITERATIONS`` iterations).  Values are SI inside; ``report()`` and
+    ``to_dict()`` print in the spec's units (GPa, mm, g).  ``progress`` is called with
+    every accepted iteration (or, with effects, a line of text per refit).  When the spec
+    states the known inputs' std, the result carries the uncertainty budget and its std
+    includes them.
     When materials have ``identify_damping``, the result's ``damping`` holds their loss
     factors, found after the stiffness from the measured damping ratios.
     """
+    if isinstance(effects, str):
+        raise LayerIdError(f"effects = {effects!r}: give a list of effect kinds, e.g. [{effects!r}]")
+    if options is not None and not isinstance(options, FitOptions):
+        raise LayerIdError(f"options = {options!r}: need a FitOptions (identify.FitOptions(max_iterations=...))")
     if effects:
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
-        return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress)))
-    return with_damping(with_budget(fit_layers(model, measurements, parameters, options, progress)))
+        return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress,
+                                                         parameters=parameters, options=options)))
+    return with_damping(with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress)))
 
 
 def with_damping(result: FitResult) -> FitResult:
@@ -82,7 +92,7 @@ def with_damping(result: FitResult) -> FitResult:
     return result if damping is None else replace(result, damping=damping)
 
 
-def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions = FitOptions(),
+def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions | None = None,
                progress: Callable[[Iteration], None] | None = None, effect_of: dict | None = None,
                like: FitResult | None = None, explain: bool = True, settle: bool | str = True,
                pairings: dict | None = None) -> FitResult:
@@ -90,7 +100,9 @@ def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None
     model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
     starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
     poor fit its likely causes (``causes``).  ``settle``: the pairing check at the solution
-    of ranked data, ``pairings``: a fit's to follow from the start (``updating.update``)."""
+    of ranked data, ``pairings``: a fit's to follow from the start (``updating.update``);
+    ``options`` default ``FitOptions()``."""
+    options = options or FitOptions()
     if measurements.ranked:
         result = update(model, measurements, parameters, options, progress, effect_of, settle, pairings)
     else:
@@ -109,9 +121,11 @@ def continued(fit: FitResult, measurements: Measurements, options: FitOptions, s
 
 
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
-                     progress: Callable[[str], None] | None = None) -> FitResult:
+                     progress: Callable[[str], None] | None = None, *, parameters=None,
+                     options: FitOptions | None = None) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
-    baseline fit's layer properties (``comparison.fitted``, computed when not given), one
+    baseline fit's layer properties (``comparison.fitted`` of a ``compare``, fitted here
+    when not given), one
     effect after the other (``add_effect``); the last refit checks the pairing in full.
 
     A point mass starts at each of the positions the residual scan suggests and on a grid
@@ -119,19 +133,26 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
     well are reported.  The transverse-shear effects free the G13 and G23 that the data
     can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
     determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
-    not an iteration.
+    not an iteration.  ``parameters``: the layer parameters of the baseline fit (default
+    every identified material's); ``options``: of every fit (default: the baseline's
+    ``FitOptions()``, the refits' ``EFFECT_ITERATIONS`` iterations).
     """
-    from .compare import compare
-
-    comparison = comparison or compare(model, measurements)
-    baseline = comparison.fitted
+    if comparison is not None and parameters is not None:
+        raise LayerIdError("fit_with_effects: give either parameters (the baseline is fitted with them) or a "
+                           "comparison (its fit is the baseline), not both")
+    if comparison is None:
+        baseline = fit_layers(model, measurements, parameters, options, explain=False)
+        hints = point_mass_hints(baseline)
+    else:
+        baseline = comparison.fitted
+        hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
+                                  comparison.node_xy)
     state, notes = baseline, []
     for number, kind in enumerate(kinds):
         last = number == len(kinds) - 1
-        hints = point_mass_starts(state.model, comparison.point_mass_hints, comparison.point_map,
-                                  comparison.node_xy) if state is baseline else point_mass_hints(state)
+        hints = hints if state is baseline else point_mass_hints(state)
         added = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
-                           progress=progress)
+                           progress=progress, options=options)
         if added.result is None:
             advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
                       "as measured) or leave the effect out" if added.precheck is not None
@@ -139,7 +160,7 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
         state = added.result
-    result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, settle=True)
+    result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, options, settle=True)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
     result = with_causes(result)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
@@ -259,7 +280,7 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     return trial, sensitivities, note
 
 
-def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(),
+def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(), *,
                settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
                skip_singular: bool = True, options: FitOptions | None = None,
                prune_below: float | None = None, prepared: Prepared | None = None) -> AddedEffect:
@@ -401,9 +422,6 @@ def with_determined_shear(result: FitResult, measurements: Measurements, nominal
 def point_mass_hints(state: FitResult) -> tuple:
     """Point-mass start positions from the residual scan of a fit (``compare``), ranked
     (``point_mass_starts``)."""
-    from .compare import residual_patterns
-    from .objective import solving_model
-
     _, shares, xy, hints = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
                                              state.model_hz, state.pairings, state.jacobian)
     return point_mass_starts(state.model, hints, shares, xy)

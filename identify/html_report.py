@@ -10,10 +10,13 @@ import html
 import sys
 from datetime import datetime, timezone
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from fem.io import tool_version
+from .rounding import status_line
+
+if TYPE_CHECKING:  # annotations only: a data frame is handed in
+    import pandas as pd
 
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto; max-width: 70em;
@@ -28,6 +31,16 @@ th { background: #f2f2f2; } td:first-child, th:first-child { text-align: left; }
 .warning { background: #fef7e0; border: 1px solid #f9ab00; }
 .header td { text-align: left; } img { max-width: 100%; margin: 0.5em 0; }
 ul.notes li { margin: 0.3em 0; } .small { color: #555; font-size: 0.85em; }
+"""
+
+#: The page's rules a notebook view needs (tables and the status box), scoped to the view.
+VIEW_STYLE = """
+table { border-collapse: collapse; margin: 0.5em 0; font-size: 0.9em; }
+th, td { border: 1px solid #ddd; padding: 0.25em 0.6em; text-align: right; }
+th { background: #f2f2f2; }
+.status { padding: 0.6em 1em; border-radius: 4px; margin: 1em 0; }
+.converged { background: #e6f4ea; border: 1px solid #34a853; }
+.warning { background: #fef7e0; border: 1px solid #f9ab00; }
 """
 
 
@@ -91,13 +104,34 @@ def document(title: str, header: dict[str, str], status: tuple[str, bool] | None
              f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>",
              f"<table class=\"header\">{rows}</table>"]
     if status is not None:
-        line, good = status
-        name, colon, rest = line.partition(": ")
-        parts.append(f"<div class=\"status {'converged' if good else 'warning'}\"><strong>{html.escape(name)}</strong>"
-                     f"{colon}{html.escape(rest)}</div>")
+        parts.append(status_box(*status))
     parts += [f"<h2>{html.escape(heading)}</h2>{body}" for heading, body in sections]
     parts.append("</body></html>")
     return "\n".join(parts)
 
 
-__all__ = ["provenance", "table", "figure", "notes", "document", "file_digest"]
+def status_box(name: str, message: str, good: bool) -> str:
+    """How an analysis ended, green when it may be used as it stands, amber otherwise: one
+    status line (the status not repeated when the message starts with it)."""
+    head, colon, rest = status_line(name, message).partition(": ")
+    return (f"<div class=\"status {'converged' if good else 'warning'}\"><strong>{html.escape(head)}</strong>"
+            f"{colon}{html.escape(rest)}</div>")
+
+
+def paragraph(text: str) -> str:
+    return f"<p>{html.escape(text)}</p>"
+
+
+def view(title: str, status: tuple[str, str, bool] | None, sections: list[tuple[str, str]]) -> str:
+    """A notebook view (``_repr_html_``): the same status box and section tables as the
+    report page, in a block styled only inside itself."""
+    scoped = "\n".join(f".layer-id {rule}" for rule in VIEW_STYLE.strip().splitlines())
+    parts = [f"<div class=\"layer-id\"><style>{scoped}</style><h3>{html.escape(title)}</h3>"]
+    if status is not None:
+        parts.append(status_box(*status))
+    parts += [f"<h4>{html.escape(heading)}</h4>{body}" for heading, body in sections]
+    parts.append("</div>")
+    return "\n".join(parts)
+
+
+__all__ = ["provenance", "table", "figure", "notes", "document", "file_digest", "status_box", "paragraph", "view"]

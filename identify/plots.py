@@ -10,6 +10,9 @@ import numpy as np
 from fem.model import SpecimenModel
 from fem.plotting import new_figure, save_figure
 
+from .objective import solving_model
+from .parameters import UNITS, display
+from .residuals import fit_residuals
 
 
 def _row_names(table, labels=None) -> list[str]:
@@ -26,8 +29,6 @@ def plot_convergence(result, path: Path) -> Path:
     """Per material (or effect) its parameters in their units against iteration (paper
     Fig. 9): moduli [GPa] on the left axis, other kinds on the right; and the RMS
     relative error [%] (Fig. 3a)."""
-    from .parameters import UNITS, display
-
     history = np.array([it.values for it in result.history])
     iterations = [it.number for it in result.history]
     targets = list(dict.fromkeys(p.target for p in result.parameters))
@@ -64,8 +65,6 @@ def plot_residuals(result, path: Path) -> Path:
     """Signed error per measured frequency [%] with the measurement std as error bars,
     labelled by configuration, model mode, nodal pattern and frequency; left-out peaks
     as open markers at their nearest mode's error."""
-    from .report import fit_residuals
-
     rows = fit_residuals(result)
     measured = rows["measured_hz"].to_numpy()
     std = None
@@ -98,9 +97,6 @@ def plot_mode_shapes(result, path: Path) -> Path:
     """The model's mode paired with each measured one: deflection w over the plate with
     the nodal lines in black, titled by mode, pattern and frequency; one row per
     configuration."""
-    from .objective import solving_model
-    from .report import fit_residuals
-
     rows = fit_residuals(result)
     rows = rows[rows["matched"]]
     configurations = list(dict.fromkeys(rows["configuration"]))

@@ -2,13 +2,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fem.io import html_pre
 from fem.model import MAX_MODES, SpecimenModel
 from fem.validation import whole
 
+from . import html_report as h
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @dataclass(frozen=True)
@@ -43,8 +47,20 @@ class Prediction:
             lines.append(f"{i + 1:>4d}  {cells}")
         return "\n".join(lines)
 
+    def table(self) -> pd.DataFrame:
+        """One row per mode: per configuration its frequency [Hz] and nodal-line label."""
+        import pandas as pd  # here: ``predict`` on the command line needs no pandas
+
+        columns = {"mode": np.arange(1, self.model.options.modes + 1)}
+        for name, f in self.frequencies_hz.items():
+            columns[f"{name} [Hz]"] = f
+            columns[f"{name} label"] = self.labels[name]
+        return pd.DataFrame(columns)
+
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        """The notebook view: the frequency table, drawn by the HTML report's code."""
+        title = self.report().splitlines()[0]
+        return h.view(self.model.name, None, [(title, h.table(self.table(), "{:.3f}"))])
 
 
 def predict(model: SpecimenModel, modes: int | None = None) -> Prediction:

@@ -1,82 +1,30 @@
 """Reading an identification: text report, JSON (the ``fit --json`` shape), CSV tables and plots.
-
-Text and HTML round every value to its uncertainty (``rounding``); JSON and CSV keep full
-precision."""
+Formats the fit result it is handed (duck-typed: it imports no result module).  Text and
+HTML round every value to its uncertainty (``rounding``); JSON and CSV keep full precision."""
 from __future__ import annotations
 
 import html
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 import pandas as pd
 
 from fem.io import report_folder, to_json, write_text
+from fem.numbers import finite_or_none
 
 from . import damping_report
 from .html_report import blank_missing
-from .measurements import Measurements
 from .parameters import UNITS, display, json_key
 from .rounding import percent, status_line, with_std
 
-if TYPE_CHECKING:
-    from .result import FitResult
+from . import html_report as h
+from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
+from .residuals import fit_residuals
 
 
-def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
-    """Per measured mode: measured and model frequency, relative error, error / std."""
-    table = measurements.table
-    out = pd.DataFrame({
-        "configuration": table["configuration"], "mode": table["mode"],
-        "measured_hz": table["frequency_hz"], "model_hz": model_hz,
-        "rel_error": model_hz / table["frequency_hz"] - 1,
-    })
-    if measurements.has_std:
-        out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
-    return out
-
-
-def fit_residuals(result: FitResult) -> pd.DataFrame:
-    """The residual rows of a fit (``fit --json`` "residuals"): every measured frequency with the model
-    mode it is paired with (1-based), measured and model frequency, relative error,
-    matched, and a note (a peak left out has None for mode, model frequency and error,
-    and its note says why, naming the nearest mode); ranked data also
-    keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
-    if result.peaks is not None:
-        from .peak_lists import peak_table
-
-        out = peak_table(result.peaks)
-    else:
-        table = result.measurements.table
-        configs = table["configuration"].to_numpy()
-        modes = np.zeros(len(table), dtype=int)
-        for name, pairing in result.pairings.items():
-            modes[configs == name] = pairing.indices + 1
-        out = residual_table(result.measurements, result.model_hz)
-        out.insert(1, "measured_mode", out.pop("mode"))
-        out.insert(1, "mode", modes)
-        out["matched"] = True
-        out["note"] = ""
-    out.insert(2, "label", _model_labels(result, out))
-    return out
-
-
-def _model_labels(result: FitResult, rows: pd.DataFrame) -> list[str]:
-    """The nodal pattern of the model mode each residual row is paired with ('' when
-    left out)."""
-    from .objective import solving_model
-
-    solver = solving_model(result.model, result.measurements)
-    labels = {c: solver.solve(c).labels for c in result.measurements.configurations}
-    out = []
-    for name, mode in zip(rows["configuration"], rows["mode"]):
-        known = labels.get(name, ())
-        out.append(known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else "")
-    return out
-
-
-def parameter_table(result: FitResult) -> pd.DataFrame:
+def parameter_table(result) -> pd.DataFrame:
     """One row per identified parameter in display units: value, std, unit, relative
     std [%], flags, and what it belongs to (a material, or an effect)."""
     rows = []
@@ -91,7 +39,7 @@ def parameter_table(result: FitResult) -> pd.DataFrame:
                                                           ignore_index=True)
 
 
-def history_table(result: FitResult) -> pd.DataFrame:
+def history_table(result) -> pd.DataFrame:
     """One row per iteration: parameter values (display units), RMS error, step, damping."""
     rows = []
     for it in result.history:
@@ -101,12 +49,8 @@ def history_table(result: FitResult) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _finite(x: float):
-    return float(x) if math.isfinite(x) else None
-
-
-def to_dict(result: FitResult) -> dict:
-    """The ``fit --json`` document, with status, conditioning, warnings and history added."""
+def to_dict(result) -> dict:
+    """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
     materials: dict[str, dict] = {}
     effects: dict[str, dict] = {}
     for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
@@ -118,12 +62,12 @@ def to_dict(result: FitResult) -> dict:
             entry = materials.setdefault(p.target, {"std": {}, "flags": {}})
             key = json_key(p)
         entry[key] = display(p, value)
-        entry["std"][key] = _finite(display(p, sd))
+        entry["std"][key] = finite_or_none(display(p, sd))
         if flags:
             entry["flags"][key] = list(flags)
         for follower, ratio in getattr(p, "followers", ()):  # a tied scale (``ties``): its members too
             entry[json_key(follower)] = display(follower, ratio * value)
-            entry["std"][json_key(follower)] = _finite(display(follower, ratio * sd))
+            entry["std"][json_key(follower)] = finite_or_none(display(follower, ratio * sd))
             entry["flags"][json_key(follower)] = [f"tied: {follower.kind} = {ratio:.4g} x {p.kind}"]
     for kind, text in result.effect_notes:  # every effect switched on, with what was decided
         effects.setdefault(kind, {"std": {}, "flags": {}}).setdefault("notes", []).append(text)
@@ -133,26 +77,27 @@ def to_dict(result: FitResult) -> dict:
         "status": result.status.value,
         "message": result.message,
         "iterations": result.iterations,
+        "stop_reason": result.stop.code if result.stop is not None else None,
         "materials": materials,
         "effects": effects,
         "residuals": fit_residuals(result).to_dict(orient="records"),
         "causes": [c.to_dict() for c in result.causes],
         "budget": result.budget.to_dict() if result.budget is not None else None,
         "rms_rel_error": result.rms_rel_error,
-        "condition_number": _finite(u.condition_number),
+        "condition_number": finite_or_none(u.condition_number),
         "verdict": u.verdict,
-        "reduced_chi2": _finite(st.reduced_chi2) if st.scatter_known else None,
+        "reduced_chi2": finite_or_none(st.reduced_chi2) if st.scatter_known else None,
         "noise_source": st.noise_source,
         "statistics": st.to_dict(),
         "weak_combinations": list(u.weak_combinations),
         "correlation": {"parameters": [p.name for p in result.parameters],
-                        "matrix": [[_finite(x) for x in row] for row in u.correlation]},
+                        "matrix": [[finite_or_none(x) for x in row] for row in u.correlation]},
         "warnings": list(result.warnings),
         "history": history_table(result).to_dict(orient="records"),
     }, result.damping, result.model)
 
 
-def _row_errors(result: FitResult) -> tuple[pd.DataFrame, np.ndarray]:
+def _row_errors(result) -> tuple[pd.DataFrame, np.ndarray]:
     """The measured rows a result speaks of (for a peak list: every peak, matched or
     not) and the relative error per row (object array, None for a peak left out)."""
     if result.peaks is not None:
@@ -207,7 +152,7 @@ def shown_parameters(parameters: pd.DataFrame) -> pd.DataFrame:
                          "flags": parameters["flags"]})
 
 
-def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
+def before_after_table(before, after) -> pd.DataFrame:
     """Relative error per measured row without and with the effects switched on.  For a
     peak list the rows are the peaks (the two fits may match different ones: a peak left
     out by one has None there); ``mode`` is the rank given, or for a peak the mode it is
@@ -223,7 +168,7 @@ def before_after_table(before: FitResult, after: FitResult) -> pd.DataFrame:
                          "rel_error_after": error_after})
 
 
-def report_text(result: FitResult) -> str:
+def report_text(result) -> str:
     """Fixed sections: statistics, parameters +- std with flags, correlations, residuals,
     the error per mode before and after the effects (when they were free), warnings."""
     u, st = result.uncertainty, result.statistics
@@ -273,7 +218,47 @@ def report_text(result: FitResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_report(result: FitResult, folder: str | Path) -> Path:
+def fit_sections(result, parameters: pd.DataFrame | None = None, residuals: pd.DataFrame | None = None
+                 ) -> list[tuple[str, str]]:
+    """The (heading, HTML) sections of a fit, as report.html and the notebook view show
+    them: likely causes, parameters, budget, statistics, residuals, warnings."""
+    parameters = parameter_table(result) if parameters is None else parameters
+    residuals = fit_residuals(result) if residuals is None else residuals
+    st, u = result.statistics, result.uncertainty
+    statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
+                                            "iterations", "RMS relative error [%]",
+                                            "misfit / scatter", "chi^2 test p-value", "scatter from",
+                                            "condition number", "verdict"],
+                               "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
+                                         str(result.iterations), percent(st.rms_rel_error, 3).removesuffix(" %"),
+                                         f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
+                                         f"{u.condition_number:.3g}", u.verdict]})
+    sections = []
+    if result.causes:
+        sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
+    sections += [("Parameters (value ± 1 std)", h.table(shown_parameters(parameters)))]
+    if result.budget is not None:
+        sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
+                         "scatter's share of each parameter's std (display units); total = the std above</p>"
+                         + h.table(result.budget.table(), "{:.3g}")))
+    sections += [("Statistics", h.table(statistics)),
+                 ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
+                  "with; label: its nodal pattern; error_%: (model - measured) / measured in %</p>"
+                  + h.table(shown_residuals(residuals))),
+                 *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}", *result.damping.notes])
+                     + h.table(result.damping.residuals.drop(columns="weight"), "{:.4g}"))]
+                   if result.damping is not None else []),
+                 ("Warnings and notes", h.notes(result.warnings))]
+    return sections
+
+
+def fit_view(result) -> str:
+    """The notebook view of a fit (``FitResult._repr_html_``): its status and sections."""
+    return h.view(f"Layer identification: {result.specimen.name}",
+                  (result.status.value, result.message, result.converged), fit_sections(result))
+
+
+def write_report(result, folder: str | Path) -> Path:
     """A report folder (written whole or not at all, see ``fem.io.report_folder``):
     report.html (self-contained), report.txt, parameters.csv, fit.json, residuals.csv,
     history.csv and the figures (and the error per mode before and after the effects when
@@ -283,10 +268,7 @@ def write_report(result: FitResult, folder: str | Path) -> Path:
     return Path(folder)
 
 
-def _write_report_files(result: FitResult, folder: Path) -> None:
-    from . import html_report as h
-    from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
-
+def _write_report_files(result, folder: Path) -> None:
     write_text(folder / "report.txt", report_text(result))
     parameters = parameter_table(result)
     write_text(folder / "parameters.csv", parameters.to_csv(index=False))
@@ -308,37 +290,12 @@ def _write_report_files(result: FitResult, folder: Path) -> None:
         write_text(folder / "damping.csv", result.damping.residuals.to_csv(index=False))
         figures.append((damping_report.plot_damping(result.damping, folder / "damping.png"),
                         "modal loss factors per configuration: measured (1 std bars) and model"))
-    st, u = result.statistics, result.uncertainty
-    statistics = pd.DataFrame({"quantity": ["measured frequencies", "configurations", "unknown parameters",
-                                            "iterations", "RMS relative error [%]",
-                                            "misfit / scatter", "chi^2 test p-value", "scatter from",
-                                            "condition number", "verdict"],
-                               "value": [str(st.n), str(len(result.measurements.configurations)), str(st.k),
-                                         str(result.iterations), percent(st.rms_rel_error, 3).removesuffix(" %"),
-                                         f"{st.misfit_over_scatter:.3g}", f"{st.p_value:.3g}", st.noise_source,
-                                         f"{u.condition_number:.3g}", u.verdict]})
-    sections = []
-    if result.causes:
-        sections.append(("Likely causes", h.notes(f"{100 * c.score:.0f} %: {c.kind}: {c.text}" for c in result.causes)))
-    sections += [("Parameters (value ± 1 std)", h.table(shown_parameters(parameters)))]
-    if result.budget is not None:
-        sections.append(("Uncertainty budget", "<p class=\"small\">each known input's and the measurement "
-                         "scatter's share of each parameter's std (display units); total = the std above</p>"
-                         + h.table(result.budget.table(), "{:.3g}")))
-    sections += [
-                 ("Statistics", h.table(statistics)),
-                 ("Residuals and pairing", "<p class=\"small\">mode: the model mode each measured frequency is paired "
-                  "with; label: its nodal pattern; error_%: (model - measured) / measured in %</p>"
-                  + h.table(shown_residuals(residuals))),
-                 *([("Damping", h.notes([f"{result.damping.status}: {result.damping.message}", *result.damping.notes])
-                     + h.table(result.damping.residuals.drop(columns="weight"), "{:.4g}"))]
-                   if result.damping is not None else []),
-                 ("Figures", "".join(h.figure(path, caption) for path, caption in figures)),
-                 ("Warnings and notes", h.notes(result.warnings))]
+    sections = fit_sections(result, parameters, residuals)
+    sections.insert(-1, ("Figures", "".join(h.figure(path, caption) for path, caption in figures)))
     header = h.provenance("identification (identify-layers fit)", result.specimen.name, result.model.source,
                           result.measurements.source)
     page = h.document(f"Layer identification: {result.specimen.name}", header,
-                      (status_line(result.status.value, result.message), result.converged), sections)
+                      (result.status.value, result.message, result.converged), sections)
     write_text(folder / "report.html", page)
 
 
@@ -348,8 +305,6 @@ def write_analysis_report(folder: str | Path, title: str, analysis: str, model, 
     .txt and as the body of report.html (with the provenance header and the figures
     embedded), ``files`` (name -> content) beside it, and each figure drawn by its
     callable into the file named (callable(path) -> path, file name, caption)."""
-    from . import html_report as h
-
     with report_folder(folder) as tmp:
         for name, content in files.items():
             write_text(tmp / name, content)

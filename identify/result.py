@@ -9,18 +9,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fem.io import html_pre
 from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
 
 from .measurements import Measurements
+from .report import fit_view, report_text, to_dict
 from .statistics import FitStatistics
+from .stopping import Stop
 from .uncertainty import Uncertainty
 
 if TYPE_CHECKING:
     from .budget import Budget
     from .damping import DampingResult
-    from .peak_lists import PeakAssignment
+    from .peak_assignment import PeakAssignment
 
 
 class FitStatus(str, Enum):
@@ -62,7 +63,8 @@ class FitResult:
     budget: each known input's and the measurements' share of the std, when the spec
     states the known inputs' std (``uncertainty`` then includes them); damping: the layers'
     loss factors from the measured damping ratios, when the spec asks for them
-    (``identify.damping``).
+    (``identify.damping``); stop: why the iterations stopped (``stopping.Stop``;
+    ``"stop_reason"`` in the JSON).
     """
 
     status: FitStatus
@@ -86,6 +88,7 @@ class FitResult:
     causes: tuple = ()
     budget: "Budget | None" = None
     damping: "DampingResult | None" = None
+    stop: Stop | None = None
 
     @property
     def converged(self) -> bool:
@@ -125,18 +128,15 @@ class FitResult:
     def report(self) -> str:
         """Fixed sections: statistics, parameters +- std with flags, correlations,
         residuals, warnings (display units)."""
-        from .report import report_text
-
         return report_text(self)
 
     def to_dict(self) -> dict:
         """The ``fit --json`` document, display units."""
-        from .report import to_dict
-
         return to_dict(self)
 
     def _repr_html_(self) -> str:
-        return html_pre(self.report())
+        """The notebook view: the report's status box and tables (``report.fit_view``)."""
+        return fit_view(self)
 
 
 __all__ = ["FitStatus", "FitResult", "Iteration"]

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from fem.numbers import finite_or_none
+
 from .measurements import Measurements
 
 #: A reduced chi-square above this says the misfit exceeds the stated scatter: the
@@ -137,14 +139,13 @@ class FitStatistics:
         return fit + self.k * math.log(self.n)
 
     def to_dict(self) -> dict:
-        finite = lambda x: x if x is not None and math.isfinite(x) else None  # noqa: E731
-        return {"n": self.n, "k": self.k, "dof": self.dof, "chi2": finite(self.chi2),
-                "reduced_chi2": finite(self.reduced_chi2) if self.scatter_known else None,
-                "chi2_against_scatter": finite(self.chi2_against_scatter),
+        return {"n": self.n, "k": self.k, "dof": self.dof, "chi2": finite_or_none(self.chi2),
+                "reduced_chi2": finite_or_none(self.reduced_chi2) if self.scatter_known else None,
+                "chi2_against_scatter": finite_or_none(self.chi2_against_scatter),
                 "scatter_assumed_rel": None if self.scatter_known else ASSUMED_SCATTER_REL,
                 "p_value": self.p_value, "consistent": self.consistent,
-                "noise_scale": finite(self.noise_scale), "rms_rel_error": self.rms_rel_error,
-                "bic": finite(self.bic), "scatter": self.noise_source}
+                "noise_scale": finite_or_none(self.noise_scale), "rms_rel_error": self.rms_rel_error,
+                "bic": finite_or_none(self.bic), "scatter": self.noise_source}
 
 
 def weighted_residuals(model_hz: np.ndarray, measurements: Measurements) -> np.ndarray:

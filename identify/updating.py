@@ -9,7 +9,6 @@ size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from enum import Enum
 from typing import Callable
 
 import numpy as np
@@ -27,19 +26,9 @@ from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
 from .parameters import UNITS, display
 from .result import FitResult, FitStatus, Iteration
 from .statistics import CHI2_TEST_LEVEL, FitStatistics
+from .stopping import (ADMISSIBLE_HALVINGS, BOUND_TOLERANCE, DAMPING_FACTOR, EXACT_RMS, FIRST_DAMPING, FLAT_STEP,
+                       STALL_ITERATIONS, STALLED, STEP_PER_STD, TINY_STEP, UNDAMPED, UNDETERMINED_Z, Stop)
 from .uncertainty import Uncertainty
-
-#: The updating stops once the misfit has stalled (falls by less than this fraction) and
-#: no parameter moves by more than STEP_PER_STD of its std.
-STALLED = 1e-4
-STEP_PER_STD = 0.01
-#: Steps the ``FitOptions.stall_chi2`` test looks back over.
-STALL_ITERATIONS = 3
-#: A parameter whose std in z reaches this is not determined by the data (a modulus
-#: +- 100 %, nu12 +- 1): what the stated scatter allows spans every plausible value.
-UNDETERMINED_Z = 1.0
-#: A parameter this close to a bound in z (relative for log parameters) is on it.
-BOUND_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -68,23 +57,6 @@ class FitOptions:
             validation.number(fields, key, where, low=0.0, low_inclusive=True, error=OptionsError)
         for key in ("max_log_step", "max_linear_step"):
             validation.number(fields, key, where, low=0.0, error=OptionsError)
-
-
-class Stop(Enum):
-    """Why the iterations stopped; the first five are convergence."""
-
-    GAUSS_NEWTON_SMALL = "the Gauss-Newton step is below the tolerances"
-    STEP_SMALL = "the parameter change is below the tolerance"
-    WITHIN_STD = f"every change is below {STEP_PER_STD:g} of its parameter's std"
-    EXACT = "the model reproduces the measurements exactly"
-    MISFIT_FLAT = "the misfit no longer falls"
-    MISFIT_STALLED = "the misfit fell by less than the stall limit in each of the last steps"
-    NO_DESCENT = "no step lowered the misfit"
-    MAX_ITERATIONS = "the iteration limit was reached"
-
-    @property
-    def converged(self) -> bool:
-        return self not in (Stop.NO_DESCENT, Stop.MAX_ITERATIONS)
 
 
 def iterate(objective: Objective, current: Evaluation, history: list, options: FitOptions,
@@ -119,24 +91,24 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             gain = np.where(keep, s / (s**2 + damping), 0.0)
             dz = np.zeros_like(z)
             dz[~held] = -vt.T @ (gain * ur)
-            dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), 1e-300))))
+            dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), TINY_STEP))))
             dz = np.clip(z + dz, z_low, z_high) - z  # projected onto the bounds
             trial_values = space.to_values(z + dz)
-            for _ in range(30):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
+            for _ in range(ADMISSIBLE_HALVINGS):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
                 if space.admissible(objective.model.specimen, trial_values):
                     break
                 dz *= 0.5
                 trial_values = space.to_values(z + dz)
             else:
-                damping = max(10 * damping, 1e-6 * s[0] ** 2)  # the step leaves the bounds: damp it
+                damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)  # the step leaves the bounds: damp it
                 continue
             # Sensitivities only for an accepted step: a rejected trial needs none.
             trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
                 accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
-                damping = damping / 10 if damping > 1e-9 * s[0] ** 2 else 0.0  # back to Gauss-Newton
+                damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0  # back to Gauss-Newton
                 break
-            damping = max(10 * damping, 1e-6 * s[0] ** 2)
+            damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
         if accepted is None:
             return current, Stop.NO_DESCENT, warnings
         previous_cost = objective.cost(current)
@@ -157,9 +129,9 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         # Judged on a full Gauss-Newton step only: a damped step is short by construction.
         if stalled and used == 0.0 and np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(current)):
             return current, Stop.WITHIN_STD, warnings
-        if objective.rms(current) < 1e-11:
+        if objective.rms(current) < EXACT_RMS:
             return current, Stop.EXACT, warnings
-        if previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost and step < 1e-4:
+        if previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost and step < FLAT_STEP:
             return current, Stop.MISFIT_FLAT, warnings
         if options.stall_chi2 > 0 and len(history) > STALL_ITERATIONS and all(
                 2 * (a.cost - b.cost) < options.stall_chi2 * objective.statistics(current).chi2_unit
@@ -229,7 +201,7 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
     return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
                      measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
                      tuple(values for values, _ in twins), current.pairings, objective.jacobian(current),
-                     dict(effect_of or {}))
+                     dict(effect_of or {}), stop=stop)
 
 
 def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:

@@ -43,15 +43,6 @@ def private_solve_cache(tmp_path_factory):
     yield
 
 
-@pytest.fixture(autouse=True)
-def no_solve_store_left():
-    """A command line sets the planner's disk store: each test starts without one."""
-    from designer import problem
-
-    yield
-    problem.use_store(None)
-
-
 @pytest.fixture(scope="session")
 def example_spec():
     """The bundled example as shipped (Table 6 start values)."""

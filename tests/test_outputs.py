@@ -95,7 +95,6 @@ def test_killed_sweep_resumes_solving_only_what_is_missing(tmp_path, monkeypatch
         return original(*args)
 
     monkeypatch.setattr(planner, "solve_pairs", counting)
-    monkeypatch.setattr(planner, "_STORE", [None])
     planner._CACHE.clear()
     assert plan_tests([str(a) for a in argv]) == 0
     total = len(list(cache.glob("*.npz")))

@@ -10,7 +10,7 @@ import pytest
 from designer.check import check
 from designer.design import Design
 from designer.problem import Problem, solve_points
-from designer.robust import NU_MARGIN, latin_hypercube, physical
+from designer.prior import NU_MARGIN, latin_hypercube, physical
 from designer.search import recommend
 from fem.spec import parse_spec
 

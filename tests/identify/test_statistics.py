@@ -9,7 +9,7 @@ import pytest
 from fem.material import Material
 from fem.specimen import Configuration, Parameter, Specimen
 from fem.laminate import Layer
-from identify.compare import ScoreTest
+from identify.patterns import ScoreTest
 from identify.measurements import Measurements
 from identify.statistics import CHI2_WARNING, FitStatistics
 from identify.uncertainty import WEAK_REL_STD, parameter_flags

@@ -1,0 +1,62 @@
+"""The residual rows of a fit or a comparison: measured against model per configuration
+and mode.  Formats what it is handed (a fit result, duck-typed: ``peaks``,
+``measurements``, ``model_hz``, ``pairings``, ``model``); imports no result module."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .measurements import Measurements
+from .objective import solving_model
+from .peak_assignment import peak_table
+
+
+def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
+    """Per measured mode: measured and model frequency, relative error, error / std."""
+    table = measurements.table
+    out = pd.DataFrame({
+        "configuration": table["configuration"], "mode": table["mode"],
+        "measured_hz": table["frequency_hz"], "model_hz": model_hz,
+        "rel_error": model_hz / table["frequency_hz"] - 1,
+    })
+    if measurements.has_std:
+        out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
+    return out
+
+
+def fit_residuals(result) -> pd.DataFrame:
+    """The residual rows of a fit (``fit --json`` "residuals"): every measured frequency with the model
+    mode it is paired with (1-based), measured and model frequency, relative error,
+    matched, and a note (a peak left out has None for mode, model frequency and error,
+    and its note says why, naming the nearest mode); ranked data also
+    keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
+    if result.peaks is not None:
+        out = peak_table(result.peaks)
+    else:
+        table = result.measurements.table
+        configs = table["configuration"].to_numpy()
+        modes = np.zeros(len(table), dtype=int)
+        for name, pairing in result.pairings.items():
+            modes[configs == name] = pairing.indices + 1
+        out = residual_table(result.measurements, result.model_hz)
+        out.insert(1, "measured_mode", out.pop("mode"))
+        out.insert(1, "mode", modes)
+        out["matched"] = True
+        out["note"] = ""
+    out.insert(2, "label", _model_labels(result, out))
+    return out
+
+
+def _model_labels(result, rows: pd.DataFrame) -> list[str]:
+    """The nodal pattern of the model mode each residual row is paired with ('' when
+    left out)."""
+    solver = solving_model(result.model, result.measurements)
+    labels = {c: solver.solve(c).labels for c in result.measurements.configurations}
+    out = []
+    for name, mode in zip(rows["configuration"], rows["mode"]):
+        known = labels.get(name, ())
+        out.append(known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else "")
+    return out
+
+
+__all__ = ["fit_residuals", "residual_table"]
