@@ -74,14 +74,14 @@ def real_like_vs_predict(repeat: int = 3) -> tuple[int, int, float, float]:
         paths = [Path(folder) / f"{h.source}.csv" for h in hits]
         for hit, path in zip(hits, paths, strict=True):
             write_rounded_csv(hit, path)
-        found = len(extract_peaks(paths))
+        result = extract_peaks(paths)
         peaks, predict = [], []
         for _ in range(repeat):
             peaks.append(_wall(_command("peaks", *paths)))
             predict.append(_wall(_command("predict", COATED_PLATE)))
-    band = extract_peaks(hits).band_hz
+    band = result.band_hz
     in_band = int(np.sum((modes.frequencies_hz > band[0]) & (modes.frequencies_hz < band[1])))
-    return in_band, found, float(np.median(peaks)), float(np.median(predict))
+    return in_band, len(result), float(np.median(peaks)), float(np.median(predict))
 
 
 def monte_carlo(sessions: int) -> dict:
