@@ -12,7 +12,7 @@ from fem.plotting import new_figure, save_figure
 
 from .objective import solving_model
 from .parameters import UNITS, display
-from .residuals import fit_residuals
+from .residuals import before_after_table, fit_residuals
 
 
 def _row_names(table, labels=None) -> list[str]:
@@ -186,8 +186,6 @@ def plot_point_map(comparison, model: SpecimenModel, path: Path) -> Path:
 def plot_before_after(before, after, label: str, path: Path) -> Path:
     """Signed error per measured mode [%] without and with the effect, with the
     measurement std as a band (a peak either fit left out has no bar there)."""
-    from .report import before_after_table
-
     rows = before_after_table(before, after)
     names = [f"{c}\nmode {'-' if m is None else m}" for c, m in zip(rows["configuration"], rows["mode"], strict=True)]
     x = np.arange(len(names))

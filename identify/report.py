@@ -21,7 +21,7 @@ from .rounding import percent, status_line, with_std
 
 from . import html_report as h
 from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
-from .residuals import fit_residuals
+from .residuals import before_after_table, fit_residuals
 
 
 def parameter_table(result) -> pd.DataFrame:
@@ -97,17 +97,6 @@ def to_dict(result) -> dict:
     }, result.damping, result.model)
 
 
-def _row_errors(result) -> tuple[pd.DataFrame, np.ndarray]:
-    """The measured rows a result speaks of (for a peak list: every peak, matched or
-    not) and the relative error per row (object array, None for a peak left out)."""
-    if result.peaks is not None:
-        table = result.peaks.measurements.table
-        error = result.peaks.model_hz / table["frequency_hz"].to_numpy() - 1
-        return table, np.array([e if m else None for e, m in zip(error, result.peaks.matched, strict=True)],
-                               dtype=object)
-    return result.measurements.table, result.rel_error.astype(object)
-
-
 def _formatted(frame: pd.DataFrame, formats: dict[str, Callable[[float], str]]) -> pd.DataFrame:
     """``frame`` with the named columns turned into text (blank where a value is missing)."""
     out = frame.copy()
@@ -150,22 +139,6 @@ def shown_parameters(parameters: pd.DataFrame) -> pd.DataFrame:
             for v, s, u in zip(parameters["value"], parameters["std"], parameters["unit"], strict=True)]
     return pd.DataFrame({"parameter": parameters["parameter"], "of": parameters["of"], "value ± std (rel.)": text,
                          "flags": parameters["flags"]})
-
-
-def before_after_table(before, after) -> pd.DataFrame:
-    """Relative error per measured row without and with the effects switched on.  For a
-    peak list the rows are the peaks (the two fits may match different ones: a peak left
-    out by one has None there); ``mode`` is the rank given, or for a peak the mode it is
-    matched to after the effects."""
-    table, error_before = _row_errors(before)
-    _, error_after = _row_errors(after)
-    if after.peaks is not None:
-        modes = pd.Series([int(m) if m > 0 else None for m in after.peaks.modes], dtype=object)
-    else:
-        modes = table["mode"].to_numpy()
-    return pd.DataFrame({"configuration": table["configuration"].to_numpy(), "mode": modes,
-                         "measured_hz": table["frequency_hz"].to_numpy(), "rel_error_before": error_before,
-                         "rel_error_after": error_after})
 
 
 def report_text(result) -> str:

@@ -59,4 +59,31 @@ def _model_labels(result, rows: pd.DataFrame) -> list[str]:
     return out
 
 
-__all__ = ["fit_residuals", "residual_table"]
+def _row_errors(result) -> tuple[pd.DataFrame, np.ndarray]:
+    """The measured rows a result speaks of (for a peak list: every peak, matched or
+    not) and the relative error per row (object array, None for a peak left out)."""
+    if result.peaks is not None:
+        table = result.peaks.measurements.table
+        error = result.peaks.model_hz / table["frequency_hz"].to_numpy() - 1
+        return table, np.array([e if m else None for e, m in zip(error, result.peaks.matched, strict=True)],
+                               dtype=object)
+    return result.measurements.table, result.rel_error.astype(object)
+
+
+def before_after_table(before, after) -> pd.DataFrame:
+    """Relative error per measured row without and with the effects switched on.  For a
+    peak list the rows are the peaks (the two fits may match different ones: a peak left
+    out by one has None there); ``mode`` is the rank given, or for a peak the mode it is
+    matched to after the effects."""
+    table, error_before = _row_errors(before)
+    _, error_after = _row_errors(after)
+    if after.peaks is not None:
+        modes = pd.Series([int(m) if m > 0 else None for m in after.peaks.modes], dtype=object)
+    else:
+        modes = table["mode"].to_numpy()
+    return pd.DataFrame({"configuration": table["configuration"].to_numpy(), "mode": modes,
+                         "measured_hz": table["frequency_hz"].to_numpy(), "rel_error_before": error_before,
+                         "rel_error_after": error_after})
+
+
+__all__ = ["before_after_table", "fit_residuals", "residual_table"]
