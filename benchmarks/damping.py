@@ -5,10 +5,10 @@ by content), as ``fit`` runs it; the complex eigenproblem a large loss factor ad
 timed beside it."""
 import time
 
-from fem.complex_modes import complex_loss_factors
+from fem.solver.complex_modes import complex_loss_factors
 from fem.model import solve_laminate
-from identify.damping import identify_damping
-from identify.fitting import fit_layers
+from identify.fitting.damping import identify_damping
+from identify.fitting.driver import fit_layers
 from studies import damping as study
 
 from .common import best_time

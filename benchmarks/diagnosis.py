@@ -6,14 +6,14 @@ reference (178 s before the forward selection).  Solutions are cached by content
 cache is cleared before each timed call."""
 import time
 
-from fem.attachments import PointMass
+from fem.solver.attachments import PointMass
 from fem.model import solve_laminate
 from fem.spec import load_spec
-from identify.diagnose import diagnose
-from identify.fitting import fit
+from identify.diagnosis.diagnose import diagnose
+from identify.fitting.driver import fit
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
 from identify.measurements import load_measurements
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 from studies import hidden_effect
 from studies.common import start_model, true_model
 

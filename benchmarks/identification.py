@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 
 from fem.model import solve_laminate
-from identify.fitting import fit
+from identify.fitting.driver import fit
 from identify.measurements import Measurements
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
 from studies.common import start_model, true_model
 

@@ -13,8 +13,8 @@ import tomllib
 from fem.model import solve_laminate
 from fem.spec import parse_spec
 from fem.specimen import Parameter
-from identify.fitting import fit
-from identify.synthetic import synthetic_measurements
+from identify.fitting.driver import fit
+from identify.recordings.synthetic import synthetic_measurements
 
 from .common import best_time
 

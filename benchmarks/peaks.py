@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from identify.peaks import extract_peaks
+from identify.recordings.peaks import extract_peaks
 from identify.examples import COATED_PLATE
-from identify.tap_quirks import real_like_plate, write_rounded_csv
-from identify.tap_simulation import Modes, Session, TapOptions, write_csv
+from identify.recordings.tap_quirks import real_like_plate, write_rounded_csv
+from identify.recordings.tap_simulation import Modes, Session, TapOptions, write_csv
 
 TARGET_S = 5.0
 #: ``peaks`` on the real-like plate at most this many times ``predict`` (same run).

@@ -24,7 +24,7 @@ from fem.lazy import lazy_package
 #: Public name -> the module that defines it.
 _HOMES = {
     "CheckResult": "designer.check", "check": "designer.check", "Problem": "designer.problem",
-    "refine": "designer.refine", "Recommendation": "designer.search", "recommend": "designer.search",
+    "refine": "designer.search.refine", "Recommendation": "designer.search.ranking", "recommend": "designer.search.ranking",
     "TestSheet": "designer.sheet", "write_spec": "designer.spec_file", "SweepResult": "designer.sweep",
     "sweep": "designer.sweep",
 }

@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from fem.design_space import DesignSpace
-from fem.laminate import Layer
-from fem.material import Material
+from fem.laminates.laminate import Layer
+from fem.laminates.material import Material
 from fem.specimen import Configuration, Specimen
 
 

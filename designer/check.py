@@ -8,9 +8,9 @@ from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING, Limits
 from fem.model import SpecimenModel
 
-from .damping import DampingScores, damping_scores
-from .design import Design
-from .poisson import PoissonPlate, poisson_plate
+from .scores.damping import DampingScores, damping_scores
+from .scores.design import Design
+from .scores.poisson import PoissonPlate, poisson_plate
 from .problem import Problem, Solved, solve_points, unmeasurable
 from .progress import Progress
 from .sheet import TestSheet, test_sheet
@@ -21,7 +21,7 @@ class CheckResult:
     """The scored spec design, the Poisson-plate rule, warnings (close modes, modes
     outside the band, too few frequencies), violations of the lab's limits, the limits
     themselves and the test sheet (computed when first asked for: ``test_sheet``); the
-    loss-factor scores when materials have ``identify_damping`` (``designer.damping``)."""
+    loss-factor scores when materials have ``identify_damping`` (``designer.scores.damping``)."""
 
     design: Design
     poisson: PoissonPlate

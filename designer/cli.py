@@ -15,7 +15,7 @@ from fem.io import check_report_folder, report_folder, to_json
 from identify.command_line import add_common_arguments, add_version, run_cli
 from identify.examples import spec_or_example
 
-from .methods import METHODS
+from .search.methods import METHODS
 
 DESCRIPTION = """plan-tests: plan the bonded test configurations of a laminated plate.
 
@@ -70,10 +70,10 @@ def run_recommend(args) -> int:
     """Ranked designs with scores, predicted std and the frequencies to expect."""
     _not_the_input(args.spec, args.write_spec)
     from .candidates import candidates
-    from .damping import damping_scores
+    from .scores.damping import damping_scores
     from .parallel import executor
-    from .refine import refine
-    from .search import recommend
+    from .search.refine import refine
+    from .search.ranking import recommend
     from .spec_file import write_spec
 
     problem = _problem(args)

@@ -10,13 +10,13 @@ import numpy as np
 
 from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
-from fem.mesh import PlateMesh
+from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, one_blas_thread, solve_laminate
-from fem.sensitivity import normalised
+from fem.solver.sensitivity import normalised
 from fem.specimen import Configuration, Parameter, Specimen
 
 from .parallel import chunked, run_chunks
-from .prior import Prior
+from .scores.prior import Prior
 from .progress import Progress
 
 #: Solved configurations kept in this process (a few kB each: no mode shapes).

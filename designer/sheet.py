@@ -21,11 +21,11 @@ peak |w| over the plate), following impact-test practice for free plates:
   log-linear prediction ln f = ln f0 + S ln(factor) over the same kind of sample with
   ``SPREAD_RANGE`` (S: the relative sensitivities);
 - close pairs (within ``CLOSE_MODES_WARNING``, 1 %): their peaks overlap, so the lab
-  needs a label column (the nodal pattern, ``fem.mode_shapes``) and a way to tell them
+  needs a label column (the nodal pattern, ``fem.solver.mode_shapes``) and a way to tell them
   apart: a point where one of the two moves much more than the other (mass-normalised
   shapes, so the comparison is fair) - touching there damps that one;
 - the sensor's own mass m shifts every mode, by about -m phi(x, y)^2 / 2 (relative, phi
-  the mass-normalised displacement there; ``fem.attachments``): for ``[design]
+  the mass-normalised displacement there; ``fem.solver.attachments``): for ``[design]
   sensor_mass_g`` the configuration is solved once more with the sensor as a point mass
   and the shift of every mode reported (exactly, since for a close pair the first-order
   formula fails: the sensor loads one combination of the two and leaves the other).
@@ -38,16 +38,16 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.assembly import UnitMatrices
-from fem.attachments import PointMass, point_operators
+from fem.solver.assembly import UnitMatrices
+from fem.solver.attachments import PointMass, point_operators
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING
-from fem.mode_shapes import deflection_operator
+from fem.solver.mode_shapes import deflection_operator
 from fem.model import one_blas_thread
 from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved
-from .prior import prior_factors
+from .scores.prior import prior_factors
 
 #: Points per side of the sampling grid (1 % spacing).
 GRID = 101

@@ -25,13 +25,13 @@ import tomli_w
 from fem.design_space import DesignSpace
 from fem.errors import DesignError
 from fem.io import write_text
-from fem.laminate import Layer
-from fem.material import ELASTIC_CONSTANTS, Material
+from fem.laminates.laminate import Layer
+from fem.laminates.material import ELASTIC_CONSTANTS, Material
 from fem.spec import parse_spec
 from fem.specimen import Configuration
 from fem.stock import STOCK, stock_name
 
-from .design import Design
+from .scores.design import Design
 from .problem import Problem
 
 GPA, MM = 1e9, 1e-3

@@ -25,15 +25,15 @@ import pandas as pd
 
 from fem.errors import DesignError
 from fem.io import report_folder, write_text
-from fem.laminate import Layer
+from fem.laminates.laminate import Layer
 from fem.model import MAX_MODES, ModelOptions, SpecimenModel
 from fem.plotting import new_figure, save_figure
-from fem.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
+from fem.solver.sensitivity import GOOD_BELOW, SINGULAR_ABOVE
 from fem.specimen import Configuration
 from fem.validation import did_you_mean
 
 from .candidates import outer_face, with_plate_thickness
-from .design import Design
+from .scores.design import Design
 from .problem import Problem, unmeasurable
 from .progress import Progress
 

@@ -14,8 +14,8 @@ from .lazy import lazy_package
 _HOMES = {
     "Effect": "fem.effects", "SwitchedOn": "fem.effects", "effect": "fem.effects", "register": "fem.effects",
     "DesignError": "fem.errors", "LayerIdError": "fem.errors", "MeasurementError": "fem.errors",
-    "ModelError": "fem.errors", "OptionsError": "fem.errors", "SpecError": "fem.errors", "Laminate": "fem.laminate",
-    "Layer": "fem.laminate", "Material": "fem.material", "ModelOptions": "fem.model",
+    "ModelError": "fem.errors", "OptionsError": "fem.errors", "SpecError": "fem.errors", "Laminate": "fem.laminates.laminate",
+    "Layer": "fem.laminates.laminate", "Material": "fem.laminates.material", "ModelOptions": "fem.model",
     "SpecimenModel": "fem.model", "load_spec": "fem.spec", "parse_spec": "fem.spec",
     "Configuration": "fem.specimen", "Parameter": "fem.specimen", "Specimen": "fem.specimen",
 }

@@ -30,9 +30,9 @@ import math
 from dataclasses import dataclass, field
 
 from .errors import DesignError
-from .laminate import Layer
+from .laminates.laminate import Layer
 from .limits import Limits
-from .material import Material
+from .laminates.material import Material
 from .stock import (
     DEFAULT_ADHESIVE,
     STOCK,

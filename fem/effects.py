@@ -4,7 +4,7 @@ An effect is a parameterised change of the model.  Switched on from a spec's
 ``[[effects]]`` table its parameters are fixed; switched on free (``--effect KIND`` or
 by the diagnosis) it brings parameters that are estimated with the layer properties.
 Every built-in effect has exact sensitivities (modal energies, or the attachment
-formulas in ``fem.attachments``).
+formulas in ``fem.solver.attachments``).
 
 Registering a new kind (see the README, "Adding an effect"): subclass ``Effect``, give
 it a ``kind`` and implement ``fixed`` and ``free``, then call ``register(MyEffect())``.
@@ -16,9 +16,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .attachments import PointMass, Suspension
+from .solver.attachments import PointMass, Suspension
 from .errors import NotApplicableError, SpecError
-from .layerwise import soft_layers
+from .laminates.layerwise import soft_layers
 from .model import SpecimenModel
 from .specimen import Parameter
 from .validation import check_keys, number

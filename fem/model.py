@@ -8,21 +8,21 @@ from functools import cached_property, lru_cache, wraps
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from .assembly import UnitMatrices, unit_matrices
-from .attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
-from .attachments import eigenvalue_derivative as attachment_derivative
+from .solver.assembly import UnitMatrices, unit_matrices
+from .solver.attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
+from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
 from .errors import ModelError, OptionsError
 from .inputs import InputStd
-from .laminate import Laminate
-from .layerwise import GROUPINGS, LayerwiseLaminate
-from .layerwise import system as layerwise_system
-from .material import Material
-from .mesh import PlateMesh
-from .modal import Modes, _first_bending_estimate, solve_modes
-from .mode_shapes import beam_coefficients, in_plane, label_of
-from .sensitivity import (
+from .laminates.laminate import Laminate
+from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
+from .laminates.layerwise import system as layerwise_system
+from .laminates.material import Material
+from .solver.mesh import PlateMesh
+from .solver.modal import Modes, _first_bending_estimate, solve_modes
+from .solver.mode_shapes import beam_coefficients, in_plane, label_of
+from .solver.sensitivity import (
     ModalEnergies,
     eigenvalue_derivatives,
     frequency_derivatives,
@@ -52,7 +52,7 @@ MAX_SOLVED_MODES = MAX_MODES + 10
 #: about 15 %), and beyond 64 a solve takes minutes for no accuracy a test can see.
 DIVISIONS_RANGE = (2, 64)
 #: Plate theories: "single_layer" (Kirchhoff, or FSDT with ``transverse_shear``) or
-#: "layerwise" (one shear strain per group of layers, ``fem.layerwise``).
+#: "layerwise" (one shear strain per group of layers, ``fem.laminates.layerwise``).
 THEORIES = ("single_layer", "layerwise")
 
 
@@ -139,7 +139,7 @@ class LaminateSolution:
 
     @cached_property
     def labels(self) -> tuple[str, ...]:
-        """Nodal-pattern labels, e.g. '(1,2)' or '(0,2)+(2,0)' (``fem.mode_shapes``);
+        """Nodal-pattern labels, e.g. '(1,2)' or '(0,2)+(2,0)' (``fem.solver.mode_shapes``);
         computed when first asked for, not on every solve."""
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
@@ -181,8 +181,8 @@ def solve_laminate(
     transverse_shear: first-order shear deformation theory (``ShearDifferencePlate``, the
     laminate's shear stiffness with its shear correction) instead of Kirchhoff;
     rotary_inertia: keep I1 and I2 in the kinetic energy;
-    attachments: point masses and suspension springs (``fem.attachments``);
-    theory "layerwise": the layerwise element (``fem.layerwise``, shear groups by
+    attachments: point masses and suspension springs (``fem.solver.attachments``);
+    theory "layerwise": the layerwise element (``fem.laminates.layerwise``, shear groups by
     ``layer_groups``, soft cores stretching unless ``core_stretch`` is off) with its full
     inertia; the two flags are then implied.
     """

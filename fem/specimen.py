@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from .attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, check_attachment
+from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, check_attachment
 from .errors import SpecError
-from .laminate import Laminate, Layer
-from .material import MATERIAL_PARAMETERS, Material
+from .laminates.laminate import Laminate, Layer
+from .laminates.material import MATERIAL_PARAMETERS, Material
 
 LAYER_PARAMETERS = ("thickness", "angle")
 KINDS = MATERIAL_PARAMETERS + LAYER_PARAMETERS + ATTACHMENT_PARAMETERS

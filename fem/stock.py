@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .material import Material
+from .laminates.material import Material
 
 GPA = 1e9
 

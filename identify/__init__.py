@@ -21,10 +21,10 @@ _HOMES = {
     "load_spec": "fem.spec", "SpecimenModel": "fem.model", "ModelOptions": "fem.model",
     "load_measurements": "identify.measurements", "Measurements": "identify.measurements",
     "predict": "identify.predict", "Prediction": "identify.predict",
-    "fit": "identify.fitting", "FitOptions": "identify.updating",
-    "FitResult": "identify.result", "FitStatus": "identify.result", "FitStatistics": "identify.statistics",
-    "compare": "identify.compare", "Comparison": "identify.compare",
-    "diagnose": "identify.diagnose", "Diagnosis": "identify.diagnose",
+    "fit": "identify.fitting.driver", "FitOptions": "identify.engine.updating",
+    "FitResult": "identify.engine.result", "FitStatus": "identify.engine.result", "FitStatistics": "identify.engine.statistics",
+    "compare": "identify.diagnosis.compare", "Comparison": "identify.diagnosis.compare",
+    "diagnose": "identify.diagnosis.diagnose", "Diagnosis": "identify.diagnosis.diagnose",
 }
 
 __all__ = [

@@ -72,7 +72,7 @@ def run_peaks(args) -> int:
     """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
     from fem.spec import load_spec
 
-    from .peaks import extract_peaks
+    from .recordings.peaks import extract_peaks
     from .predict import predict
 
     guide = None
@@ -99,8 +99,8 @@ def run_peaks(args) -> int:
 
 def run_fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
-    from .fitting import fit
-    from .report import write_report
+    from .fitting.driver import fit
+    from .reporting.report import write_report
 
     if args.report:
         check_report_folder(args.report)  # refuse a bad --report before the fit, not after
@@ -120,9 +120,9 @@ def run_fit(args) -> int:
 
 def run_compare(args) -> int:
     """Where the model fails: residuals per mode and the patterns that point at causes."""
-    from .compare import compare
-    from .plots import plot_comparison, plot_point_map
-    from .report import write_analysis_report
+    from .diagnosis.compare import compare
+    from .reporting.plots import plot_comparison, plot_point_map
+    from .reporting.report import write_analysis_report
 
     if args.report:
         check_report_folder(args.report)
@@ -147,9 +147,9 @@ def run_compare(args) -> int:
 def run_diagnose(args) -> int:
     """Find the effects the model misses (forward selection); exit 0 only when the data
     are then explained (at the noise level, or the refit with the selection converged)."""
-    from .diagnose import diagnose
-    from .plots import plot_before_after, plot_point_map
-    from .report import write_analysis_report
+    from .diagnosis.diagnose import diagnose
+    from .reporting.plots import plot_before_after, plot_point_map
+    from .reporting.report import write_analysis_report
 
     if args.report:
         check_report_folder(args.report)

@@ -9,7 +9,7 @@ given, as ``identify-layers peaks`` writes them: a damping identification uses t
 
 Without ``mode`` the file is a peak list, as recordings give it: some modes missing,
 some peaks spurious.  Its rows get mode 0 (no rank) and the fit matches them to model
-modes itself (``identify.matching``).
+modes itself (``identify.engine.matching``).
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from fem.errors import MeasurementError
-from fem.mode_shapes import pattern
+from fem.solver.mode_shapes import pattern
 from fem.model import SpecimenModel
 from fem.validation import suggestion
 

@@ -9,7 +9,7 @@ import numpy as np
 from fem.model import MAX_MODES, SpecimenModel
 from fem.validation import whole
 
-from . import html_report as h
+from .reporting import html_report as h
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -13,7 +13,7 @@ Per case (everything seeded by the case's number):
 - the user's spec: the nominal stack (0/90 deg, no sensor), the plies' E1, E2, G12, nu12
   drawn 0.7-1.3 x the truth (handbook-like starts), G13/G23 not given; a foam core
   identified through its shear moduli (``identify = ["G13", "G23"]``), started 0.7-1.3 x;
-- ``identify.diagnose`` through the public API (every registered effect a candidate);
+- ``identify.diagnosis.diagnose`` through the public API (every registered effect a candidate);
 - the oracle floor: the project's model with the true properties, angles, sensor and the
   shear theory (first-order shear with rotary inertia, or the layerwise model, whichever
   fits better), its layer properties refitted; the true effects are those the oracle

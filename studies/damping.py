@@ -22,16 +22,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from fem.complex_modes import complex_loss_factors
-from fem.damping import ratio_from_loss
-from fem.laminate import Layer
-from fem.material import Material
+from fem.solver.complex_modes import complex_loss_factors
+from fem.solver.damping import ratio_from_loss
+from fem.laminates.laminate import Layer
+from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Configuration, Specimen
-from identify.damping import identify_damping
-from identify.fitting import fit
+from identify.fitting.damping import identify_damping
+from identify.fitting.driver import fit
 from identify.measurements import Measurements
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 
 from .common import report_folder, start_model, true_model, write_text
 
@@ -127,10 +127,10 @@ def tap_chain(folder, seed: int = 1, hits: int = 5) -> TapChain:
     """Simulated recordings of the truth (its modal damping from the complex eigenproblem,
     a 3 g accelerometer, hit-to-hit scatter and noise as ``studies.tap_test``) -> peaks ->
     fit of the peak lists (no mode numbers) -> the layers' loss factors."""
-    from fem.attachments import PointMass
-    from fem.mode_shapes import deflection_operator
-    from identify.peaks import extract_peaks
-    from identify.tap_simulation import Modes, Session
+    from fem.solver.attachments import PointMass
+    from fem.solver.mode_shapes import deflection_operator
+    from identify.recordings.peaks import extract_peaks
+    from identify.recordings.tap_simulation import Modes, Session
     from .tap_test import EXCITATION, SENSOR, SENSOR_MASS
 
     sensor = [PointMass(SENSOR_MASS, *SENSOR, "accelerometer")]

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from identify.measurements import Measurements
-from identify.synthetic import synthetic_measurements
-from identify.fitting import fit
+from identify.recordings.synthetic import synthetic_measurements
+from identify.fitting.driver import fit
 
 from .common import report_folder, true_model, write_text
 

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identify.fitting import fit
-from identify.parameters import display
-from identify.report import write_report
-from identify.result import FitResult
-from identify.synthetic import synthetic_measurements
+from identify.fitting.driver import fit
+from identify.engine.parameters import display
+from identify.reporting.report import write_report
+from identify.engine.result import FitResult
+from identify.recordings.synthetic import synthetic_measurements
 
 from .common import (
     dependency_plot,

@@ -4,7 +4,7 @@ diagnose -> report, one run per variant of a corpus made by the tap simulator.
 The plate is the tap test's (``studies.tap_test``: the paper's coated plate, Table 1
 properties, a 3 g accelerometer in the spec, three configurations, five hits each, hit 3
 a double hit).  Each variant adds what real exports and real setups add
-(``identify.tap_quirks``): a time column printed with 7 digits, integer ADC counts on an
+(``identify.recordings.tap_quirks``): a time column printed with 7 digits, integer ADC counts on an
 offset without a time column, mains hum, the plate bouncing on its suspension and the
 sensor cable rattling, a clipped hit, a noise floor 30 dB under the response.  All of
 those are *honest* data (the true properties must come out within 3 reported std, with
@@ -25,14 +25,14 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from fem.attachments import PointMass
+from fem.solver.attachments import PointMass
 from fem.errors import MeasurementError
-from identify.diagnose import diagnose
-from identify.fitting import fit
+from identify.diagnosis.diagnose import diagnose
+from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
-from identify.peaks import extract_peaks
-from identify.recordings import Hit
-from identify.tap_quirks import (
+from identify.recordings.peaks import extract_peaks
+from identify.recordings.readers import Hit
+from identify.recordings.tap_quirks import (
     clipped,
     real_like_plate,
     with_bounce,
@@ -42,7 +42,7 @@ from identify.tap_quirks import (
     write_counts_csv,
     write_rounded_csv,
 )
-from identify.tap_simulation import Session, TapOptions, write_csv
+from identify.recordings.tap_simulation import Session, TapOptions, write_csv
 
 from .common import parse_args, report_folder, start_model, true_model, write_text
 from .tap_test import MODES, SENSOR, SENSOR_MASS, modal_data

@@ -19,14 +19,14 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from fem.attachments import PointMass
-from fem.mode_shapes import deflection_operator
+from fem.solver.attachments import PointMass
+from fem.solver.mode_shapes import deflection_operator
 from fem.model import SpecimenModel
-from identify.fitting import fit
+from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
-from identify.peaks import extract_peaks
-from identify.result import FitResult
-from identify.tap_simulation import Modes, Session, write_csv
+from identify.recordings.peaks import extract_peaks
+from identify.engine.result import FitResult
+from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 from .common import parse_args, report_folder, start_model, true_model, write_text
 

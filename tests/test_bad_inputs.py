@@ -7,7 +7,7 @@ import tomllib
 import pytest
 
 from fem.errors import SpecError
-from fem.material import Material
+from fem.laminates.material import Material
 from fem.spec import parse_spec
 from identify.cli import main
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
@@ -85,7 +85,7 @@ def test_predict_modes_out_of_range(capsys, modes):
 
 
 def test_peaks_out_onto_a_folder(tmp_path, capsys):
-    from identify.tap_simulation import Modes, Session, write_csv
+    from identify.recordings.tap_simulation import Modes, Session, write_csv
     import numpy as np
 
     hit = Session(Modes(np.array([150.0]), np.array([0.01]), np.array([1.0])), n_hits=1, seed=1).hits()[0]

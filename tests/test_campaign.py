@@ -22,7 +22,7 @@ from fem.model import ModelOptions
 from fem.spec import load_spec, parse_spec
 from identify.cli import main as identify_layers
 from identify.measurements import parse_measurements
-from identify.updating import FitOptions
+from identify.engine.updating import FitOptions
 
 from .walk import check_report, run, write_files
 
@@ -221,7 +221,7 @@ def test_a_clipped_response_is_warned_about(hits, tmp_path):
 def test_poisson_plate_advice_never_needs_a_larger_plate(length, width, cut):
     """Eq. 16 with length/width = 1.2: the plate to cut fits inside the one there is (a
     300 x 15 mm strip was told to become 300 x 299.5 mm)."""
-    from designer.poisson import PoissonPlate
+    from designer.scores.poisson import PoissonPlate
 
     plate = PoissonPlate(length, width, 1.2)
     got = tuple(1e3 * v for v in plate.cut_to)

@@ -14,7 +14,7 @@ import pytest
 from designer.cli import main as plan_tests
 from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
-from identify.tap_simulation import Modes, Session, write_csv
+from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 DOC = Path(__file__).parent.parent / "docs" / "json.md"
 MATERIALS = set(tomllib.loads(Path(COATED_PLATE).read_text())["materials"])

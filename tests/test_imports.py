@@ -1,10 +1,13 @@
-"""No import circle among the project's modules, counting the imports inside functions
-and under ``TYPE_CHECKING`` (a circle dodged by a late import is still a circle)."""
+"""The house: no import circle among the project's modules, counting the imports inside
+functions and under ``TYPE_CHECKING`` (a circle dodged by a late import is still a
+circle), and no folder of the packages holding more than ``MAX_MODULES`` modules."""
 import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("fem", "identify", "designer", "studies", "benchmarks")
+#: Modules (``__init__`` included) one folder of fem, identify or designer may hold directly.
+MAX_MODULES = 16
 
 
 def project_modules(root: Path = ROOT, packages=PACKAGES) -> dict[str, tuple[Path, bool]]:
@@ -93,3 +96,10 @@ def test_the_graph_counts_late_and_relative_imports(tmp_path):
 def test_no_import_circles():
     found = cycles(import_graph(project_modules()))
     assert not found, "import circles: " + "; ".join(" <-> ".join(c) for c in found)
+
+
+def test_no_folder_holds_more_than_max_modules():
+    sizes = {str(init.parent.relative_to(ROOT)): len(list(init.parent.glob("*.py")))
+             for package in ("fem", "identify", "designer") for init in (ROOT / package).rglob("__init__.py")}
+    assert len(sizes) >= 10 and all(sizes.values())
+    assert {folder: n for folder, n in sizes.items() if n > MAX_MODULES} == {}

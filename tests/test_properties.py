@@ -18,9 +18,9 @@ from hypothesis import strategies as st
 from fem.errors import LayerIdError
 from fem.spec import load_spec, parse_spec
 from identify.examples import COATED_PLATE
-from identify.matching import align, match
+from identify.engine.matching import align, match
 from identify.measurements import parse_measurements
-from identify.recordings import read_csv, read_uff, read_wav
+from identify.recordings.readers import read_csv, read_uff, read_wav
 
 BASE = tomllib.loads(COATED_PLATE.read_text())
 MODEL = load_spec(COATED_PLATE)

@@ -22,7 +22,7 @@ def loaded_after(code: str) -> dict:
 def test_version_and_help_load_no_heavy_library():
     loaded = loaded_after("import identify.cli, designer.cli")
     assert loaded["heavy"] == []
-    assert "identify.fitting" not in loaded["project"] and "designer.search" not in loaded["project"]
+    assert "identify.fitting.driver" not in loaded["project"] and "designer.search.ranking" not in loaded["project"]
 
 
 def test_predict_loads_only_the_solver():

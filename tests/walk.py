@@ -17,8 +17,8 @@ import pandas as pd
 from fem.io import REPORT_MARK
 from fem.spec import load_spec
 from fem.specimen import Parameter
-from identify.synthetic import synthetic_measurements
-from identify.tap_simulation import Modes, Session, write_csv
+from identify.recordings.synthetic import synthetic_measurements
+from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 SPEC = """
 [specimen]

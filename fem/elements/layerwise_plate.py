@@ -14,7 +14,7 @@ J. Eng. Mech. 118:1026-1043, here constant through the core):
 
 with Phi_k piecewise linear (slope 1 in the layers of group k), Psi_s piecewise linear
 (slope 1 in stretching layer s), Lambda_s = int_0^z Psi_s, all zero at z = 0 (so u, v, w
-are the mid-plane displacements; ``fem.layerwise``).  The transverse shear strains are
+are the mid-plane displacements; ``fem.laminates.layerwise``).  The transverse shear strains are
 gamma_xz = gx_k, gamma_yz = gy_k in the layers of group k, the normal strain eps_z = e_s in
 layer s, and the in-plane strains
 
@@ -30,7 +30,7 @@ basis (C1, as chi_s needs), so all strains converge at the Kirchhoff element's r
 the eigenvalues at O(h^4).  With one group and no stretching layer Phi = z and the
 element is exactly ``ShearDifferencePlate``.
 
-The energies are linear in generalised laminate coefficients (``fem.layerwise``): one unit
+The energies are linear in generalised laminate coefficients (``fem.laminates.layerwise``): one unit
 stiffness matrix per pair (a <= b) of the through-thickness functions f = [1, z, Phi_k,
 Lambda_s] and Voigt pair, one per group shear term, one per stretching layer; one unit mass
 matrix per pair of f, and per pair of [1, Psi_s] beyond the first.
@@ -131,7 +131,7 @@ class LayerwisePlate(HermitePlate):
         return out
 
     def unit_stiffness(self, pairs) -> np.ndarray:
-        """Unit stiffness matrices (n_c, N, N) in ``fem.layerwise.stiffness_names`` order."""
+        """Unit stiffness matrices (n_c, N, N) in ``fem.laminates.layerwise.stiffness_names`` order."""
         strains = self.in_plane_strains()
         out = []
         for a, b in basis_pairs(len(strains)):
@@ -147,7 +147,7 @@ class LayerwisePlate(HermitePlate):
         return np.array(out)
 
     def unit_mass(self) -> np.ndarray:
-        """Unit mass matrices (n_i, N, N) in ``fem.layerwise.inertia_names`` order: the
+        """Unit mass matrices (n_i, N, N) in ``fem.laminates.layerwise.inertia_names`` order: the
         in-plane pairs (the first, I0, also carries w^2), then the transverse pairs of
         [w, e_s] beyond (w, w)."""
         w = self.weights

@@ -1,5 +1,5 @@
 """plan-tests scores designs for the layers' loss factors: the condition number of the
-loss-factor columns and each loss factor's predicted std (``designer.damping``)."""
+loss-factor columns and each loss factor's predicted std (``designer.scores.damping``)."""
 import json
 
 import numpy as np
@@ -8,7 +8,7 @@ import tomli_w
 
 from designer.check import check
 from designer.cli import main
-from designer.damping import damping_scores
+from designer.scores.damping import damping_scores
 from fem.spec import parse_spec
 
 from .conftest import paper_data

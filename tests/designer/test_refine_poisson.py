@@ -5,12 +5,12 @@ import math
 import pytest
 
 from designer.candidates import plate_configuration, with_plate_thickness
-from designer.design import Design
-from designer.poisson import poisson_plate
-from designer.refine import refine, thickness_range
-from designer.search import ORIGINAL
-from fem.laminate import Layer
-from fem.material import Material
+from designer.scores.design import Design
+from designer.scores.poisson import poisson_plate
+from designer.search.refine import refine, thickness_range
+from designer.search.ranking import ORIGINAL
+from fem.laminates.laminate import Layer
+from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Configuration, Specimen
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from designer.check import check
-from designer.design import Design
+from designer.scores.design import Design
 from designer.problem import Problem, solve_points
-from designer.prior import NU_MARGIN, latin_hypercube, physical
-from designer.search import recommend
+from designer.scores.prior import NU_MARGIN, latin_hypercube, physical
+from designer.search.ranking import recommend
 from fem.spec import parse_spec
 
 from .conftest import paper_data, problem_of

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from designer.check import check
-from designer.design import Design
-from designer.scoring import score, singular_values, verdict
+from designer.scores.design import Design
+from designer.scores.scoring import score, singular_values, verdict
 from fem.model import SpecimenModel
 from tests.conftest import PAPER
 
@@ -113,7 +113,7 @@ def test_spec_effects_are_in_the_scored_model():
     problem = problem_of(data)
     assert len(problem.specimen.attachments) == 1
     design = check(problem).design
-    from fem.attachments import PointMass
+    from fem.solver.attachments import PointMass
 
     by_hand = problem_of(paper_data()).model.with_attachments([PointMass(3e-3, 0.125, 0.110)])
     direct = np.linalg.cond(by_hand.sensitivity_matrix(list(problem.parameters)))

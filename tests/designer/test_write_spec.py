@@ -11,7 +11,7 @@ import identify
 from designer.check import check
 from designer.cli import main as plan_tests
 from designer.problem import Problem
-from designer.search import recommend
+from designer.search.ranking import recommend
 from designer.spec_file import write_spec
 from fem.errors import DesignError
 from fem.spec import load_spec, parse_spec

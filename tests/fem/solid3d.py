@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.attachments import point_operators
+from fem.solver.attachments import point_operators
 from fem.model import SpecimenModel
 from fem.spec import parse_spec
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fem.attachments import PointMass, Suspension
+from fem.solver.attachments import PointMass, Suspension
 from fem.errors import SpecError
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Parameter

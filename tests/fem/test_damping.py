@@ -7,8 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fem.complex_modes import complex_loss_factors
-from fem.damping import first_order_loss_factors, loss_columns
+from fem.solver.complex_modes import complex_loss_factors
+from fem.solver.damping import first_order_loss_factors, loss_columns
 from fem.errors import SpecError
 from fem.spec import parse_spec
 from identify.examples import COATED_PLATE

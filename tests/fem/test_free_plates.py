@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from fem.laminate import Laminate, Layer
-from fem.material import Material
-from fem.mesh import PlateMesh
+from fem.laminates.laminate import Laminate, Layer
+from fem.laminates.material import Material
+from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, plate_frequency_parameter, solve_laminate
 from fem.specimen import Parameter
 from tests.conftest import FREE_PLATES, PAPER, GPA
@@ -119,7 +119,7 @@ def test_exactly_six_rigid_body_modes_dropped(thickness, E):
     for the thinnest plate the in-plane modes make lambda_max / lambda_7 ~ 1e10.)"""
     import scipy.linalg as sla
 
-    from fem.assembly import unit_matrices
+    from fem.solver.assembly import unit_matrices
 
     lam = Laminate((Layer(iso(E, 0.3, 7800), thickness),))
     mesh = PlateMesh(0.15, 0.1, 4, 3)

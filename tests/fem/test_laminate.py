@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from fem.laminate import COEFFICIENTS, Laminate, Layer, reduced_stiffness, transformation
-from fem.material import Material
+from fem.laminates.laminate import COEFFICIENTS, Laminate, Layer, reduced_stiffness, transformation
+from fem.laminates.material import Material
 
 STEEL = Material("steel", 201e9, 200e9, 78e9, 0.29, 7900)
 CFRP = Material("cfrp", 140e9, 10e9, 5e9, 0.3, 1600)

@@ -6,9 +6,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fem.laminate import Laminate, Layer
-from fem.laminate_shear import shear_stiffness
-from fem.material import Material
+from fem.laminates.laminate import Laminate, Layer
+from fem.laminates.laminate_shear import shear_stiffness
+from fem.laminates.material import Material
 
 STEEL = Material("steel", 201e9, 200e9, 78e9, 0.29, 7900, G13=70e9, G23=60e9)
 CFRP = Material("cfrp", 140e9, 10e9, 5e9, 0.3, 1600, G13=5e9, G23=3.5e9)

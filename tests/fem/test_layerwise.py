@@ -12,16 +12,16 @@ import scipy.linalg as sla
 from fem.effects import effect
 from fem.elements import LayerwisePlate
 from fem.errors import ModelError, SpecError
-from fem.laminate import Laminate, Layer
-from fem.layerwise import (
+from fem.laminates.laminate import Laminate, Layer
+from fem.laminates.layerwise import (
     LayerwiseLaminate,
     inertia_names,
     layer_groups,
     stiffness_names,
     unit_matrices,
 )
-from fem.material import Material
-from fem.mesh import PlateMesh
+from fem.laminates.material import Material
+from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, solve_laminate
 from fem.spec import parse_spec
 from fem.specimen import Parameter
@@ -77,7 +77,7 @@ def test_homogeneous_shear_correction_and_sandwich_core():
 
 def test_generalised_coefficients_of_one_group_are_clt_moments():
     """With one group Phi = z, so E = B, F = G = D, the inertia J = I1, K = L = I2, and the
-    A, B, D and I0..I2 blocks are the laminate's own (``fem.laminate``), to round-off."""
+    A, B, D and I0..I2 blocks are the laminate's own (``fem.laminates.laminate``), to round-off."""
     lam = Laminate((Layer(GFRP, 1e-3, 0.2, "g"), Layer(CFRP, 2e-3, 0.0, "c")))
     stack = LayerwiseLaminate.of(lam, "blocks")
     s, i = stack.stiffness, stack.inertia

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from fem.laminate import Layer
-from fem.material import Material
+from fem.laminates.laminate import Layer
+from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Configuration, Parameter, Specimen
 

@@ -3,7 +3,7 @@ not depend on the mesh or the plate theory, and patterns parsed from a lab's lab
 import numpy as np
 import pytest
 
-from fem.mode_shapes import ORDER, _beta, _gauss, affinity, beam_functions, label_of, pattern
+from fem.solver.mode_shapes import ORDER, _beta, _gauss, affinity, beam_functions, label_of, pattern
 from fem.model import ModelOptions, SpecimenModel
 
 

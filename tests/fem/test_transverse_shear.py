@@ -7,11 +7,11 @@ import pytest
 import scipy.linalg as sla
 from scipy.optimize import brentq
 
-from fem.assembly import unit_matrices
+from fem.solver.assembly import unit_matrices
 from fem.elements import ShearDifferencePlate
-from fem.laminate import Laminate, Layer
-from fem.material import Material
-from fem.mesh import PlateMesh
+from fem.laminates.laminate import Laminate, Layer
+from fem.laminates.material import Material
+from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, solve_laminate
 from tests.conftest import FREE_PLATES
 

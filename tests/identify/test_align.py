@@ -3,7 +3,7 @@ must pick exactly the scale, matching and cost of trying every scale."""
 import numpy as np
 import pytest
 
-from identify.matching import SCALES, START_TOLERANCE, Match, align, match
+from identify.engine.matching import SCALES, START_TOLERANCE, Match, align, match
 
 
 def every_scale(peaks_hz, std_hz, model_hz, allowed):

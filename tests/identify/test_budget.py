@@ -8,9 +8,9 @@ import pytest
 from fem.errors import SpecError
 from fem.spec import load_spec, parse_spec
 from fem.specimen import Parameter
-from identify.fitting import fit, fit_layers
+from identify.fitting.driver import fit, fit_layers
 from identify.measurements import Measurements
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 from tests.conftest import DATA
 
 SPEC = DATA / "coating_on_aluminium.toml"

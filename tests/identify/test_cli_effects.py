@@ -3,10 +3,10 @@ import json
 
 import pytest
 
-from fem.attachments import PointMass
+from fem.solver.attachments import PointMass
 from identify.cli import main
 from identify.examples import COATED_PLATE
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 from studies.common import true_model
 
 

@@ -8,7 +8,7 @@ from identify.cli import main
 from identify.examples import COATED_PLATE
 from identify.measurements import load_measurements
 from fem.spec import load_spec
-from identify.tap_simulation import Modes, Session, write_csv
+from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 #: Three modes of a plate-like spectrum, a node of the third near the sensor.
 MODES = Modes(np.array([129.2, 191.6, 238.8]), np.array([0.005, 0.006, 0.008]), np.array([1.0, -0.7, 0.4]))

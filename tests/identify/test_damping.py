@@ -9,16 +9,16 @@ import pytest
 
 from fem.errors import MeasurementError
 from fem.io import to_json
-from identify.damping import identify_damping
+from identify.fitting.damping import identify_damping
 from identify.measurements import Measurements, parse_measurements
-from identify.report import parameter_table, report_text
+from identify.reporting.report import parameter_table, report_text
 from studies import damping as study
 
 
 @pytest.fixture(scope="module")
 def fitted():
     """One stiffness and damping identification of the study's simulated data."""
-    from identify.fitting import fit
+    from identify.fitting.driver import fit
 
     return fit(study.start(), study.simulate(seed=3))
 
@@ -132,7 +132,7 @@ def test_without_damping_std_the_assumed_scatter(fitted):
 
 
 def test_report_folder_has_the_damping_table_and_figure(fitted, tmp_path):
-    from identify.report import write_report
+    from identify.reporting.report import write_report
 
     folder = write_report(fitted, tmp_path / "report")
     page = (folder / "report.html").read_text()

@@ -6,12 +6,12 @@ import tomllib
 
 from fem.spec import parse_spec
 from identify.measurements import parse_measurements
-from identify.synthetic import synthetic_measurements
-from identify.updating import FitOptions
+from identify.recordings.synthetic import synthetic_measurements
+from identify.engine.updating import FitOptions
 
 from ..walk import SPEC
 
-diagnosis = importlib.import_module("identify.diagnose")  # the module (the package exports its function)
+diagnosis = importlib.import_module("identify.diagnosis.diagnose")  # the module (the package exports its function)
 
 #: The truth the data come from: the walk plate with a 6 g sensor the spec leaves out.
 SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}

@@ -7,17 +7,17 @@ import math
 import numpy as np
 import pytest
 
-from fem.attachments import PointMass, Suspension
+from fem.solver.attachments import PointMass, Suspension
 from fem.effects import effect
 from fem.errors import LayerIdError
 from fem.specimen import Parameter
-from identify import ties
-from identify.compare import compare
-from identify.diagnose import diagnose
+from identify.engine import ties
+from identify.diagnosis.compare import compare
+from identify.diagnosis.diagnose import diagnose
 from identify import fit
-from identify.fitting import add_effect, prepare_effect
-from identify.plausibility import MAX_MASS_SHARE, implausible, plate_mass
-from identify.synthetic import synthetic_measurements
+from identify.fitting.driver import add_effect, prepare_effect
+from identify.fitting.plausibility import MAX_MASS_SHARE, implausible, plate_mass
+from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
 
@@ -133,7 +133,7 @@ def test_point_mass_refit_finds_the_sensor_and_is_plausible(sensor_baseline):
     """The screened multistart (4 starts x 3 iterations, the best 2 continued) finds the
     3 g sensor (1 % of the plate: plausible) within 10 %."""
     model, data, baseline = sensor_baseline
-    from identify.fitting import point_mass_hints
+    from identify.fitting.driver import point_mass_hints
 
     added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
     fit = added.result

@@ -5,12 +5,12 @@ from dataclasses import replace
 
 import pytest
 
-from fem.attachments import PointMass
-from identify.compare import compare
-from identify.diagnose import Candidate, _candidate, _signs
-from identify.fitting import add_effect, point_mass_hints
-from identify.precheck import Precheck
-from identify.synthetic import synthetic_measurements
+from fem.solver.attachments import PointMass
+from identify.diagnosis.compare import compare
+from identify.diagnosis.diagnose import Candidate, _candidate, _signs
+from identify.fitting.driver import add_effect, point_mass_hints
+from identify.fitting.precheck import Precheck
+from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from identify.examples.recordings import EXAMPLES, MODES_HZ, SAMPLE_RATE
-from identify.peaks import extract_peaks
+from identify.recordings.peaks import extract_peaks
 
 
 @pytest.mark.parametrize("kind", EXAMPLES)

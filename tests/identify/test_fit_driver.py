@@ -7,7 +7,7 @@ from fem.spec import load_spec
 from fem.specimen import Parameter
 from identify import FitOptions, fit, load_measurements
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
-from identify.stopping import Stop
+from identify.engine.stopping import Stop
 
 STEEL = [Parameter(kind, "steel") for kind in ("E1", "E2", "G12")]
 

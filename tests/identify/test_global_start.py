@@ -1,11 +1,11 @@
-"""The global stage before the local fit (``identify.global_start``): its starts are
+"""The global stage before the local fit (``identify.fitting.global_start``): its starts are
 reproducible and inside every property's bounds, and it does nothing when the local fit
 is already below ``GLOBAL_FROM``."""
 import math
 
-from identify.compare import compare
-from identify.global_start import GLOBAL_FROM, SPREAD, STARTS, global_fit, starts
-from identify.synthetic import synthetic_measurements
+from identify.diagnosis.compare import compare
+from identify.fitting.global_start import GLOBAL_FROM, SPREAD, STARTS, global_fit, starts
+from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
 

@@ -9,9 +9,9 @@ import pytest
 from fem.specimen import Parameter
 from identify.cli import main
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
-from identify.fitting import fit
+from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 
 GOOD = pd.read_csv(COATED_PLATE_MEASURED, comment="#")
 

@@ -6,10 +6,10 @@ import pandas as pd
 import pytest
 
 from fem.errors import MeasurementError
-from identify.peaks import extract_peaks
-from identify.recordings import read_csv, read_recordings
-from identify.tap_quirks import clipped, with_hum, write_counts_csv, write_rounded_csv
-from identify.tap_simulation import Modes, Session, write_csv
+from identify.recordings.peaks import extract_peaks
+from identify.recordings.readers import read_csv, read_recordings
+from identify.recordings.tap_quirks import clipped, with_hum, write_counts_csv, write_rounded_csv
+from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 #: The test plate's separated modes at 48 kHz, 2-s hits (a full lab recording).
 MODES = Modes([129.2, 191.6, 238.8, 383.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.003], [1.0, -0.8, 0.6, 1.2, 0.9])
@@ -104,7 +104,7 @@ def test_mains_hum_is_removed_and_said(hits):
 def test_unremoved_hum_would_have_made_false_modes(hits, monkeypatch):
     """The same hum with the removal switched off: a false 'mode' at 50.0 Hz (the test
     above is not vacuous)."""
-    import identify.frf as frf
+    import identify.recordings.frf as frf
 
     monkeypatch.setattr(frf, "remove_hum", lambda hit: (hit, None))
     result = extract_peaks([with_hum(h, 50.0, 3e-2) for h in hits])
@@ -144,7 +144,7 @@ def test_every_format_gives_the_csv_peaks(tmp_path, hits, kind):
     from nptdms import ChannelObject, TdmsWriter
     from scipy.io import savemat
 
-    from identify.tap_simulation import write_wav
+    from identify.recordings.tap_simulation import write_wav
 
     paths = []
     for hit in hits:

@@ -3,8 +3,8 @@ Jacobian against central differences, and exact poles recovered from a noise-fre
 of two close modes with a neighbour outside the window."""
 import numpy as np
 
-from identify.peaks import _Projection, local_fit
-from identify.tap_simulation import Modes
+from identify.recordings.peaks import _Projection, local_fit
+from identify.recordings.tap_simulation import Modes
 
 MODES = Modes([100.0, 104.0, 120.0], [0.01, 0.008, 0.01], [1.0, -0.5, 0.7])
 

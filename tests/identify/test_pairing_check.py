@@ -8,9 +8,9 @@ import numpy as np
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.examples import COATED_PLATE
-from identify.fitting import fit
+from identify.fitting.driver import fit
 from identify.predict import predict
-from identify.synthetic import synthetic_measurements
+from identify.recordings.synthetic import synthetic_measurements
 from tests.conftest import table1_values
 
 

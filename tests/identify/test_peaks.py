@@ -23,10 +23,10 @@ import pandas as pd
 import pytest
 
 from fem.io import to_json
-from identify.frf import _notch, correct_for_window
-from identify.peaks import CSV_COLUMNS, extract_peaks
-from identify.recordings import Hit
-from identify.tap_simulation import Modes, Session, TapOptions, hammer_force
+from identify.recordings.frf import _notch, correct_for_window
+from identify.recordings.peaks import CSV_COLUMNS, extract_peaks
+from identify.recordings.readers import Hit
+from identify.recordings.tap_simulation import Modes, Session, TapOptions, hammer_force
 
 TRUE = pd.DataFrame({
     "frequency_hz": [8.0, 129.2, 191.6, 238.8, 275.0, 337.11, 337.14, 383.0, 440.0, 560.0, 590.0],

@@ -5,8 +5,8 @@ by ``python -m benchmarks.peaks``."""
 import numpy as np
 import pytest
 
-from identify.peaks import extract_peaks
-from identify.tap_simulation import Modes, Session
+from identify.recordings.peaks import extract_peaks
+from identify.recordings.tap_simulation import Modes, Session
 
 #: The test plate's well-separated modes (the close pair is tested elsewhere).
 MODES = Modes([129.2, 191.6, 238.8, 383.0, 440.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.011, 0.003],

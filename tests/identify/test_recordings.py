@@ -6,9 +6,9 @@ import pytest
 from scipy import signal
 
 from fem.errors import MeasurementError
-from identify.frf import average_hits
-from identify.peaks import extract_peaks
-from identify.recordings import (
+from identify.recordings.frf import average_hits
+from identify.recordings.peaks import extract_peaks
+from identify.recordings.readers import (
     Hit,
     MeasuredFRF,
     read_csv,
@@ -16,7 +16,7 @@ from identify.recordings import (
     read_uff,
     read_wav,
 )
-from identify.tap_simulation import (
+from identify.recordings.tap_simulation import (
     Modes,
     Session,
     TapOptions,

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from identify.rounding import percent, status_line, with_std
+from identify.reporting.rounding import percent, status_line, with_std
 
 
 @pytest.mark.parametrize("value, std, unit, expected", [

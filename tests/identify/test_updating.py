@@ -5,10 +5,10 @@ import pytest
 from fem.errors import MeasurementError
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Parameter
-from identify.fitting import fit
-from identify.pairing import ModePairing, mac_matrix
-from identify.synthetic import synthetic_measurements
-from identify.updating import FitOptions
+from identify.fitting.driver import fit
+from identify.engine.pairing import ModePairing, mac_matrix
+from identify.recordings.synthetic import synthetic_measurements
+from identify.engine.updating import FitOptions
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ from studies import tap_test
 
 def test_recordings_to_layers(tmp_path):
     """Every double hit rejected (one per configuration); every peak within 3 of its std of
-    a true frequency (the std is calibrated, identify.peaks); the fit from Table 6's start
+    a true frequency (the std is calibrated, identify.recordings.peaks); the fit from Table 6's start
     consistent with the scatter and every layer property within 3 reported std of Table 1.
     Frequencies alone leave the merged pairs' assignment open, so the coatings' std is wide
     (several %) and says so: a flag on the parameters."""

@@ -4,8 +4,8 @@ import wave
 import numpy as np
 from scipy.io import savemat
 
-from identify.tap_quirks import write_counts_csv, write_rounded_csv
-from identify.tap_simulation import Modes, Session, TapOptions, write_uff
+from identify.recordings.tap_quirks import write_counts_csv, write_rounded_csv
+from identify.recordings.tap_simulation import Modes, Session, TapOptions, write_uff
 
 from . import EXAMPLES, FOLDER, MODES_HZ, SAMPLE_RATE
 

@@ -18,7 +18,7 @@ coarser one (``--check-divisions``): the largest change of a paired frequency is
     python tests/data/solid3d/compare_plate_models.py [--case NAME ...] [--json OUT]
 
 Uses the project's API as it is (``fem.spec.parse_spec``, ``fem.model``,
-``fem.attachments.point_operators``); the plate models are not modified.
+``fem.solver.attachments.point_operators``); the plate models are not modified.
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ from scipy.optimize import linear_sum_assignment
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[2]))
 
-from fem.attachments import point_operators  # noqa: E402
+from fem.solver.attachments import point_operators  # noqa: E402
 from fem.model import ModelOptions, SpecimenModel  # noqa: E402
 from fem.spec import parse_spec  # noqa: E402
 

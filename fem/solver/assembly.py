@@ -1,0 +1,165 @@
+"""Unit stiffness and mass matrices of a mesh, assembled once.
+
+Every element of a structured mesh is the same rectangle, so one set of element
+unit matrices serves them all.  Assembly maps the n x n local entries onto one
+global CSR pattern through a sparse aggregation matrix; a global matrix for any
+laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
+cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
+element matrices (``combined_data``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..elements import HermitePlate
+from ..laminates.laminate import VOIGT_PAIRS
+from .mesh import PlateMesh
+
+
+@dataclass(frozen=True)
+class UnitMatrices:
+    """Assembled unit matrices of one mesh and element type (shared by every
+    configuration on it)."""
+
+    mesh: PlateMesh
+    element_type: type = HermitePlate
+
+    @cached_property
+    def element(self) -> HermitePlate:
+        return self.element_type(*self.mesh.element_size)
+
+    @property
+    def dofs_per_node(self) -> int:
+        return len(self.element_type.NODE_DOFS)
+
+    @cached_property
+    def element_dofs(self) -> np.ndarray:
+        """Global DOF numbers per element (n_elements, n_local)."""
+        nodes = self.mesh.element_nodes
+        per_node = self.dofs_per_node
+        return (nodes[:, :, None] * per_node + np.arange(per_node)).reshape(len(nodes), -1)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.mesh.n_nodes * self.dofs_per_node
+
+    @cached_property
+    def element_stiffness(self) -> np.ndarray:
+        """(n_c, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
+        then any the element adds, e.g. transverse shear)."""
+        return self.element.unit_stiffness(VOIGT_PAIRS)
+
+    @cached_property
+    def element_mass(self) -> np.ndarray:
+        """(3, n_local, n_local) element unit mass matrices (I0, I1, I2)."""
+        return self.element.unit_mass()
+
+    @cached_property
+    def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
+        """CSR indices/indptr of the global pattern and the aggregation matrix
+        (nnz x n_local^2) summing local entries into global ones."""
+        dofs = self.element_dofs
+        n_local = dofs.shape[1]
+        rows = np.repeat(dofs, n_local, axis=1).ravel()
+        cols = np.tile(dofs, (1, n_local)).ravel()
+        local = np.tile(np.arange(n_local * n_local), len(dofs))
+        # Number the distinct (row, col) pairs in CSR order.
+        key = rows.astype(np.int64) * self.n_dofs + cols
+        unique, slot = np.unique(key, return_inverse=True)
+        g_rows, g_cols = np.divmod(unique, self.n_dofs)
+        indptr = np.searchsorted(g_rows, np.arange(self.n_dofs + 1))
+        aggregate = sp.csr_matrix(
+            (np.ones(slot.size), (slot, local)), shape=(unique.size, n_local * n_local)
+        )
+        return g_cols.astype(np.int32), indptr.astype(np.int32), aggregate
+
+    @cached_property
+    def stiffness_data(self) -> np.ndarray:
+        """(n_c, nnz) CSR data of the global unit stiffness matrices."""
+        aggregate = self._pattern[2]
+        return (aggregate @ self.element_stiffness.reshape(len(self.element_stiffness), -1).T).T
+
+    @cached_property
+    def mass_data(self) -> np.ndarray:
+        """(n_inertia, nnz) CSR data of the global unit mass matrices (I0, I1, I2, and more
+        for elements with more inertia terms)."""
+        aggregate = self._pattern[2]
+        return (aggregate @ self.element_mass.reshape(len(self.element_mass), -1).T).T
+
+    @cached_property
+    def first_unit_mass(self) -> sp.csr_matrix:
+        """The first unit mass matrix (the I0 term) alone: a mass weight for comparing mode
+        shapes, without assembling every inertia term (the layerwise element has ~100)."""
+        return self.matrix(self._pattern[2] @ self.element_mass[0].ravel())
+
+    def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray) -> np.ndarray:
+        """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
+        first: one aggregation instead of n_c unit data arrays in memory."""
+        return self._pattern[2] @ (weights @ element_matrices.reshape(len(element_matrices), -1))
+
+    def matrix(self, data: np.ndarray) -> sp.csr_matrix:
+        """A global CSR matrix on the shared pattern from its data array."""
+        indices, indptr, _ = self._pattern
+        return sp.csr_matrix((data, indices, indptr), shape=(self.n_dofs, self.n_dofs))
+
+    def stiffness(self, coefficients: np.ndarray) -> sp.csr_matrix:
+        """K = sum_c X_c K_c for the 18 laminate coefficients X."""
+        return self.matrix(coefficients @ self.stiffness_data)
+
+    def mass(self, inertia: np.ndarray) -> sp.csr_matrix:
+        """M = sum_j I_j M_j for the inertia terms [I0, I1, I2]."""
+        return self.matrix(inertia @ self.mass_data)
+
+    @cached_property
+    def bandwidth(self) -> int:
+        """Upper semi-bandwidth of the global pattern (row-by-row node numbering keeps it
+        at about dofs_per_node (nx + 2))."""
+        indices, indptr, _ = self._pattern
+        rows = np.repeat(np.arange(self.n_dofs), np.diff(indptr))
+        return int(np.max(indices - rows))
+
+    @cached_property
+    def _banded_slots(self) -> tuple[np.ndarray, np.ndarray]:
+        """Positions of the upper-triangle CSR entries in LAPACK upper banded storage."""
+        indices, indptr, _ = self._pattern
+        rows = np.repeat(np.arange(self.n_dofs), np.diff(indptr))
+        upper = np.flatnonzero(indices >= rows)
+        flat = (self.bandwidth + rows[upper] - indices[upper]) * self.n_dofs + indices[upper]
+        return upper, flat
+
+    def banded(self, data: np.ndarray) -> np.ndarray:
+        """Upper banded storage (bandwidth + 1, n_dofs) of a symmetric matrix given by CSR data."""
+        upper, flat = self._banded_slots
+        out = np.zeros((self.bandwidth + 1) * self.n_dofs)
+        out[flat] = data[upper]
+        return out.reshape(self.bandwidth + 1, self.n_dofs)
+
+    def element_quadratic_forms(self, modes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
+        """phi_i^T K_c phi_i summed over elements, for every unit matrix c and mode i.
+
+        modes: (n_dofs, m); matrices: (n_c, n_local, n_local) element matrices.  Returns
+        (n_c, m).  Works per element, so it costs O(n_elements * n_local^2 * m), not a
+        sparse product per c.
+        """
+        local = modes[self.element_dofs]  # (ne, n_local, m)
+        second_moment = np.einsum("eam,ebm->mab", local, local).reshape(modes.shape[1], -1)
+        return matrices.reshape(len(matrices), -1) @ second_moment.T
+
+    @cached_property
+    def rigid_body_modes(self) -> np.ndarray:
+        """The element type's six rigid-body displacement fields on this mesh (n_dofs, 6)."""
+        return self.element_type.rigid_body_modes(self.mesh.node_xy)
+
+
+def unit_matrices(mesh: PlateMesh, element_type: type = HermitePlate) -> UnitMatrices:
+    """The (cached) unit matrices of a mesh for an element type (default: Kirchhoff)."""
+    return _cached_unit_matrices(mesh, element_type)
+
+
+@lru_cache(maxsize=16)
+def _cached_unit_matrices(mesh: PlateMesh, element_type: type) -> UnitMatrices:
+    return UnitMatrices(mesh, element_type)

@@ -1,0 +1,131 @@
+"""Things attached to the plate at points: a sensor or glue mass, suspension springs.
+
+A point mass m at (x, y) moves with the reference surface: it adds m (u^2 + v^2 + w^2) / 2
+to the kinetic energy.  A suspension is a set of equal springs k acting on w at given
+points; it adds k w^2 / 2 each to the strain energy, so the three out-of-plane rigid-body
+motions become low "suspension modes" (the in-plane ones stay free).
+
+Exact eigenvalue derivatives for mass-normalised modes:
+    d(lambda)/dm = -lambda |phi(x, y)|^2,  d(lambda)/dx = -lambda m d|phi|^2/dx,
+    d(lambda)/dk = sum over points w(x_p, y_p)^2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .assembly import UnitMatrices
+from ..elements.hermite_plate import _hermite_1d
+from ..errors import SpecError
+
+ATTACHMENT_PARAMETERS = ("mass", "x", "y", "stiffness")
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A mass [kg] at (x, y) [m] from the plate corner at the origin."""
+
+    mass: float
+    x: float
+    y: float
+    label: str = "point_mass"
+
+
+@dataclass(frozen=True)
+class Suspension:
+    """Equal out-of-plane springs [N/m each] at the given points [m]."""
+
+    stiffness: float
+    points: tuple[tuple[float, float], ...]
+    label: str = "suspension"
+
+
+def check_attachment(attachment, length: float, width: float) -> None:
+    """Reject negative masses or stiffnesses and points off the plate."""
+    if isinstance(attachment, PointMass):
+        if not (np.isfinite(attachment.mass) and attachment.mass >= 0):
+            raise SpecError(f"point mass '{attachment.label}': mass = {attachment.mass!r} kg must not be negative")
+        points = [(attachment.x, attachment.y)]
+    else:
+        if not (np.isfinite(attachment.stiffness) and attachment.stiffness >= 0):
+            raise SpecError(f"suspension '{attachment.label}': stiffness = {attachment.stiffness!r} N/m "
+                            "must not be negative")
+        points = attachment.points
+    for x, y in points:
+        if not (0 <= x <= length and 0 <= y <= width):
+            raise SpecError(f"'{attachment.label}': point ({1e3 * x:g}, {1e3 * y:g}) mm is outside the plate "
+                            f"(0..{1e3 * length:g} x 0..{1e3 * width:g} mm); coordinates are from the corner at the origin")
+
+
+def point_operators(units: UnitMatrices, x: float, y: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Global DOFs of the element holding (x, y) and the rows that evaluate each field and
+    its x-, y-derivatives there: {"u": (n_local,), "u_x": ..., "w_y": ...}."""
+    mesh = units.mesh
+    element, s, t = mesh.locate(x, y)
+    hx, hy = mesh.element_size
+    vx, dx, _ = (a[:, 0] for a in _hermite_1d(np.array([s]), hx))
+    vy, dy, _ = (a[:, 0] for a in _hermite_1d(np.array([t]), hy))
+    corners = units.element_type.CORNERS
+    scalar = {"": [], "_x": [], "_y": []}
+    for i, j in corners:
+        for ax, ay in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            a, b = 2 * i + ax, 2 * j + ay
+            scalar[""].append(vx[a] * vy[b])
+            scalar["_x"].append(dx[a] * vy[b])
+            scalar["_y"].append(vx[a] * dy[b])
+    per_node = len(units.element_type.NODE_DOFS)
+    rows = {}
+    for f, field in enumerate(("u", "v", "w")):
+        for suffix, values in scalar.items():
+            row = np.zeros((4, per_node))
+            row[:, 4 * f : 4 * f + 4] = np.reshape(values, (4, 4))
+            rows[field + suffix] = row.ravel()
+    return units.element_dofs[element], rows
+
+
+def _data_positions(units: UnitMatrices, dofs: np.ndarray) -> np.ndarray:
+    """CSR data positions of the dense block dofs x dofs on the shared pattern."""
+    indices, indptr, _ = units._pattern
+    out = np.empty((len(dofs), len(dofs)), dtype=np.int64)
+    for a, row in enumerate(dofs):
+        columns = indices[indptr[row] : indptr[row + 1]]
+        out[a] = indptr[row] + np.searchsorted(columns, dofs)
+    return out
+
+
+def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.ndarray]:
+    """CSR data (on the shared pattern) of the stiffness and mass the attachments add."""
+    nnz = units._pattern[0].size
+    stiffness, mass = np.zeros(nnz), np.zeros(nnz)
+    for attachment in attachments:
+        if isinstance(attachment, PointMass):
+            dofs, n = point_operators(units, attachment.x, attachment.y)
+            block = attachment.mass * sum(np.outer(n[f], n[f]) for f in ("u", "v", "w"))
+            np.add.at(mass, _data_positions(units, dofs), block)
+        else:
+            for x, y in attachment.points:
+                dofs, n = point_operators(units, x, y)
+                np.add.at(stiffness, _data_positions(units, dofs), attachment.stiffness * np.outer(n["w"], n["w"]))
+    return stiffness, mass
+
+
+def eigenvalue_derivative(units: UnitMatrices, attachment, kind: str, shapes: np.ndarray,
+                          eigenvalues: np.ndarray) -> np.ndarray:
+    """d(omega^2)/dp of every mode for an attachment parameter (mass [kg], x, y [m],
+    stiffness [N/m])."""
+    if isinstance(attachment, PointMass):
+        dofs, n = point_operators(units, attachment.x, attachment.y)
+        local = shapes[dofs]
+        if kind == "mass":
+            return -eigenvalues * sum((n[f] @ local) ** 2 for f in ("u", "v", "w"))
+        suffix = {"x": "_x", "y": "_y"}[kind]
+        slope = sum(2 * (n[f] @ local) * (n[f + suffix] @ local) for f in ("u", "v", "w"))
+        return -eigenvalues * attachment.mass * slope
+    if kind != "stiffness":
+        raise SpecError(f"suspension '{attachment.label}' has no parameter {kind!r}; it has: stiffness")
+    total = np.zeros(shapes.shape[1])
+    for x, y in attachment.points:
+        dofs, n = point_operators(units, x, y)
+        total += (n["w"] @ shapes[dofs]) ** 2
+    return total

@@ -1,0 +1,144 @@
+"""Free-free modal solve: sparse shift-invert Lanczos, rigid-body modes removed."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse.linalg as spla
+
+from .assembly import UnitMatrices
+from ..errors import ModelError
+
+#: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
+RIGID_LEAK = 1e-9
+#: The first elastic omega^2 must exceed this fraction of the first-bending estimate.
+MECHANISM_GAP = 1e-4
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Elastic modes of a free plate, lowest first.
+
+    eigenvalues: omega^2 [rad^2/s^2]; shapes: (n_dofs, m), mass-normalised
+    (phi^T M phi = 1).  Their nodal-pattern labels are in ``fem.solver.mode_shapes``.
+    """
+
+    eigenvalues: np.ndarray
+    shapes: np.ndarray
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        return np.sqrt(self.eigenvalues) / (2 * math.pi)
+
+
+def _first_bending_estimate(coefficients: np.ndarray, mass_per_area: float, span: float) -> float:
+    """A rough omega^2 of the first bending mode, only to place the shift."""
+    d_max = max(coefficients[12], coefficients[14])  # D11, D22
+    return (22.0 / span**2) ** 2 * d_max / mass_per_area
+
+
+def solve_modes(
+    units: UnitMatrices,
+    stiffness_data: np.ndarray,
+    mass_data: np.ndarray,
+    n_modes: int,
+    shift_scale: float,
+    suspended: bool = False,
+) -> Modes:
+    """The lowest ``n_modes`` elastic modes of K phi = omega^2 M phi for a free plate.
+
+    stiffness_data, mass_data: CSR data of K and M on the mesh's shared pattern.
+    shift_scale: an estimate of the first elastic omega^2; the Lanczos shift sits at
+    -0.1 of it, where K - sigma M is positive definite despite the rigid-body modes,
+    so a banded Cholesky factor (LAPACK pbtrf) serves as the shift-invert operator.
+
+    The six rigid-body modes (the element type's fields) are removed by deflation, not
+    by counting: they are checked to be zero-energy fields of K, and the Lanczos
+    iteration runs in their M-orthogonal complement, so exactly six are dropped whatever
+    the plate's scale.  A seventh near-zero mode (a mechanism) is reported as an error.
+    M may be singular (an element's shear-strain DOFs carry no inertia without rotary
+    inertia): shift-invert Lanczos needs only K - sigma M definite and M semi-definite.
+
+    suspended: springs hold some rigid-body motions.  Only the zero-energy combinations
+    are deflated; the others become low suspension modes, which are solved for and
+    dropped by their projection on the rigid-body space (their number is checked).
+    """
+    n_dofs = units.n_dofs
+    stiffness, mass = units.matrix(stiffness_data), units.matrix(mass_data)
+    # M shares K's pattern, but without rotary inertia only u-u, v-v and w-w entries are
+    # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.  (A copy:
+    # the pattern's index arrays are shared by every matrix of the mesh.)
+    mass = mass.copy()
+    mass.eliminate_zeros()
+    all_rigid = units.rigid_body_modes
+    n_suspension = 0
+    if suspended:
+        # Rigid-body combinations by their spring energy (omega^2 of a rigid plate on the springs).
+        energy = all_rigid.T @ (stiffness @ all_rigid)
+        mu, combos = sla.eigh(energy, all_rigid.T @ (mass @ all_rigid))
+        held = mu > RIGID_LEAK * shift_scale
+        n_suspension = int(held.sum())
+        rigid = all_rigid @ combos[:, ~held]
+    else:
+        rigid = all_rigid
+        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (abs(stiffness).max() * np.linalg.norm(rigid, axis=0))
+        if leak.max() > RIGID_LEAK:
+            raise ModelError(
+                f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free plate"
+            )
+    k = n_modes + 2 + n_suspension
+    if k >= n_dofs // 2:
+        raise ModelError(f"mesh too coarse: {n_dofs} DOFs for {n_modes} elastic modes; refine the mesh")
+    m_rigid = mass @ rigid
+    gram = rigid.T @ m_rigid
+
+    def deflate(x: np.ndarray) -> np.ndarray:
+        return x - rigid @ np.linalg.solve(gram, m_rigid.T @ x)
+
+    sigma = -0.1 * shift_scale
+    try:
+        factor = sla.cholesky_banded(
+            units.banded(stiffness_data - sigma * mass_data), lower=False, overwrite_ab=True, check_finite=False
+        )
+    except sla.LinAlgError as exc:
+        raise ModelError(
+            "the stiffness matrix is not positive semi-definite: check the material values and units"
+        ) from exc
+    shift_invert = spla.LinearOperator(
+        (n_dofs, n_dofs),
+        matvec=lambda x: deflate(sla.cho_solve_banded((factor, False), x, check_finite=False)),
+        dtype=float,
+    )
+    start = deflate(np.random.default_rng(0).standard_normal(n_dofs))
+    try:
+        # tol bounds the Ritz-vector residual; eigenvalues converge quadratically in it,
+        # so they come out accurate to ~1e-12 relative.
+        lam, phi = spla.eigsh(
+            stiffness, k=k, M=mass, sigma=sigma, which="LM", v0=start, tol=1e-8, OPinv=shift_invert
+        )
+    except spla.ArpackNoConvergence as exc:
+        raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
+    order = np.argsort(lam)
+    lam, phi = lam[order], phi[:, order]
+    phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
+    if n_suspension:
+        m_all = mass @ all_rigid
+        coupling = m_all.T @ phi
+        share = np.einsum("ik,ik->k", coupling, np.linalg.solve(all_rigid.T @ m_all, coupling))
+        suspension = share > 0.5
+        if suspension.sum() != n_suspension or not suspension[:n_suspension].all():
+            raise ModelError(
+                f"the {n_suspension} suspension modes cannot be told from the elastic ones (found "
+                f"{int(suspension.sum())} rigid-like among the lowest); the suspension is too stiff for a free test"
+            )
+        lam, phi = lam[~suspension], phi[:, ~suspension]
+    lam, phi = lam[:n_modes], phi[:, :n_modes]
+    if lam[0] < MECHANISM_GAP * shift_scale:
+        raise ModelError(
+            f"an elastic mode has near-zero frequency (omega^2 = {lam[0]:.3g}): the model has a mechanism; "
+            "check for a zero modulus or a disconnected layer"
+        )
+    return Modes(lam, phi)
+

@@ -1,0 +1,610 @@
+"""Which physical effects is the model missing?  A forward selection.
+
+The baseline (layer properties fitted, no effect) is compared with refits that switch
+one more effect on, its parameters free together with everything already free.  Each is
+judged by the Bayesian information criterion, BIC = chi^2 + k ln n (chi^2 in units of the
+measurement scatter, k free parameters, n frequencies), so an effect's extra parameters
+must pay for themselves; without a stated scatter, chi^2 is replaced by n ln(RSS / n).
+
+Forward selection: the effect that lowers the criterion most is added, the others are
+tried again on top of it, and so on, until the misfit is at the noise level or nothing
+pays for itself: its gain, divided by the over-dispersion c = max(1, reduced chi^2) the
+refit leaves (a misfit made of model error, not noise, shrinks every chi^2 difference's
+weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the conditioning
+of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
+identifiable and never iterated.  An estimate that is physically unlikely
+(``plausibility``), or whose refit ends singular (``Candidate.singular``), is never
+selected whatever its gain, nor may it keep another candidate from being refitted: it is
+reported as a sign of what is missing (``SIGNS``; ``docs/diagnosis.md`` states every rule
+and threshold).  Implausible estimates are also ranked behind plausible rivals whose
+criterion is within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
+parameters, the one with more of the physics every plate has (``thick_plate`` over
+``transverse_shear``) is preferred unless the other is better by ``COMPLETE_MARGIN``.
+Candidates are refitted with the pairing re-checked at their solution (``repair``), in
+parallel processes when that pays; the selection is finally refitted in full
+(iterations, pairing check), and that refit's own status says whether the data are now
+explained.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import multiprocessing as mp
+import os
+import time
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import pandas as pd
+
+from fem.effects import REGISTRY, effect
+from fem.model import SpecimenModel
+from fem.solver.sensitivity import SINGULAR_ABOVE
+from fem.numbers import finite_or_none
+
+from ..reporting import html_report as h
+from ..fitting.causes import with_causes
+from .compare import Comparison, compare
+from ..fitting.driver import (EFFECT_ITERATIONS, AddedEffect, add_effect, continued, point_mass_hints,
+                      point_mass_starts, prepare_effect, with_determined_shear)
+from ..measurements import Measurements
+from ..engine.parameters import UNITS, display, json_key
+from ..fitting.plausibility import plausible_first
+from ..fitting.precheck import SINGULAR_GROWTH, Precheck
+from ..engine.result import FitResult, FitStatus
+from ..reporting.rounding import percent, status_line, with_std
+from ..engine.ties import Tied
+from ..engine.updating import FitOptions
+
+#: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
+#: strong" evidence, 2 ln B > 10).
+MIN_GAIN = 10.0
+#: An implausible estimate is ranked behind plausible rivals within this many units of c.
+PLAUSIBILITY_MARGIN = 10.0
+#: A candidate's refit: at most this many iterations, and it stops once the misfit falls by
+#: less than 0.1 chi^2 units per step (three in a row): a ranking needs the misfit, not the
+#: last digits of the parameters; the selected effects are refitted in full at the end.
+CANDIDATE_OPTIONS = FitOptions(max_iterations=20, stall_chi2=0.1)
+#: The chosen refit and the final one: to convergence, or until chi^2 falls by less than
+#: 0.01 per step (three in a row) where a weakly determined direction only creeps (its std
+#: then says so).
+FINAL_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS, stall_chi2=0.01)
+#: Effects that are the same physics as a set of others: ``thick_plate`` is shear with
+#: rotary inertia, and the layerwise model has both besides its soft layers' own shear (the
+#: full inertia of its displacement field; it frees the same shear moduli).
+SAME_AS = {"thick_plate": frozenset({"transverse_shear", "rotary_inertia"}),
+           "layerwise": frozenset({"layerwise", "transverse_shear", "rotary_inertia"})}
+#: A candidate that is another one with physics every real plate has besides (rotary
+#: inertia: thick_plate against transverse_shear; a soft layer's own shear: layerwise
+#: against both), with no more free parameters, is preferred unless the lesser one's
+#: criterion is lower by more than this (in units of c; 2 ln B > 6 is Kass and Raftery's
+#: "strong" evidence).  The lesser model is an approximation: where the data cannot tell,
+#: its error is taken up by the moduli (3-D cross-ply reference: G13 23 % low without
+#: rotary inertia; on a soft bond line, G12 2 % = 4 std off with a single shear layer).
+COMPLETE_MARGIN = 6.0
+#: Effects that refine others: tried in a round only when one of those paid for itself in
+#: it (or is selected already).  The layerwise model refines transverse shear where a layer
+#: is much softer in shear than its neighbours (elsewhere it does not apply), and one of its
+#: solves costs 6-18 of the single-layer model's.
+REFINES = {"layerwise": ("transverse_shear", "thick_plate")}
+#: Candidate refits run in parallel processes when there are at least this many in a round
+#: and the baseline fit took at least ``PARALLEL_FROM_S`` (starting a worker costs ~1 s).
+PARALLEL_FROM = 3
+PARALLEL_FROM_S = 0.5
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One effect added to a state of the selection: its refit, the BIC gain over the
+    state (positive = better) and that gain / c (``scaled_gain``, see the module doc)."""
+
+    kind: str
+    note: str
+    added: AddedEffect
+    gain: float
+    scaled_gain: float
+    error: str = ""
+
+    @property
+    def fit(self) -> FitResult | None:
+        return self.added.result
+
+    @property
+    def precheck(self) -> Precheck | None:
+        return self.added.precheck
+
+    @property
+    def plausible(self) -> bool:
+        return not self.added.implausible
+
+    @property
+    def eligible(self) -> bool:
+        """Can be selected: refitted to a finished (converged or poor) fit."""
+        return self.fit is not None and self.fit.finished
+
+    @property
+    def singular(self) -> bool:
+        """The refit ended where the frequencies do not determine its parameters: the
+        condition number at the solution above the paper's limit and ``SINGULAR_GROWTH``
+        times the start's without the effect (as ``precheck`` judges the start)."""
+        check, fit = self.precheck, self.fit
+        if fit is None or check is None:
+            return False
+        at = fit.uncertainty.condition_number
+        return bool(not at <= SINGULAR_ABOVE and not at <= SINGULAR_GROWTH * check.base_condition_number)
+
+    @property
+    def selectable(self) -> bool:
+        """Can be selected: finished, plausible and identifiable at its solution.  An
+        implausible or singular estimate is never an answer, whatever its BIC gain: it is
+        reported as a sign of what is missing (``SIGNS``)."""
+        return self.eligible and self.plausible and not self.singular
+
+    @property
+    def rms_rel_error(self) -> float:
+        return self.fit.rms_rel_error if self.fit else float("nan")
+
+    @property
+    def bic(self) -> float:
+        return self.fit.statistics.bic if self.fit else float("inf")
+
+    def effect_values(self) -> dict[str, float]:
+        """The effect's own parameters in display units (e.g. mass_g, x_mm; a material's
+        shear moduli as 'cfrp.G13_GPa')."""
+        return _values(self.fit, self.added.added) if self.fit else {}
+
+    def effect_std(self) -> dict[str, float | None]:
+        return _values(self.fit, self.added.added, std=True) if self.fit else {}
+
+    def to_dict(self) -> dict:
+        check = self.precheck
+        return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
+                "bic_gain": finite_or_none(self.gain), "gain_over_c": finite_or_none(self.scaled_gain),
+                "status": self.fit.status.value if self.fit else _not_fitted(self),
+                "parameters": self.effect_values(), "std": self.effect_std(),
+                "plausible": self.plausible, "implausible": list(self.added.implausible),
+                "condition_number": finite_or_none(check.condition_number) if check else None,
+                "note": " ".join(x for x in (self.note, self.error) if x)}
+
+
+def _not_fitted(c: Candidate) -> str:
+    """Why a candidate has no refit: its status word."""
+    if not c.added.applicable:
+        return "not_applicable"
+    if c.precheck is not None and c.precheck.singular:
+        return "not_identifiable"
+    return "not_refitted" if c.added.pruned else "failed"
+
+
+def _key(p) -> str:
+    if p.kind in ("angle", "thickness", "G13", "G23"):
+        return f"{p.target}.{json_key(p)}"
+    return json_key(p)
+
+
+def _values(fit: FitResult, parameters, std: bool = False) -> dict:
+    out = {}
+    for p in parameters:
+        value = fit.std(p) if std else fit.value(p)
+        out[_key(p)] = finite_or_none(display(p, value)) if std else display(p, value)
+        if isinstance(p, Tied):  # a follower: its ratio to the leader
+            for follower, ratio in p.followers:
+                out[_key(follower)] = finite_or_none(display(follower, ratio * value)) if std else \
+                    display(follower, ratio * value)
+    return out
+
+
+@dataclass(frozen=True)
+class Step:
+    """One round of the forward selection: from ``start`` (the effects selected so far),
+    every remaining candidate tried (most preferred first); ``chosen`` or None, and why."""
+
+    number: int
+    selected_before: tuple[str, ...]
+    start: FitResult
+    candidates: tuple[Candidate, ...]
+    chosen: Candidate | None
+    reason: str
+    skipped: tuple[str, ...] = ()   # refinements not tried (what they refine did not pay)
+
+    def to_dict(self) -> dict:
+        return {"round": self.number, "with": list(self.selected_before), "rms_rel_error": self.start.rms_rel_error,
+                "candidates": [c.to_dict() for c in self.candidates], "not_tried": list(self.skipped),
+                "chosen": self.chosen.kind if self.chosen else None, "reason": self.reason}
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """The baseline and its residual patterns (``comparison``), the forward selection
+    (``steps``), the first round's ranking (``candidates``: one effect at a time, most
+    preferred first) and the ``final`` refit with the selected effects (None when none)."""
+
+    baseline: FitResult
+    comparison: Comparison
+    candidates: tuple[Candidate, ...]
+    steps: tuple[Step, ...] = ()
+    final: FitResult | None = None
+    seconds: float = float("nan")
+
+    @property
+    def at_noise_level(self) -> bool:
+        return self.comparison.at_noise_level
+
+    @property
+    def selected(self) -> tuple[Candidate, ...]:
+        return tuple(s.chosen for s in self.steps if s.chosen is not None)
+
+    @property
+    def explained(self) -> bool:
+        """The data are explained: at the noise level without effects, or the final refit
+        with the selection converged (its misfit consistent with the scatter)."""
+        return self.at_noise_level or (self.final is not None and self.final.converged)
+
+    @property
+    def verdict(self) -> str:
+        if self.at_noise_level:
+            return "nothing beyond the measurement scatter remains: no effect is needed"
+        if not self.selected:
+            return "no candidate effect explains the misfit well enough to pay for its parameters"
+        final = self.final
+        chain = " + ".join(c.kind for c in self.selected)
+        text = (f"missing: {chain} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
+                f"{100 * final.rms_rel_error:.3g} %, refit {final.status.value})")
+        odd = [c.kind for c in self.selected if not c.plausible]
+        if odd:
+            text += f"; implausible estimate of {', '.join(odd)}: read it as a sign of what is missing, not a value"
+        if not final.converged:
+            text += "; the refit still does not explain the data"
+        return text
+
+    def to_dict(self) -> dict:
+        final = self.final
+        return {
+            "rms_rel_error": self.baseline.rms_rel_error,
+            "reduced_chi2": self.baseline.statistics.reduced_chi2 if self.baseline.statistics.scatter_known else None,
+            "verdict": self.verdict,
+            "at_noise_level": self.at_noise_level,
+            "explained": self.explained,
+            "ranking": [c.to_dict() for c in self.candidates],
+            "selected": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error, "bic_gain": finite_or_none(c.gain),
+                          "parameters": c.effect_values(), "plausible": c.plausible} for c in self.selected],
+            "path": [s.to_dict() for s in self.steps],
+            "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
+            "seconds": finite_or_none(self.seconds),
+        }
+
+    def _repr_html_(self) -> str:
+        """The notebook view: the verdict, every round's candidates and the comparison's
+        tables, drawn by the HTML report's code."""
+        rounds = [(f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
+                   h.table(pd.DataFrame([{"effect": c.kind, "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
+                                          "BIC gain": finite_or_none(c.gain),
+                                          "status": c.fit.status.value if c.fit else _not_fitted(c),
+                                          "parameters": ", ".join(f"{k} = {v:.4g}"
+                                                                  for k, v in c.effect_values().items()),
+                                          "note": " ".join(x for x in (c.note, c.error) if x)}
+                                         for c in s.candidates]), "{:.4g}") + h.paragraph(f"-> {s.reason}"))
+                  for s in self.steps]
+        good = self.explained
+        return h.view("Diagnosis", ("explained" if good else "not explained", self.verdict, good),
+                      rounds + self.comparison.sections())
+
+    def report(self) -> str:
+        base = self.baseline.statistics
+        lines = ["== diagnosis ==", "", self.verdict, "",
+                 f"baseline: RMS relative error {100 * self.baseline.rms_rel_error:.4f} %, "
+                 f"reduced chi^2 {base.reduced_chi2:.3g}"]
+        if self.at_noise_level:
+            lines += ["no effect was refitted: the residual patterns below (a score test) show what each would "
+                      "explain"]
+        for step in self.steps:
+            start = " + ".join(step.selected_before) or "the baseline"
+            lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %)",
+                      f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s}  status / parameters"]
+            for c in step.candidates:
+                values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
+                gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
+                status = c.fit.status.value if c.fit else _not_fitted(c).replace("_", " ")
+                mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
+                lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain}  {status}  {values}{mark}".rstrip())
+                if not c.fit:
+                    lines.append(f"  {'':17s} {c.error}")
+            if step.skipped:
+                refined = {r for k in step.skipped for r in REFINES[k]}
+                lines.append(f"  not tried: {', '.join(step.skipped)} (refines {' or '.join(sorted(refined))}, "
+                             "which did not pay)")
+            lines.append(f"  -> {step.reason}")
+        final = self.final
+        if final is not None:
+            lines += ["", f"refit with {' + '.join(c.kind for c in self.selected)}",
+                      f"  {status_line(final.status.value, final.message)}",
+                      f"  RMS relative error {percent(final.rms_rel_error, 3)}"]
+            added = [p for p in final.parameters if p not in self.baseline.parameters]
+            for p in added:
+                shown = with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])
+                lines.append(f"  {p.name:40s} {shown}")
+            notes = [text for _, text in final.effect_notes]
+            lines += [f"  - {text}" for text in notes]
+        if math.isfinite(self.seconds):
+            lines += ["", f"({self.seconds:.1f} s)"]
+        return "\n".join(lines) + "\n\n" + self.comparison.report()
+
+
+#: What an implausible or singular estimate that would pay for itself is a sign of (it is
+#: reported, never selected): the misfit's pattern is real, the effect is the wrong one.
+SIGNS = {"thickness": "the misfit wants the neutral axis or the bending stiffness distribution to move: transverse "
+                      "shear or a layerwise effect?",
+         "point_mass": "the misfit grows with the mode number like shear, or a sensor heavier than plausible: "
+                       "transverse shear, or a mass measured and given in the spec?",
+         "orientation": "the twisting modes are off: a turned layer, or shear coupling?",
+         "suspension": "the lowest modes are off: the suspension, or a missing shear effect?",
+         "adhesive": "the bonded configurations are off: the bond line's shear (layerwise)?"}
+
+
+def _signs(ordered, best) -> str:
+    """Candidates not selectable (implausible, or singular at their solution) that explain
+    more than the chosen one would: reported as signs."""
+    floor = best.fit.statistics.sum_squares if best is not None else float("inf")
+    out = []
+    for c in ordered:
+        if c.eligible and not c.selectable and c.fit.statistics.sum_squares < floor and c.scaled_gain > MIN_GAIN:
+            why = "implausible" if not c.plausible else "singular at its solution"
+            out.append(f"{c.kind} would pay (gain / c = {c.scaled_gain:.1f}) but is {why}, not taken: "
+                       + SIGNS.get(c.kind, "read it as a sign of what is missing"))
+    return ("; " + "; ".join(out)) if out else ""
+
+
+def _canonical(kinds) -> frozenset:
+    out = set()
+    for k in kinds:
+        out |= SAME_AS.get(k, {k})
+    return frozenset(out)
+
+
+def _refine(kind: str, kinds, selected, candidates) -> bool:
+    """Is refinement ``kind`` worth a refit in this round: what it refines is not among the
+    candidates at all, or is selected already, or paid for itself in this round (even at
+    the noise level: the refinement may be the more complete physics, ``COMPLETE_MARGIN``)."""
+    refined = set(REFINES[kind])
+    if not refined & set(kinds) or refined & set(selected):
+        return True
+    return any(c.scaled_gain > MIN_GAIN for c in candidates if c.kind in refined)
+
+
+def _refined_start(kind: str, candidates) -> FitResult | None:
+    """The fit a refinement's refit starts from: the lowest-criterion finished candidate
+    among the effects ``kind`` refines (None: from the round's start)."""
+    refined = [c for c in candidates if c.kind in REFINES[kind] and c.selectable]
+    return min(refined, key=lambda c: c.bic).fit if refined else None
+
+
+def _more_complete(best: Candidate | None, ordered, selected, c_hat: float) -> Candidate | None:
+    """``best``, or an eligible, plausible candidate whose physics strictly contains it
+    (with what is ``selected``) with the same number of free parameters and a criterion
+    within ``COMPLETE_MARGIN`` x ``c_hat`` of it."""
+    if best is None:
+        return None
+    mine = _canonical(list(selected) + [best.kind])
+    fuller = [c for c in ordered if c is not best and c.selectable
+              and _canonical(list(selected) + [c.kind]) > mine and c.fit.statistics.k == best.fit.statistics.k
+              and c.bic - best.bic < COMPLETE_MARGIN * c_hat]
+    return min(fuller, key=lambda c: c.bic) if fuller else best
+
+
+def _nested(a: str, b: str, selected) -> bool:
+    """The physics of one candidate contains the other's (with what is selected), e.g.
+    transverse_shear and thick_plate: not rivals but the same explanation, one with a part
+    more."""
+    x, y = _canonical(list(selected) + [a]), _canonical(list(selected) + [b])
+    return x <= y or y <= x
+
+
+def _eligible_kinds(kinds: list[str], selected: list[str], closed: set[str]) -> list[str]:
+    """The candidates worth a refit on top of ``selected``: not closed (not identifiable,
+    nothing to act on), changing the model, and not the same as an earlier one."""
+    now = _canonical(selected)
+    seen, out = set(), []
+    for k in kinds:
+        if k in selected or k in closed:
+            continue
+        then = _canonical(selected + [k])
+        if then == now or then in seen:
+            continue
+        seen.add(then)
+        out.append(k)
+    return out
+
+
+def _over_dispersion(fit: FitResult) -> float:
+    st = fit.statistics
+    return max(1.0, st.reduced_chi2) if st.scatter_known and st.dof > 0 else 1.0
+
+
+def _candidate(state: FitResult, added: AddedEffect) -> Candidate:
+    fit = added.result
+    if fit is None:
+        return Candidate(added.kind, "", added, float("-inf"), float("-inf"), added.error)
+    gain = state.statistics.bic - fit.statistics.bic
+    st, now = fit.statistics, state.statistics
+    if st.scatter_known:
+        scaled = (now.sum_squares - st.sum_squares) / _over_dispersion(fit) - (st.k - now.k) * math.log(st.n)
+    else:
+        scaled = gain
+    note = "; ".join(added.notes) if fit.finished else fit.message
+    return Candidate(added.kind, note, added, gain, scaled)
+
+
+def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
+    if requested is not None:
+        return max(1, requested)
+    if tasks < PARALLEL_FROM or baseline_seconds < PARALLEL_FROM_S:
+        return 1
+    return max(1, min(2, os.cpu_count() or 1, tasks))
+
+
+def _add(job: dict):
+    """One candidate's refit, ``add_effect(**job)`` (module level: runs in a worker process)."""
+    return add_effect(**job)
+
+
+def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal, hints, pool,
+         n_workers: int, starts: dict | None = None) -> list[Candidate]:
+    """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
+    (here), then refitted most promising first (by the linearised bound), each only when
+    it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
+    pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from."""
+    out, ready = [], []
+    for kind in kinds:
+        prepared = prepare_effect(state, kind, hints, (starts or {}).get(kind))
+        if isinstance(prepared, AddedEffect):
+            out.append(_candidate(state, prepared))
+        else:
+            ready.append(prepared)
+    ready.sort(key=lambda r: -r.bound)
+    for i in range(0, len(ready), n_workers if pool else 1):
+        # Only an answer may prune: an implausible estimate that explains much must not
+        # keep the right physics from being refitted.
+        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.selectable]
+        below = max(explained) if explained else None
+        jobs = [dict(state=state, kind=r.kind, measurements=measurements, nominal=nominal, hints=hints,
+                     settle="quick", skip_singular=True, options=CANDIDATE_OPTIONS, prune_below=below, prepared=r)
+                for r in ready[i:i + (n_workers if pool else 1)]]
+        out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
+    return out
+
+
+def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] | None = None,
+             progress: Callable[[str], None] | None = None, workers: int | None = 1) -> Diagnosis:
+    """Find the effects the model misses: forward selection over ``kinds`` (default: every
+    registered effect), see the module doc.  ``workers``: processes for the candidate
+    refits (1: all here, the default; None: 2 when a round has several and the fit is not
+    trivial, as the command line does).  Workers are spawned and import the main module:
+    a script that asks for them needs the ``if __name__ == "__main__":`` guard."""
+    kinds = list(kinds) if kinds is not None else list(REGISTRY)
+    for kind in kinds:
+        effect(kind)  # unknown kinds fail before any work
+    started = time.perf_counter()
+    say = progress or (lambda text: None)
+    comparison = compare(model, measurements)
+    baseline = comparison.fitted
+    baseline_seconds = time.perf_counter() - started
+    if comparison.at_noise_level:
+        say("the baseline fits at the noise level: no effect refitted")
+        return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
+    nominal = model.specimen
+    state, selected, steps, closed = baseline, [], [], set()
+    pool = None
+    try:
+        for number in range(1, len(kinds) + 1):
+            trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
+            if not trying:
+                steps.append(Step(number, tuple(c.kind for c in selected), state, (), None,
+                                  "stop: no candidate left to try"))
+                break
+            hints = point_mass_starts(model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy) \
+                if state is baseline else point_mass_hints(state)
+            n_workers = _workers(workers, len(trying), baseline_seconds)
+            if n_workers > 1 and pool is None:
+                pool = cf.ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"))
+
+            def run(batch, starts=None):  # called in this round only: the loop variables are this round's
+                say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023
+                    + (f" in {n_workers} processes" if pool else ""))  # noqa: B023
+                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
+
+            names = [c.kind for c in selected]
+            candidates = run([k for k in trying if k not in REFINES])
+            refining = [k for k in trying if k in REFINES and _refine(k, kinds, names, candidates)]
+            skipped = [k for k in trying if k in REFINES and k not in refining]
+            if refining:
+                # A refinement starts where the best of what it refines ended (the layerwise
+                # model's solves cost 6-18 of the single layer's: few iterations from there).
+                candidates += run(refining, {k: _refined_start(k, candidates) for k in refining})
+            candidates = _continue_unfinished(candidates, measurements, state, say)
+            closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
+            finished = [c for c in candidates if c.eligible]
+            c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
+            ordered = plausible_first([c for c in candidates if c.fit is not None], c_hat, PLAUSIBILITY_MARGIN,
+                                      key=lambda c: c.bic, judged=lambda c: c.plausible,
+                                      related=lambda a, b: _nested(a.kind, b.kind, names))  # noqa: B023 (used now)
+            ordered += [c for c in candidates if c.fit is None]
+            best = next((c for c in ordered if c.selectable), None)
+            plausible_best = best
+            best = _more_complete(best, ordered, names, c_hat)
+            if best is not plausible_best:
+                ordered = [best] + [c for c in ordered if c is not best]
+            for c in candidates:
+                say(f"  {c.kind}: " + (f"RMS {100 * c.rms_rel_error:.4f} %, BIC gain {c.gain:.1f}" if c.fit
+                                       else c.error) + f" ({c.added.seconds:.1f} s)")
+            before = tuple(c.kind for c in selected)
+            if best is None or not best.scaled_gain > MIN_GAIN:
+                reason = ("stop: no plausible, identifiable candidate could be refitted" if best is None else
+                          f"stop: the best, {best.kind}, does not pay for itself (gain / c = {best.scaled_gain:.1f} "
+                          f"<= {MIN_GAIN:g})")
+                reason += _signs(ordered, best)
+                steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped)))
+                break
+            reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
+            lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
+            if best is not plausible_best:
+                reason += (f"; preferred to {plausible_best.kind}: the same free parameters and physics a real plate "
+                           f"has besides, and {plausible_best.kind}'s criterion is only "
+                           f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within {COMPLETE_MARGIN:g}")
+            elif lowest is not best:
+                reason += (f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
+                           "whose estimate is implausible or singular")
+            reason += _signs(ordered, best)
+            # The chosen refit is taken to convergence (the candidates stopped once their misfit
+            # settled) before the next round looks again.
+            polished = continued(best.fit, measurements, FINAL_OPTIONS)
+            polished, notes = with_determined_shear(polished, measurements, nominal, FINAL_OPTIONS)
+            if polished.finished and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares):
+                added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
+                                added=tuple(p for p in polished.parameters if p not in state.parameters))
+                best = _candidate(state, added)
+                ordered = [best if c.kind == best.kind else c for c in ordered]
+            steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped)))
+            selected.append(best)
+            state = best.fit
+            if state.statistics.consistent:
+                steps.append(Step(number + 1, tuple(c.kind for c in selected), state, (), None,
+                                  "stop: the misfit is at the noise level"))
+                break
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    final = _final(state, measurements, baseline, selected, say) if selected else None
+    first = steps[0].candidates if steps else ()
+    return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started)
+
+
+def _continue_unfinished(candidates: list[Candidate], measurements: Measurements, state: FitResult,
+                         say) -> list[Candidate]:
+    """Candidates where one that stopped at the iteration limit with a lower criterion than
+    every finished one (its misfit still falling) is continued, each at most once."""
+    candidates = list(candidates)
+    for _ in range(len(candidates)):
+        ranked = sorted((c for c in candidates if c.fit is not None), key=lambda c: c.bic)
+        if not ranked or ranked[0].fit.status is not FitStatus.NOT_CONVERGED:
+            break
+        c = ranked[0]
+        say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
+        fit = continued(c.fit, measurements, replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS))
+        extended = _candidate(state, replace(c.added, result=fit))
+        candidates[candidates.index(c)] = extended
+        if not extended.eligible:
+            break
+    return candidates
+
+
+def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:
+    """The selection refitted in full: iterations to convergence and the whole pairing
+    check; its status is its own (converged only when consistent with the scatter)."""
+    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
+    result = with_causes(continued(state, measurements, FINAL_OPTIONS, settle=True))
+    notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
+    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+                   effect_notes=notes, baseline=baseline)
+
+
+__all__ = ["Candidate", "Diagnosis", "Step", "diagnose", "MIN_GAIN", "PLAUSIBILITY_MARGIN"]

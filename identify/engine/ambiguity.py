@@ -1,0 +1,328 @@
+"""What frequencies alone cannot decide: which of two close modes is which, and the
+square plate's E1 <-> E2 mirror.
+
+Close pairs.  On a near-square plate the (1,2)/(2,1) pair may be 0.05 % apart; with one
+such pair per configuration each of the 2^k assignments can be fitted, giving twin
+solutions that differ by percents in E1, E2 and nu12.  ``settle_pairings`` refits every
+assignment of the unlabelled close pairs (and the other pairings the solution suggests),
+keeps the lowest misfit and returns the others that fit within the scatter, so the user
+learns that only mode shapes (a ``label`` column) can decide.
+
+The mirror.  When a 90-degree turn maps every configuration onto itself with only the
+identified materials' axes exchanged, E1 <-> E2 (nu12 -> nu21) of all identified
+materials together changes no frequency; the answer is oriented like the start values.
+"""
+from __future__ import annotations
+
+import itertools
+from typing import Callable
+
+import numpy as np
+
+from fem.solver.mode_shapes import pattern
+from fem.specimen import Parameter
+
+from .objective import Evaluation, Objective
+from .pairing import ModePairing
+
+#: Adjacent measured modes closer than this (relative) may be paired either way round:
+#: every assignment of such pairs is refitted.
+CLOSE_MODES = 0.01
+#: Adjacent modes closer than this are also tried swapped, one pair at a time.
+NEAR_MODES = 0.03
+#: Up to this many close pairs every assignment (2^k) is refitted; beyond, single swaps.
+MAX_EXHAUSTIVE_PAIRS = 4
+#: Twins: other assignments whose chi^2 is within this of the best (about 2 std).
+TWIN_CHI2 = 4.0
+#: Each alternative pairing is first refitted this many iterations; those then more than
+#: ``SCREEN_CHI2`` above the best are dropped (a twin is within 4 after converging; from a
+#: re-paired state Gauss-Newton gets near in 2-4 steps), the rest continue to
+#: ``MAX_REFIT_ITERATIONS``.
+SCREEN_ITERATIONS = 4
+SCREEN_CHI2 = 100.0
+MAX_REFIT_ITERATIONS = 30
+#: Rounds of the search over pairings (each from the best found so far).
+SETTLE_ROUNDS = 4
+
+
+def close_pairs(objective: Objective) -> list[tuple[int, int]]:
+    """Rows of adjacent measured modes closer than ``CLOSE_MODES`` with no labels."""
+    table = objective.measurements.table
+    pairs = []
+    for rows in objective.rows.values():
+        for a, b in zip(rows[:-1], rows[1:]):
+            ta, tb = table.iloc[a], table.iloc[b]
+            if tb["mode"] == ta["mode"] + 1 and not ta["label"] and not tb["label"] \
+                    and tb["frequency_hz"] / ta["frequency_hz"] - 1 < CLOSE_MODES:
+                pairs.append((int(a), int(b)))
+    return pairs
+
+
+def near_pairs(objective: Objective) -> list[tuple[int, int]]:
+    """Adjacent unlabelled measured modes from ``CLOSE_MODES`` to ``NEAR_MODES`` apart: a
+    start model off by a few per cent can have them the other way round (a CFRP plate's
+    pair 1.2 % apart was), and the fit may then settle on a twin."""
+    table = objective.measurements.table
+    pairs = []
+    for rows in objective.rows.values():
+        for a, b in zip(rows[:-1], rows[1:]):
+            ta, tb = table.iloc[a], table.iloc[b]
+            gap = tb["frequency_hz"] / ta["frequency_hz"] - 1
+            if not ta["label"] and not tb["label"] and CLOSE_MODES <= gap < NEAR_MODES:
+                pairs.append((int(a), int(b)))
+    return pairs
+
+
+def describe_pairs(objective: Objective, pairs) -> str:
+    table = objective.measurements.table
+    return ", ".join(f"{table['configuration'].iloc[a]} {table['mode'].iloc[a]}/{table['mode'].iloc[b]}"
+                     for a, b in pairs)
+
+
+def swapped(objective: Objective, e: Evaluation, rows: tuple[int, int]) -> Evaluation:
+    """The same state with the model partners of two measured rows exchanged."""
+    configuration = objective.measurements.table["configuration"].iloc[rows[0]]
+    local = [int(np.flatnonzero(objective.rows[configuration] == r)[0]) for r in rows]
+    pairing = e.pairings[configuration]
+    indices = pairing.indices.copy()
+    indices[local] = indices[local[::-1]]
+    shapes = pairing.shapes.copy()
+    shapes[:, local] = shapes[:, local[::-1]]
+    pairings = dict(e.pairings)
+    pairings[configuration] = ModePairing(configuration, indices, shapes)
+    model_hz, derivatives = e.model_hz.copy(), e.derivatives.copy()
+    model_hz[list(rows)] = model_hz[list(rows[::-1])]
+    derivatives[list(rows)] = derivatives[list(rows[::-1])]
+    return Evaluation(e.values, model_hz, derivatives, pairings, e.model)
+
+
+def mirror_symmetric(objective: Objective) -> bool:
+    """True when a 90-degree turn maps every configuration onto itself with only the
+    identified materials' axes exchanged: a square plate, layer angles 0 or 90 deg,
+    known materials in-plane isotropic, E1, E2 and nu12 of every identified material free,
+    and no measured label that tells x from y (a (1,2) turns into a (2,1))."""
+    sp = objective.model.specimen
+    if abs(sp.length - sp.width) > 1e-9 * sp.length:
+        return False
+    for label in objective.measurements.table["label"]:
+        shape = pattern(label) if label else None
+        if shape is not None and abs(float(np.sum(shape * shape.T))) < 1 - 1e-9:
+            return False
+    kinds = {p.kind for p in objective.parameters}
+    if not kinds <= {"E1", "E2", "G12", "nu12", "density"}:
+        return False
+    identified = {p.target for p in objective.parameters}
+    for layer in sp.all_layers():
+        if abs(np.sin(2 * layer.angle)) > 1e-12:
+            return False
+        m = layer.material
+        if m.name not in identified and abs(m.E1 - m.E2) > 1e-12 * m.E1:
+            return False
+    return all({Parameter(k, t) for k in ("E1", "E2", "nu12")} <= set(objective.parameters) for t in identified)
+
+
+def mirrored(objective: Objective, values: np.ndarray) -> np.ndarray:
+    """Values with E1 and E2 exchanged and nu12 -> nu21 for every identified material."""
+    index = {p: i for i, p in enumerate(objective.parameters)}
+    out = values.copy()
+    for p, i in index.items():
+        if p.kind == "E1":
+            j = index[Parameter("E2", p.target)]
+            out[i], out[j] = values[j], values[i]
+            n = index[Parameter("nu12", p.target)]
+            out[n] = values[n] * values[j] / values[i]
+    return out
+
+
+def _anisotropy_sign(objective: Objective, values: np.ndarray) -> float:
+    """sign(D11 - D22) of the original plate with these values."""
+    specimen = objective.space.apply(objective.model.specimen, values)
+    d = specimen.laminate(specimen.configurations[0].name).stiffness
+    return float(np.sign(d[12] - d[14]))
+
+
+def oriented_like_start(objective: Objective, e: Evaluation) -> Evaluation:
+    """The state or its exact mirror, whichever has D11 - D22 of the start's sign."""
+    start = np.array([objective.model.value(p) for p in objective.parameters])
+    if _anisotropy_sign(objective, e.values) * _anisotropy_sign(objective, start) >= 0:
+        return e
+    mirror = objective.evaluate(mirrored(objective, e.values), None)
+    # An exact mirror fits exactly as well; anything else is not the mirror: keep the state.
+    return mirror if objective.cost(mirror) <= objective.cost(e) * (1 + 1e-6) + 1e-12 else e
+
+
+def same_or_mirror(objective: Objective, a: Evaluation, b: Evaluation, tolerance: float = 1e-4) -> bool:
+    def close(x, y):
+        return bool(np.all(np.abs(x - y) < tolerance * np.maximum(np.abs(y), 1e-300)))
+
+    return close(a.values, b.values) or (mirror_symmetric(objective) and close(mirrored(objective, a.values), b.values))
+
+
+def lone_close_modes(objective: Objective, e: Evaluation) -> list[tuple[int, int]]:
+    """(row, model mode index): a measured unlabelled mode paired with a model mode whose
+    neighbour, closer than ``CLOSE_MODES``, is paired with nothing: one peak where two
+    modes lie (a pair merged in the spectrum, or one of them at a node of the sensor),
+    which frequencies alone cannot assign."""
+    table = objective.measurements.table
+    model = objective.solved.with_specimen(e.model.specimen)
+    out = []
+    for name, rows in objective.rows.items():
+        f = model.solve(name).frequencies_hz
+        used = set(e.pairings[name].indices.tolist())
+        for row, j in zip(rows, e.pairings[name].indices):
+            if table["label"].iloc[row]:
+                continue
+            for other in (j - 1, j + 1):
+                if 0 <= other < len(f) and other not in used and abs(f[other] / f[j] - 1) < CLOSE_MODES:
+                    out.append((int(row), int(other)))
+    return out
+
+
+def moved(objective: Objective, e: Evaluation, row: int, index: int) -> Evaluation:
+    """The state with measured ``row`` paired with model mode ``index`` instead."""
+    configuration = objective.measurements.table["configuration"].iloc[row]
+    local = int(np.flatnonzero(objective.rows[configuration] == row)[0])
+    pairings = dict(e.pairings)
+    indices = pairings[configuration].indices.copy()
+    indices[local] = index
+    pairings[configuration] = ModePairing(configuration, indices)
+    return objective.evaluate(e.values, pairings, track=False)
+
+
+def _describe(objective: Objective, kind: str, what) -> str:
+    if kind == "swap":
+        return f"close modes {describe_pairs(objective, [what])}"
+    row, index = what
+    table = objective.measurements.table
+    return (f"{table['configuration'].iloc[row]} {table['frequency_hz'].iloc[row]:.2f} Hz as model mode {index + 1} "
+            "(two modes lie there, one peak)")
+
+
+def beneficial_swaps(objective: Objective, e: Evaluation) -> list[tuple[int, int]]:
+    """Adjacent unlabelled measured modes of a configuration whose model partners, swapped,
+    lower the misfit at ``e``: equal and opposite residuals, the sign of a pair paired the
+    wrong way round."""
+    table = objective.measurements.table
+    measured, sigma, model = objective.measured_hz, objective.sigma, e.model_hz
+    out = []
+    for rows in objective.rows.values():
+        for a, b in zip(rows[:-1], rows[1:]):
+            if table["label"].iloc[a] or table["label"].iloc[b]:
+                continue
+            now = ((model[a] - measured[a]) / sigma[a]) ** 2 + ((model[b] - measured[b]) / sigma[b]) ** 2
+            swapped_cost = ((model[b] - measured[a]) / sigma[a]) ** 2 + ((model[a] - measured[b]) / sigma[b]) ** 2
+            if swapped_cost < now - 1e-9 * max(now, 1e-300):
+                out.append((int(a), int(b)))
+    return out
+
+
+def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) -> list[tuple[Evaluation, str]]:
+    """The re-paired states to try from ``current`` (see ``settle_pairings``)."""
+    pairs = close_pairs(objective)
+    lone = lone_close_modes(objective, current)
+    items = [("swap", rows) for rows in pairs] + [("move", move) for move in lone]
+    out = []
+    if len(items) <= MAX_EXHAUSTIVE_PAIRS:
+        combos = [c for k in range(1, len(items) + 1) for c in itertools.combinations(items, k)]
+        if symmetric and not lone and items:
+            # Swapping a set of pairs or all the others gives mirror images (same misfit):
+            # refit one of each.
+            combos = [c for c in combos if items[0] not in c]
+    else:
+        combos = [(item,) for item in items]
+    for combo in combos:
+        state = current
+        for kind, what in combo:
+            state = swapped(objective, state, what) if kind == "swap" else moved(objective, state, *what)
+        out.append((state, "; ".join(_describe(objective, kind, what) for kind, what in combo)))
+    fresh = objective.evaluate(current.values, None)
+    if any(np.any(fresh.pairings[c].indices != current.pairings[c].indices) for c in objective.configurations):
+        out.append((fresh, "the pairing made afresh at the solution (by rank and label)"))
+    near = near_pairs(objective)
+    out += [(swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])}") for rows in near]
+    out += [(swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])} (equal and opposite "
+                                                "residuals)")
+            for rows in beneficial_swaps(objective, current) if rows not in pairs and rows not in near]
+    return out
+
+
+def settle_pairings(objective: Objective, current: Evaluation, history: list,
+                    refit: Callable[[Evaluation, list, int], tuple[Evaluation, object]]):
+    """Check the pairing at the solution and refit the alternatives frequencies cannot
+    rule out:
+
+    - every other assignment of the close unlabelled pairs (twins, see the module doc),
+      and of a lone measured mode to the close model mode beside it that no measured
+      mode takes (one peak where two modes lie); with more than ``MAX_EXHAUSTIVE_PAIRS``
+      of these, one at a time;
+    - each pair of adjacent unlabelled modes up to ``NEAR_MODES`` apart, swapped;
+    - the pairing made afresh at the solution (by rank and label), when the one followed
+      by mode shapes from the start differs (the start may have had two modes in the
+      other order than the solution);
+    - each swap of two adjacent unlabelled modes that lowers the misfit at the solution.
+
+    Each is screened with ``SCREEN_ITERATIONS`` and the promising ones refitted to
+    convergence; when one fits better, the search goes on from it (at most
+    ``SETTLE_ROUNDS`` rounds), so several changes that must go together are found one by
+    one.  ``refit(state, history, max_iterations)`` iterates from a state, appending to
+    ``history``, and returns (state, ``updating.Stop``).  Returns (best state, what was
+    re-paired or '', notes, every other converged pairing as (values, chi^2 above the
+    best)).
+    """
+    symmetric = mirror_symmetric(objective)
+    unit = objective.statistics(current).chi2_unit
+    outcomes = [(current, history[:], "")]
+    best = outcomes[0]
+    for _ in range(SETTLE_ROUNDS):
+        candidates = _alternatives(objective, best[0], symmetric)
+        if not candidates:
+            break
+        # Screen every alternative with a few iterations; continue those that can still
+        # fit about as well as the best (a twin converges fast from the re-paired state;
+        # the others creep towards misfits far above it).
+        screened = []
+        for state, what in candidates:
+            branch = best[1][:]
+            alternative, stop = refit(state, branch, SCREEN_ITERATIONS)
+            screened.append((alternative, branch, "; ".join(w for w in (best[2], what) if w), stop))
+        best_cost = min([objective.cost(best[0])] + [objective.cost(x[0]) for x in screened])
+        for alternative, branch, what, stop in screened:
+            if 2 * (objective.cost(alternative) - best_cost) > SCREEN_CHI2 * unit:
+                continue
+            if stop.name == "MAX_ITERATIONS":
+                alternative, stop = refit(alternative, branch, MAX_REFIT_ITERATIONS)
+            if stop.converged and not any(same_or_mirror(objective, alternative, o[0]) for o in outcomes):
+                outcomes.append((alternative, branch, what))
+        better = min(outcomes, key=lambda o: objective.cost(o[0]))
+        if objective.cost(better[0]) >= objective.cost(best[0]) * (1 - 1e-9):
+            break
+        best = better
+    state, branch, what = best
+    notes = []
+    if symmetric:
+        state = oriented_like_start(objective, state)
+    if what:
+        history[:] = branch
+        notes.append(f"re-paired {what}: lower misfit than the pairing followed from the start")
+    if symmetric:
+        notes.append("square plate, known layers in-plane isotropic: exchanging E1 and E2 (nu12 -> nu21) of all "
+                     "identified materials changes no frequency; the orientation of the start values "
+                     "(sign of D11 - D22) is given. Mode-shape labels or a non-square plate remove this ambiguity")
+    unit = objective.statistics(state).chi2_unit
+    others = [(o[0], o[2], 2 * (objective.cost(o[0]) - objective.cost(best[0])) / unit) for o in outcomes
+              if o is not best and not same_or_mirror(objective, o[0], state)]
+    twins = [o for o in others if o[2] < TWIN_CHI2]
+    if twins:
+        scale = np.maximum(np.abs(state.values), 1e-300)
+        spread = np.max(np.abs([(t[0].values - state.values) / scale for t in twins]), axis=0)
+        worst = np.argsort(-spread)[:3]
+        names = ", ".join(f"{objective.parameters[i].name} {100 * spread[i]:.2g} %" for i in worst)
+        alternatives = "; ".join(t[1] or "the pairing followed from the start" for t in twins)
+        notes.append(f"{len(twins)} other pairing(s) fit within the scatter ({alternatives}): twin solutions; "
+                     f"largest differences: {names}; give mode-shape labels (a 'label' column) for these modes to "
+                     "decide")
+    # Every other pairing that converged enters the uncertainty, weighted by its fit.
+    return state, what, notes, [(o[0].values, o[2]) for o in others]
+
+
+__all__ = ["CLOSE_MODES", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped", "beneficial_swaps"]

@@ -1,0 +1,146 @@
+"""The objective of the multi-model updating: the model evaluated at parameter values,
+its modes paired with the measured ones, the weighted residuals and their Jacobian.
+
+All configurations are evaluated together (paper eqs. 12-14): the paired model
+frequencies of every configuration are stacked in measurement-row order, with their
+exact derivatives, so the global sensitivity matrix is one array.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from fem.model import SpecimenModel
+from fem.specimen import Parameter
+
+from ..measurements import Measurements
+from .pairing import ModePairing
+from .parameters import ParameterSpace
+from . import ties
+from .statistics import FitStatistics, weighted_residuals
+
+#: Singular values of the Jacobian below this fraction of the largest span its null
+#: space: the pseudo-inverse of the paper's eq. 15 drops them.
+NULL_SINGULAR_VALUE = 1e-12
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The model at one set of parameter values, paired with the measurements."""
+
+    values: np.ndarray
+    model_hz: np.ndarray            # paired model frequencies, measurement row order
+    derivatives: np.ndarray | None  # d f / d p of the paired modes (rows x parameters); None: not computed
+    pairings: dict[str, ModePairing]
+    model: SpecimenModel
+
+
+def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes: int = 3) -> SpecimenModel:
+    """The model as the updating solves it: the mesh the measured modes need (the default
+    rule for the highest measured rank) and ``extra_modes`` more modes, so a mode may be
+    followed when it moves past the last measured one."""
+    highest = int(measurements.table["mode"].max())
+    mesh = model.with_options(modes=highest).mesh
+    return model.with_options(modes=highest + extra_modes, divisions=max(mesh.nx, mesh.ny))
+
+
+class Objective:
+    """Evaluates the model for parameter values and pairs its modes with the measurements."""
+
+    def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
+        self.model = model
+        self.measurements = measurements
+        self.space = ParameterSpace.of(parameters, model.specimen)
+        table = measurements.table
+        self.configurations = measurements.configurations
+        self.solved = solving_model(model, measurements, extra_modes)
+        self.measured_hz = table["frequency_hz"].to_numpy()
+        self.sigma = table["std_hz"].to_numpy() if measurements.has_std else self.measured_hz.copy()
+        self.rows = {c: np.flatnonzero(table["configuration"].to_numpy() == c) for c in self.configurations}
+
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        return self.space.parameters
+
+    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True,
+                 differentiate: bool = True) -> Evaluation:
+        """The model at ``values``; modes paired afresh (``pairings`` None: by rank or
+        label), followed from the previous pairings by their shapes, or (``track``
+        False) paired with the same model modes as ``pairings`` say.  Without
+        ``differentiate`` the sensitivities are left out (a trial step that may be
+        rejected; ``differentiated`` adds them)."""
+        model = self.solved.with_specimen(ties.apply(self.model.specimen, self.space.parameters, values))
+        weight = None
+        model_hz = np.empty(len(self.measured_hz))
+        derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
+        new_pairings = {}
+        for name in self.configurations:
+            solution = model.solve(name)
+            rows = self.rows[name]
+            group = self.measurements.table.iloc[rows]
+            previous = None if pairings is None else pairings[name].shapes
+            if previous is None or (track and previous.shape[0] != solution.modes.shapes.shape[0]):
+                # Afresh; also when the pairing to follow is of another model (another plate theory).
+                pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist())
+            elif not track:
+                indices = pairings[name].indices
+                pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])
+            else:
+                units = solution.units
+                if weight is None or weight.shape[0] != units.n_dofs:  # the layerwise DOFs differ per stack
+                    weight = units.first_unit_mass
+                pairing = pairings[name].track(solution.modes, weight)
+            new_pairings[name] = pairing
+            model_hz[rows] = solution.frequencies_hz[pairing.indices]
+            if differentiate:
+                derivatives[rows] = ties.derivatives(solution, self.space.parameters)[pairing.indices]
+        return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(model.specimen))
+
+    def differentiated(self, e: Evaluation) -> Evaluation:
+        """``e`` with its sensitivities (the solves are cached: no new eigen-solve)."""
+        if e.derivatives is not None:
+            return e
+        model = self.solved.with_specimen(e.model.specimen)
+        derivatives = np.empty((len(self.measured_hz), len(e.values)))
+        for name in self.configurations:
+            solution = model.solve(name)
+            derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[e.pairings[name].indices]
+        return replace(e, derivatives=derivatives)
+
+    def residual(self, e: Evaluation) -> np.ndarray:
+        """Weighted residuals (model - measured) / sigma."""
+        return weighted_residuals(e.model_hz, self.measurements)
+
+    def jacobian(self, e: Evaluation) -> np.ndarray:
+        """d residual / d z."""
+        return e.derivatives * self.space.dvalue_dz(e.values)[None, :] / self.sigma[:, None]
+
+    def cost(self, e: Evaluation) -> float:
+        r = self.residual(e)
+        return 0.5 * float(r @ r)
+
+    def rms(self, e: Evaluation) -> float:
+        """RMS of the relative frequency errors."""
+        return float(np.sqrt(np.mean((e.model_hz / self.measured_hz - 1) ** 2)))
+
+    def statistics(self, e: Evaluation) -> FitStatistics:
+        return FitStatistics.of(e.model_hz, self.measurements, len(e.values))
+
+    def std_z(self, e: Evaluation) -> np.ndarray:
+        """Linearised std of each z at ``e`` (scatter from std_hz, or from the residual);
+        infinite for a parameter the data do not determine (it has a share in the null
+        space of the Jacobian)."""
+        _, s, vt = np.linalg.svd(self.jacobian(e), full_matrices=False)
+        null = s <= NULL_SINGULAR_VALUE * s[0]
+        variance = self.statistics(e).chi2_unit * np.sum((vt[~null] / s[~null, None]) ** 2, axis=0)
+        undetermined = np.sum(vt[null] ** 2, axis=0) > 1e-6
+        return np.where(undetermined, np.inf, np.sqrt(variance))
+
+
+def relative_sensitivity(e: Evaluation) -> np.ndarray:
+    """The paper's normalised sensitivity matrix (p / f) df/dp of the paired modes."""
+    return e.derivatives * e.values[None, :] / e.model_hz[:, None]
+
+
+__all__ = ["Evaluation", "Objective", "relative_sensitivity", "solving_model"]

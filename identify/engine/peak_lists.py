@@ -1,0 +1,215 @@
+"""Fitting a peak list: measured frequencies without mode numbers, as recordings give them.
+
+1. Per configuration, the start model's spectrum is laid over the peaks (``matching.align``:
+   the best scale factor) and the peaks are matched to modes, leaving out those that fit
+   no mode; the original plate's factor also rescales the start moduli (frequencies go
+   as the square root of stiffness), a closed-form start like the plate formulas IET
+   and Resonalyser users apply.
+2. The matched peaks are fitted as ranked measurements (``updating.update``).
+3. At the solution the peaks are matched again with a narrower tolerance (``TIGHTENING``),
+   then with the model's remaining error as the tolerance; if a different set of peaks
+   or modes is matched, the fit is redone from there, until the matching settles (at
+   most ``MAX_ROUNDS``).
+Every peak left out, and every model mode in the band no peak was matched to, is
+reported.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable
+
+import numpy as np
+
+from fem.model import SpecimenModel
+from fem.specimen import Parameter
+
+from .matching import Match, align, label_permits, match
+from ..measurements import Measurements
+from .peak_assignment import PeakAssignment, peak_table
+from .result import FitResult, Iteration
+from .statistics import ASSUMED_SCATTER_REL
+from .objective import solving_model
+from .updating import FitOptions, update
+
+#: Model modes solved beyond the number of peaks of a configuration (spurious peaks and
+#: missing modes shift the ranks by a few).
+EXTRA_MODES = 4
+#: Match-fit rounds at the final tolerance before the matching must have settled.
+MAX_ROUNDS = 4
+#: Tolerances (relative model error) of the first re-matches after the start's 3 %: the
+#: gate narrows as the model comes closer, so a true peak left out early is taken back and
+#: a spurious one matched early is dropped before the final, data-driven tolerance.
+TIGHTENING = (0.01, 0.003)
+#: Start moduli are rescaled when the original plate's spectrum is off by more than this.
+RESCALE_ABOVE = 0.02
+#: Floor of the matching tolerance at the solution (relative): the model is never taken as
+#: exact to better than a tenth of the usual scatter.
+SOLUTION_TOLERANCE_FLOOR = 0.1 * ASSUMED_SCATTER_REL
+MODULI = ("E1", "E2", "G12", "G13", "G23")
+
+
+def _by_rank(peaks: Measurements) -> Measurements:
+    """The peaks as if each configuration's were its modes 1, 2, ... (before any matching)."""
+    table = peaks.table.assign(mode=peaks.table.groupby("configuration").cumcount() + 1)
+    return Measurements(table, peaks.source)
+
+
+def _options(options: FitOptions, peaks: Measurements, ranked: Measurements) -> FitOptions:
+    """The fit's options with enough extra modes that it solves every mode the matching
+    needs (the most peaks of a configuration + ``EXTRA_MODES``).  The matching then
+    solves the fit's own model (:func:`_solver`) and, at a solution, reuses its solves
+    (``fem.model.solve_laminate`` is cached) instead of solving a second model."""
+    most = int(peaks.table.groupby("configuration").size().max())
+    highest = int(ranked.table["mode"].max())
+    return replace(options, extra_modes=max(options.extra_modes, most + EXTRA_MODES - highest))
+
+
+def _solver(model: SpecimenModel, peaks: Measurements, options: FitOptions,
+            ranked: Measurements | None = None) -> SpecimenModel:
+    """The model as the fit of ``ranked`` (the peaks as matched; None: by rank) solves it."""
+    ranked = _by_rank(peaks) if ranked is None else ranked
+    return solving_model(model, ranked, _options(options, peaks, ranked).extra_modes)
+
+
+def _match_all(solver: SpecimenModel, peaks: Measurements, tolerance: float | None) -> dict[str, Match]:
+    """Per configuration, the peaks matched to the solver's modes (``tolerance`` None: at
+    the start, laid over by the best scale)."""
+    out = {}
+    for name in peaks.configurations:
+        rows = peaks.of(name)
+        solution = solver.solve(name)
+        std = rows["std_hz"].to_numpy() if peaks.has_std else None
+        allowed = label_permits(rows["label"].tolist(), solution.shape_coefficients)
+        f = rows["frequency_hz"].to_numpy()
+        out[name] = (align(f, std, solution.frequencies_hz, allowed) if tolerance is None
+                     else match(f, std, solution.frequencies_hz, tolerance, allowed))
+    return out
+
+
+def _ranked(peaks: Measurements, matches: dict[str, Match]) -> Measurements:
+    """The matched peaks as ranked measurements (mode = the matched model mode)."""
+    table = peaks.table.copy()
+    for name, m in matches.items():
+        table.loc[table["configuration"] == name, "mode"] = m.modes + 1
+    kept = table[table["mode"] > 0].copy()
+    order = {name: i for i, name in enumerate(peaks.configurations)}
+    kept["_order"] = kept["configuration"].map(order)
+    kept = kept.sort_values(["_order", "mode"]).drop(columns="_order").reset_index(drop=True)
+    return Measurements(kept, peaks.source)
+
+
+def _signature(matches: dict[str, Match]) -> dict:
+    """Which peaks and which modes are matched (not who with whom: that is the pairing's
+    business, settled by ``ambiguity``)."""
+    return {name: (tuple(np.flatnonzero(m.matched)), tuple(sorted(m.modes[m.matched]))) for name, m in matches.items()}
+
+
+def _rescaled_start(model: SpecimenModel, scale: float, parameters) -> tuple[SpecimenModel, str]:
+    """Identified moduli x scale^2, when the original plate's spectrum is off by more
+    than ``RESCALE_ABOVE``."""
+    if abs(np.log(scale)) <= RESCALE_ABOVE:
+        return model, ""
+    moduli = [p for p in parameters if p.kind in MODULI]
+    if not moduli:
+        return model, ""
+    values = {p: model.value(p) * scale**2 for p in moduli}
+    return model.with_values(values), (f"start moduli x {scale**2:.3g}: the start model's spectrum of "
+                                       f"'{model.specimen.configurations[0].name}' lies {scale:.3g} x over the "
+                                       "peaks (frequencies go as the square root of stiffness)")
+
+
+def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Parameter] | None = None,
+                  options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
+                  effect_of: dict | None = None, start_matches: dict[str, Match] | None = None) -> FitResult:
+    """Identify ``parameters`` from a peak list (no mode numbers): match, fit, match again
+    at the solution until settled; the result's ``peaks`` says what became of each peak.
+    ``start_matches`` skips the alignment (e.g. a baseline fit's final matching)."""
+    parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
+    notes = []
+    matches = start_matches or _match_all(_solver(model, peaks, options), peaks, None)
+    if start_matches is None:
+        first = peaks.configurations[0]
+        model, note = _rescaled_start(model, matches[first].scale, parameters)
+        notes += [note] if note else []
+        matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
+    seen = [_signature(matches)]
+    history: list[Iteration] = []
+    result = None
+    for round_ in range(MAX_ROUNDS + len(TIGHTENING)):
+        ranked = _ranked(peaks, matches)
+        if result is None:  # a round whose matching is the last fit's would refit the same problem
+            # Rounds while the matching moves skip the pairing checks; the settled one does them.
+            result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of,
+                            settle=False)
+            history += _renumbered(result.history, history)
+        tightening = round_ < len(TIGHTENING)
+        tolerance = TIGHTENING[round_] if tightening else _model_error(result)
+        again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
+        unchanged = all(np.array_equal(again[c].modes, matches[c].modes) for c in matches)
+        if not tightening and _signature(again) == seen[-1]:
+            matches = again
+            break
+        if tightening:  # a peak left out while the model was still far off gets another chance
+            seen.append(_signature(again))
+            matches, model, result = again, result.model, (result if unchanged else None)
+            continue
+        if _signature(again) in seen:  # the matching cycles: keep the last fit and say so
+            notes.append("the peak matching did not settle (it cycles between alternatives): check the "
+                         "left-out peaks and unseen modes below")
+            break
+        seen.append(_signature(again))
+        notes.append("peaks re-matched at the solution (a different set of peaks or modes fits): refitted")
+        matches, model, result = again, result.model, None
+    else:
+        notes.append(f"the peak matching had not settled after {MAX_ROUNDS} rounds at the final tolerance")
+    ranked = _ranked(peaks, matches)
+    result = update(result.model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
+    history += _renumbered(result.history, history)
+    assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
+    return replace(result, warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings, peaks=assignment,
+                   history=tuple(history))
+
+
+def _model_error(result: FitResult) -> float:
+    """How far the model may be off at a solution (relative): a robust scale of the
+    residuals (1.48 x their median absolute value), at least ``SOLUTION_TOLERANCE_FLOOR``."""
+    return max(1.4826 * float(np.median(np.abs(result.rel_error))), SOLUTION_TOLERANCE_FLOOR)
+
+
+def _renumbered(rounds: tuple[Iteration, ...], before: list[Iteration]) -> list[Iteration]:
+    """A round's iterations continuing the numbering of those ``before`` (its start, the
+    previous round's end, dropped)."""
+    if not before:
+        return list(rounds)
+    offset = before[-1].number
+    return [replace(it, number=it.number + offset) for it in rounds[1:]]
+
+
+def matched_at(model: SpecimenModel, peaks: Measurements) -> Measurements:
+    """The peaks matched to the model as it stands (laid over by the best scale), ranked:
+    for comparing a peak list without fitting."""
+    return _ranked(peaks, _match_all(_solver(model, peaks, FitOptions()), peaks, None))
+
+
+def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Match], options: FitOptions,
+                ranked: Measurements) -> PeakAssignment:
+    solver = _solver(model, peaks, options, ranked)
+    table = peaks.table
+    modes = np.zeros(len(table), dtype=int)
+    model_hz = np.zeros(len(table))
+    nearest = np.zeros(len(table), dtype=int)
+    unseen = {}
+    for name, m in matches.items():
+        rows = np.flatnonzero(table["configuration"].to_numpy() == name)
+        f = solver.solve(name).frequencies_hz
+        measured = table["frequency_hz"].to_numpy()[rows]
+        near = np.argmin(np.abs(measured[:, None] / f[None, :] - 1), axis=1)
+        chosen = np.where(m.matched, m.modes, near)
+        modes[rows] = np.where(m.matched, m.modes + 1, 0)
+        model_hz[rows], nearest[rows] = f[chosen], chosen + 1
+        band = np.flatnonzero((f >= measured.min()) & (f <= measured.max()))
+        unseen[name] = [int(j) + 1 for j in band if j not in set(m.modes[m.matched].tolist())]
+    return PeakAssignment(peaks, modes, model_hz, nearest, unseen, dict(matches))
+
+
+__all__ = ["PeakAssignment", "fit_peak_list", "matched_at", "peak_table"]

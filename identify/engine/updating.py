@@ -1,0 +1,259 @@
+"""Multi-model updating (paper section 4.2, eqs. 12-15) with safeguards.
+
+All configurations are updated at once: the weighted frequency residuals of every
+measured mode of every configuration are stacked, with the global sensitivity matrix,
+and a Gauss-Newton step is taken with its pseudo-inverse (eq. 15).  Unlike the paper,
+the step is damped (Levenberg-Marquardt) when it does not lower the misfit, limited in
+size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import numpy as np
+from scipy.stats import chi2 as chi2_distribution
+
+from fem.errors import MeasurementError, OptionsError
+from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
+from fem.specimen import Parameter
+from fem import validation
+
+from .ambiguity import settle_pairings
+from .repair import quick_repair
+from ..measurements import Measurements
+from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
+from .parameters import UNITS, display
+from .result import FitResult, FitStatus, Iteration
+from .statistics import CHI2_TEST_LEVEL, FitStatistics
+from .stopping import (ADMISSIBLE_HALVINGS, BOUND_TOLERANCE, DAMPING_FACTOR, EXACT_RMS, FIRST_DAMPING, FLAT_STEP,
+                       STALL_ITERATIONS, STALLED, STEP_PER_STD, TINY_STEP, UNDAMPED, UNDETERMINED_Z, Stop)
+from .uncertainty import Uncertainty
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """Iteration control.  Steps and tolerances are in z: relative for log parameters."""
+
+    max_iterations: int = 30
+    parameter_tolerance: float = 1e-7   # stop when no parameter changes by more (relative)
+    cost_tolerance: float = 1e-10       # ... or the misfit falls by less than this fraction
+    max_log_step: float = 0.7           # largest relative change per step: a factor e^0.7 ~ 2
+    max_linear_step: float = 0.1        # largest change of nu12 (or an angle in rad) per step
+    extra_modes: int = 3                # model modes computed beyond the highest measured one
+    max_damping_tries: int = 12
+    # > 0: also stop once each of the last STALL_ITERATIONS steps lowered chi^2 by less than
+    # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
+    # even where an ill-conditioned direction still creeps (off by default).
+    stall_chi2: float = 0.0
+
+    def __post_init__(self):
+        where = "FitOptions"
+        validation.whole(self.max_iterations, f"{where}.max_iterations", 0, 100_000, "of iterations ", OptionsError)
+        validation.whole(self.extra_modes, f"{where}.extra_modes", 0, MAX_SOLVED_MODES - MAX_MODES, "of modes ", OptionsError)
+        validation.whole(self.max_damping_tries, f"{where}.max_damping_tries", 1, 1000, "of tries ", OptionsError)
+        fields = vars(self)
+        for key in ("parameter_tolerance", "cost_tolerance", "stall_chi2"):
+            validation.number(fields, key, where, low=0.0, low_inclusive=True, error=OptionsError)
+        for key in ("max_log_step", "max_linear_step"):
+            validation.number(fields, key, where, low=0.0, error=OptionsError)
+
+
+def iterate(objective: Objective, current: Evaluation, history: list, options: FitOptions,
+            progress: Callable[[Iteration], None] | None = None) -> tuple[Evaluation, Stop, list[str]]:
+    """Damped Gauss-Newton iterations from ``current``; appends to ``history``.  Returns
+    the last state, why it stopped and warnings about mode tracking."""
+    space = objective.space
+    r = objective.residual(current)
+    damping, warnings = 0.0, []
+    limit = np.where(space.is_log, options.max_log_step, options.max_linear_step)
+    z_low, z_high = space.z_bounds()
+    first = history[-1].number + 1
+    for number in range(first, first + options.max_iterations):
+        jacobian = objective.jacobian(current)
+        z = space.to_z(current.values)
+        # Parameters on a bound that the misfit pushes outward are held there (active set).
+        gradient = jacobian.T @ r
+        held = ((z <= z_low + BOUND_TOLERANCE) & (gradient > 0)) | ((z >= z_high - BOUND_TOLERANCE) & (gradient < 0))
+        if held.all():
+            return current, Stop.GAUSS_NEWTON_SMALL, warnings
+        u, s, vt = np.linalg.svd(jacobian[:, ~held], full_matrices=False)
+        keep = s > NULL_SINGULAR_VALUE * s[0]  # the pseudo-inverse of eq. 15 drops null directions
+        ur = u.T @ r
+        # Converged already?  Judge by the Gauss-Newton prediction before paying for solves.
+        reducible = 0.5 * float(np.sum(ur[keep] ** 2))  # misfit a Gauss-Newton step could remove
+        gauss_newton = vt.T @ np.where(keep, ur / np.where(keep, s, 1.0), 0.0)
+        if reducible <= options.cost_tolerance * objective.cost(current) or \
+                float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance:
+            return current, Stop.GAUSS_NEWTON_SMALL, warnings
+        accepted = None
+        for _ in range(options.max_damping_tries):
+            gain = np.where(keep, s / (s**2 + damping), 0.0)
+            dz = np.zeros_like(z)
+            dz[~held] = -vt.T @ (gain * ur)
+            dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), TINY_STEP))))
+            dz = np.clip(z + dz, z_low, z_high) - z  # projected onto the bounds
+            trial_values = space.to_values(z + dz)
+            for _ in range(ADMISSIBLE_HALVINGS):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
+                if space.admissible(objective.model.specimen, trial_values):
+                    break
+                dz *= 0.5
+                trial_values = space.to_values(z + dz)
+            else:
+                damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)  # the step leaves the bounds: damp it
+                continue
+            # Sensitivities only for an accepted step: a rejected trial needs none.
+            trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
+            if objective.cost(trial) <= objective.cost(current):
+                accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
+                damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0  # back to Gauss-Newton
+                break
+            damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
+        if accepted is None:
+            return current, Stop.NO_DESCENT, warnings
+        previous_cost = objective.cost(current)
+        current, dz, used = accepted
+        r = objective.residual(current)
+        step = float(np.max(np.abs(dz)))
+        history.append(Iteration(number, current.values, current.model_hz, objective.rms(current),
+                                 objective.cost(current), step, damping))
+        if progress:
+            progress(history[-1])
+        lost = [p.configuration for p in current.pairings.values() if p.lost]
+        if lost:
+            warnings.append(f"iteration {number}: mode tracking uncertain in {', '.join(lost)} "
+                            "(a mode shape changed strongly; check the pairing in the residual table)")
+        if step < options.parameter_tolerance:
+            return current, Stop.STEP_SMALL, warnings
+        stalled = previous_cost - objective.cost(current) <= STALLED * previous_cost
+        # Judged on a full Gauss-Newton step only: a damped step is short by construction.
+        if stalled and used == 0.0 and np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(current)):
+            return current, Stop.WITHIN_STD, warnings
+        if objective.rms(current) < EXACT_RMS:
+            return current, Stop.EXACT, warnings
+        if previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost and step < FLAT_STEP:
+            return current, Stop.MISFIT_FLAT, warnings
+        if options.stall_chi2 > 0 and len(history) > STALL_ITERATIONS and all(
+                2 * (a.cost - b.cost) < options.stall_chi2 * objective.statistics(current).chi2_unit
+                for a, b in zip(history[-STALL_ITERATIONS - 1:-1], history[-STALL_ITERATIONS:])):
+            return current, Stop.MISFIT_STALLED, warnings
+    return current, Stop.MAX_ITERATIONS, warnings
+
+
+def update(model: SpecimenModel, measurements: Measurements, parameters: list[Parameter] | None = None,
+           options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
+           effect_of: dict[Parameter, str] | None = None, settle: bool | str = True,
+           pairings: dict | None = None) -> FitResult:
+    """Identify ``parameters`` (default: the properties every identified material's
+    ``identify`` names) from measured frequencies of all configurations at once, then
+    settle the pairings frequencies cannot rule out (``settle``; an intermediate fit may
+    skip it; "quick": only the re-pairings that lower the misfit at once, ``repair``).
+    ``effect_of`` names the effect kind a parameter belongs to, for reporting;
+    ``pairings``: a previous fit's, followed by shape from the start (default: afresh)."""
+    parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
+    if not parameters:
+        raise MeasurementError("nothing to identify: mark at least one material with identify = true")
+    if len(measurements) < len(parameters):
+        raise MeasurementError(
+            f"{len(measurements)} measured frequencies for {len(parameters)} unknown parameters: "
+            "measure at least as many modes as unknowns (the paper uses 5 per configuration)"
+        )
+    objective = Objective(model, measurements, parameters, options.extra_modes)
+    given = np.array([model.value(p) for p in parameters], dtype=float)
+    values = objective.space.clip(given)
+    warnings = [f"start {p.name} = {display(p, v):.4g} is outside its bounds "
+                f"{display(p, lo):.4g}..{display(p, hi):.4g}: started at {display(p, c):.4g} (set bounds in the spec "
+                "to widen them)" for p, v, c, lo, hi in zip(parameters, given, values, objective.space.lower,
+                                                           objective.space.upper) if v != c]
+    current = objective.evaluate(values, pairings)
+    warnings += [p.note for p in current.pairings.values() if p.note]
+    history = [Iteration(0, values, current.model_hz, objective.rms(current), objective.cost(current), 0.0, 0.0)]
+    if progress:
+        progress(history[-1])
+    current, stop, tracking = iterate(objective, current, history, options, progress)
+    warnings += tracking
+    twins, repaired = [], ""
+    if stop.converged and settle:
+        def refit(state, branch, max_iterations):
+            state, again, _ = iterate(objective, state, branch, replace(options, max_iterations=max_iterations))
+            return state, again
+
+        if settle == "quick":  # a candidate's refit in a diagnosis: only re-pairings that pay at once
+            current, repaired, notes = quick_repair(objective, current, history, refit)
+        else:
+            current, repaired, notes, twins = settle_pairings(objective, current, history, refit)
+        warnings += notes
+        if progress and notes:
+            progress(history[-1])
+    statistics = objective.statistics(current)
+    uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
+    vague = undetermined(objective.space, current.values, uncertainty.std)
+    status, message = _status(stop, uncertainty, statistics, options, vague.all())
+    if vague.any() and not vague.all():
+        warnings.append(f"not determined by the stated scatter (std above {UNDETERMINED_Z:g} x the parameter's own "
+                        f"scale): {_listed(parameters, current.values, uncertainty.std, vague)}; fix them or "
+                        "measure more modes or configurations")
+    elif vague.all() and status is FitStatus.NOT_IDENTIFIABLE:
+        message += f": {_listed(parameters, current.values, uncertainty.std, vague)}"
+    warnings += _overstated(statistics)
+    if repaired:
+        message += f"; re-paired {repaired}"
+    return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
+                     measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
+                     tuple(values for values, _ in twins), current.pairings, objective.jacobian(current),
+                     dict(effect_of or {}), stop=stop)
+
+
+def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:
+    """Which parameters the data do not determine: a std of at least ``UNDETERMINED_Z``
+    in z (the value itself for a modulus, a thickness or a mass, i.e. 100 %; 1 for nu12,
+    1 rad for an angle, a plate length for a position), or none at all."""
+    std_z = np.asarray(std, dtype=float) / np.abs(space.dvalue_dz(np.asarray(values, dtype=float)))
+    return ~np.isfinite(std_z) | (std_z >= UNDETERMINED_Z)
+
+
+def _overstated(statistics: FitStatistics) -> list[str]:
+    """A warning when the misfit is far below the stated scatter (chi^2 in the lower tail
+    at the test level): std_hz overstated, so every std reported is too large."""
+    if not (statistics.scatter_known and statistics.dof > 0):
+        return []
+    p_low = float(chi2_distribution.cdf(statistics.chi2, statistics.dof))
+    if p_low >= CHI2_TEST_LEVEL:
+        return []
+    return [f"the misfit is far below the stated scatter (reduced chi^2 {statistics.reduced_chi2:.2g}; an honest "
+            f"std_hz gives one this small with chance {p_low:.1g}): is std_hz overstated? The std above scale with it"]
+
+
+def _listed(parameters, values, std, mask) -> str:
+    shown = [f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip()
+             for p, v, s, m in zip(parameters, values, std, mask) if m]
+    return ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
+
+
+def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
+            options: FitOptions, all_undetermined: bool = False) -> tuple[FitStatus, str]:
+    """The status of a finished fit and its message: converged only when the misfit is
+    consistent with the scatter (``FitStatistics.consistent``) and the scatter determines
+    at least one parameter."""
+    if not stop.converged:
+        if stop is Stop.MAX_ITERATIONS:
+            return FitStatus.NOT_CONVERGED, f"not converged in {options.max_iterations} iterations"
+        return FitStatus.NOT_CONVERGED, (f"stopped: no step lowered the misfit after {options.max_damping_tries} "
+                                         "damping increases")
+    singular = uncertainty.verdict == "singular"
+    if not statistics.consistent:
+        also = (f"; the sensitivity matrix is singular too (condition number {uncertainty.condition_number:.3g})"
+                if singular else "")
+        return FitStatus.POOR_FIT, f"poor fit: {statistics.describe()}{also}"
+    if singular:
+        return FitStatus.NOT_IDENTIFIABLE, (
+            f"not identifiable: the frequencies fit but the sensitivity matrix is singular (condition number "
+            f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data")
+    if all_undetermined:
+        return FitStatus.NOT_IDENTIFIABLE, ("not identifiable: the frequencies fit, but the stated scatter determines "
+                                            f"none of the parameters (each std at least {UNDETERMINED_Z:g} x its own "
+                                            "scale; is std_hz in Hz?)")
+    return FitStatus.CONVERGED, f"converged: {stop.value}; {statistics.describe()}"
+
+
+__all__ = ["FitOptions", "Stop", "iterate", "update"]

@@ -1,0 +1,122 @@
+"""The uncertainty budget of an identification (GUM, linear propagation): how much each
+known input's standard uncertainty (moduli, densities and thicknesses of the known
+layers, the plate's size and weighed mass; ``fem.inputs``) and the measurement scatter
+contribute to each identified property.
+
+The identified values minimise the weighted misfit r(theta, beta) over theta with the
+known inputs beta held at their nominal values.  To first order a change d beta moves
+the solution by d theta = G d beta, G = -J_theta^+ J_beta (J: derivatives of the weighted
+residuals, ^+ the pseudo-inverse), so the inputs add G diag(u_beta^2) G^T to the
+covariance.  J_beta uses the model's exact sensitivities for material properties and
+thicknesses, the chain rule for the plate's mass (its layers' densities scale with it),
+and central differences of the plate's length and width (a new mesh each way).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+
+from fem.inputs import GEOMETRY, MASS, InputStd
+from fem.specimen import Parameter
+
+from ..engine.objective import Objective
+from ..engine.parameters import UNITS, display
+
+#: Relative step of the central differences in the plate's length and width: the
+#: frequency error is O(step^2) ~ 1e-8, far below any input's effect.
+GEOMETRY_STEP = 1e-4
+
+
+@dataclass(frozen=True)
+class Budget:
+    """parameters: the identified ones; inputs: the known inputs with their std;
+    measurement_std: each parameter's std from the measurement scatter [SI];
+    sensitivity: d theta_i / d beta_j [SI per SI] (parameters x inputs)."""
+
+    parameters: tuple[Parameter, ...]
+    inputs: tuple[InputStd, ...]
+    measurement_std: np.ndarray
+    sensitivity: np.ndarray
+
+    @property
+    def contributions(self) -> np.ndarray:
+        """|d theta_i / d beta_j| u_j: each input's share of each parameter's std [SI]."""
+        return np.abs(self.sensitivity) * np.array([i.std for i in self.inputs])[None, :]
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """The inputs' part of the parameters' covariance [SI^2]."""
+        u2 = np.array([i.std for i in self.inputs]) ** 2
+        return (self.sensitivity * u2[None, :]) @ self.sensitivity.T
+
+    @property
+    def total_std(self) -> np.ndarray:
+        """Measurement and inputs together [SI] (independent contributions)."""
+        return np.sqrt(self.measurement_std**2 + np.sum(self.contributions**2, axis=1))
+
+    def table(self) -> pd.DataFrame:
+        """One row per parameter in display units: value's std from the measurements,
+        from each input, and the total (and the unit)."""
+        rows = []
+        for i, p in enumerate(self.parameters):
+            row = {"parameter": p.name, "unit": UNITS[p.kind][0], "measurement": display(p, self.measurement_std[i])}
+            row.update({f"{u.name}": display(p, c) for u, c in zip(self.inputs, self.contributions[i])})
+            row["total"] = display(p, self.total_std[i])
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    def to_dict(self) -> dict:
+        return {"inputs": [{"input": u.name, "std_si": u.std} for u in self.inputs],
+                "table": self.table().to_dict(orient="records")}
+
+
+def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
+    """d (model frequency) / d beta_j of the paired rows [Hz per SI unit] (rows x inputs)."""
+    model = objective.solved.with_specimen(e.model.specimen)
+    out = np.zeros((len(objective.measured_hz), len(inputs)))
+    specimen = model.specimen
+    for name in objective.configurations:
+        rows = objective.rows[name]
+        indices = e.pairings[name].indices
+        solution = model.solve(name)
+        for j, u in enumerate(inputs):
+            if u.kind in GEOMETRY:
+                size = getattr(specimen, u.kind)
+                f = [model.with_specimen(replace(specimen, **{u.kind: size * (1 + s * GEOMETRY_STEP)})).solve(name)
+                     .frequencies_hz[indices] for s in (1, -1)]
+                out[rows, j] = (f[0] - f[1]) / (2 * GEOMETRY_STEP * size)
+            elif u.kind == MASS:
+                # Every specimen layer's density scales with the weighed mass: d rho_k / d m = rho_k / m.
+                own = {layer.material.name: layer.material.density for layer in specimen.layers}
+                mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
+                d = solution.derivatives([Parameter("density", m) for m in own])[indices]
+                out[rows, j] = d @ (np.array(list(own.values())) / mass)
+            else:
+                out[rows, j] = solution.derivatives([Parameter(u.kind, u.target)])[indices, 0]
+    return out
+
+
+def uncertainty_budget(result) -> Budget | None:
+    """The budget of a finished fit whose model states known inputs' std (None else)."""
+    inputs = result.model.input_std
+    if not inputs or not result.finished or not np.all(np.isfinite(result.uncertainty.std)):
+        return None
+    objective = Objective(result.model, result.measurements, result.parameters)
+    e = objective.evaluate(result.values, result.pairings, track=False)
+    weighted_theta = e.derivatives / objective.sigma[:, None]
+    weighted_beta = _input_columns(objective, e, inputs) / objective.sigma[:, None]
+    sensitivity = -np.linalg.pinv(weighted_theta) @ weighted_beta
+    return Budget(result.parameters, inputs, result.uncertainty.std.copy(), sensitivity)
+
+
+def with_budget(result):
+    """The result with its budget, and its uncertainty widened by the inputs' part."""
+    budget = uncertainty_budget(result)
+    if budget is None:
+        return result
+    return replace(result, budget=budget, uncertainty=result.uncertainty.with_covariance(budget.covariance))
+
+
+__all__ = ["Budget", "uncertainty_budget", "with_budget"]

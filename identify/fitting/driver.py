@@ -1,0 +1,510 @@
+"""``fit``: identify the layers of a specimen, optionally with physical effects whose
+parameters are estimated together with the layer properties."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from typing import Callable, Sequence
+
+import numpy as np
+
+from fem.effects import effect
+from fem.errors import LayerIdError, NotApplicableError
+from fem.laminates.material import MATERIAL_PARAMETERS, SHEAR_MODULI
+from fem.model import SpecimenModel
+from fem.specimen import Parameter, Specimen
+
+from ..measurements import Measurements
+from ..engine.objective import solving_model
+from ..engine.parameters import display
+from .patterns import residual_patterns
+from ..engine.peak_lists import fit_peak_list
+from .budget import with_budget
+from .causes import with_causes
+from .damping import identify_damping
+from ..engine.result import FitResult, Iteration
+from .plausibility import implausible
+from .precheck import Precheck, Sensitivities, precheck
+from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
+from ..engine.statistics import ASSUMED_SCATTER_REL
+from ..engine.ties import Tied, plain
+from ..engine.updating import FitOptions, update
+
+#: Iterations of a refit with an effect (from the fit without it).
+EFFECT_ITERATIONS = 40
+#: Point-mass starts: the residual scan's best position and a 3 x 3 grid over its quarter
+#: of the plate, ranked by the share of the misfit the scan gives a mass there; the best
+#: ``POINT_MASS_STARTS`` are screened with ``POINT_MASS_SCREEN`` iterations each, and the
+#: best ``POINT_MASS_CONTINUED`` at distinct positions are continued to convergence (rivals
+#: need finished fits).
+POINT_MASS_STARTS = 4
+POINT_MASS_SCREEN = 3
+POINT_MASS_CONTINUED = 2
+#: Starts (G13, G23) / G12 screened for transverse shear moduli that only default to G12
+#: (one evaluation each): fibre plies have G23 ~ 0.6-0.9 G12, wood's rolling shear G23 ~
+#: G12 / 10-20, and from G23 = G12 a refit stops in a local minimum there (the 3-D spruce
+#: reference: 1.1 % RMS left, against the noise level from G12 / 16).
+SHEAR_STARTS = ((1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
+#: The last start of a failed shear refit: shear moduli this many times G12, where the
+#: model is close to the one without shear (a continuation from the thin-plate fit).
+CONTINUATION_START = (8.0, 8.0)
+#: A candidate whose refit could explain, by its linearised estimate (or a point mass by the
+#: residual scan), less than 1 / PRUNE_FACTOR of what another one explained is not refitted.
+PRUNE_FACTOR = 2.0
+#: Two effect estimates whose chi^2 differ by less than this (about 2 std) are rivals.
+RIVAL_CHI2 = 4.0
+
+
+def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str] = (), *,
+        parameters=None, options: FitOptions | None = None,
+        progress: Callable[[Iteration | str], None] | None = None) -> FitResult:
+    """Identify E1, E2, G12, nu12 of every identified material of ``model`` (or the given
+    ``parameters``) from the measured frequencies of all configurations at once.
+
+    effects: kinds switched on with their parameters free (e.g. ``["point_mass"]``): the
+    layers (``parameters``) are fitted first, then again with the effects' parameters
+    added; the result's ``baseline`` is the fit without them.  options: the iteration
+    control of every fit (default ``FitOptions()``; the refits with effects
+    ``EFFECT_ITERATIONS`` iterations).  Values are SI inside; ``report()`` and
+    ``to_dict()`` print in the spec's units (GPa, mm, g).  ``progress`` is called with
+    every accepted iteration (or, with effects, a line of text per refit).  When the spec
+    states the known inputs' std, the result carries the uncertainty budget and its std
+    includes them.
+    When materials have ``identify_damping``, the result's ``damping`` holds their loss
+    factors, found after the stiffness from the measured damping ratios.
+    """
+    if isinstance(effects, str):
+        raise LayerIdError(f"effects = {effects!r}: give a list of effect kinds, e.g. [{effects!r}]")
+    if options is not None and not isinstance(options, FitOptions):
+        raise LayerIdError(f"options = {options!r}: need a FitOptions (identify.FitOptions(max_iterations=...))")
+    if effects:
+        for kind in effects:
+            effect(kind)  # unknown kinds fail before any work
+        return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress,
+                                                         parameters=parameters, options=options)))
+    return with_damping(with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress)))
+
+
+def with_damping(result: FitResult) -> FitResult:
+    """The fit with the layers' loss factors identified from the measured damping ratios
+    at its stiffness (``identify.fitting.damping``), when the spec asks for them."""
+    damping = identify_damping(result.model, result.measurements, result.pairings)
+    return result if damping is None else replace(result, damping=damping)
+
+
+def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions | None = None,
+               progress: Callable[[Iteration], None] | None = None, effect_of: dict | None = None,
+               like: FitResult | None = None, explain: bool = True, settle: bool | str = True,
+               pairings: dict | None = None) -> FitResult:
+    """The multi-model updating of ranked measurements, or of a peak list (matched to the
+    model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
+    starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
+    poor fit its likely causes (``causes``).  ``settle``: the pairing check at the solution
+    of ranked data, ``pairings``: a fit's to follow from the start (``updating.update``);
+    ``options`` default ``FitOptions()``."""
+    options = options or FitOptions()
+    if measurements.ranked:
+        result = update(model, measurements, parameters, options, progress, effect_of, settle, pairings)
+    else:
+        start = like.peaks.matches() if like is not None and like.peaks is not None else None
+        result = fit_peak_list(model, measurements, parameters, options, progress, effect_of, start)
+    return with_causes(result) if explain else result
+
+
+def continued(fit: FitResult, measurements: Measurements, options: FitOptions, settle: bool | str = "quick",
+              effect_of: dict | None = None) -> FitResult:
+    """``fit`` iterated on from where it stopped: its model, parameters, effects and
+    pairing (``effect_of`` default its own); causes of a poor fit are left to the caller."""
+    return fit_layers(fit.model, measurements, list(fit.parameters), options,
+                      effect_of=fit.effect_of if effect_of is None else effect_of, like=fit, explain=False,
+                      settle=settle, pairings=fit.pairings)
+
+
+def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
+                     progress: Callable[[str], None] | None = None, *, parameters=None,
+                     options: FitOptions | None = None) -> FitResult:
+    """The fit with ``kinds`` switched on, their parameters free, starting from the
+    baseline fit's layer properties (``comparison.fitted`` of a ``compare``, fitted here
+    when not given), one
+    effect after the other (``add_effect``); the last refit checks the pairing in full.
+
+    A point mass starts at each of the positions the residual scan suggests and on a grid
+    over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
+    well are reported.  The transverse-shear effects free the G13 and G23 that the data
+    can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
+    determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
+    not an iteration.  ``parameters``: the layer parameters of the baseline fit (default
+    every identified material's); ``options``: of every fit (default: the baseline's
+    ``FitOptions()``, the refits' ``EFFECT_ITERATIONS`` iterations).
+    """
+    if comparison is not None and parameters is not None:
+        raise LayerIdError("fit_with_effects: give either parameters (the baseline is fitted with them) or a "
+                           "comparison (its fit is the baseline), not both")
+    if comparison is None:
+        baseline = fit_layers(model, measurements, parameters, options, explain=False)
+        hints = point_mass_hints(baseline)
+    else:
+        baseline = comparison.fitted
+        hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
+                                  comparison.node_xy)
+    state, notes = baseline, []
+    for number, kind in enumerate(kinds):
+        last = number == len(kinds) - 1
+        hints = hints if state is baseline else point_mass_hints(state)
+        added = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
+                           progress=progress, options=options)
+        if added.result is None:
+            advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
+                      "as measured) or leave the effect out" if added.precheck is not None
+                      and added.precheck.singular else "")
+            raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
+        notes += [(kind, text) for text in added.notes]
+        state = added.result
+    result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, options, settle=True)
+    notes += [(kinds[-1], text) for text in reconsidered_notes]
+    result = with_causes(result)
+    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+                   effect_notes=tuple(notes), baseline=baseline)
+
+
+@dataclass(frozen=True)
+class AddedEffect:
+    """An effect added to a fit: ``result`` the refit with it (None when not run: not
+    identifiable, or an error); ``added`` the parameters it freed (after the choice of
+    shear moduli); ``precheck`` the conditioning before the refit; ``notes`` what was
+    decided or found (shear moduli freed, rival estimates, implausible values);
+    ``implausible`` why its estimate is physically unlikely (empty: plausible)."""
+
+    kind: str
+    result: FitResult | None
+    added: tuple[Parameter, ...] = ()
+    precheck: Precheck | None = None
+    notes: tuple[str, ...] = ()
+    implausible: tuple[str, ...] = ()
+    error: str = ""
+    seconds: float = 0.0
+    pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
+    applicable: bool = True  # False: the effect has nothing to act on in this spec
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """An effect ready to be refitted on top of ``state``: the model with it switched on,
+    the parameters it adds (after the choice of shear moduli), the pre-check and its notes,
+    and ``bound``: the reduction of the weighted sum of squares the refit could bring, by
+    the linearised refit from its start (for a point mass the residual scan's best share
+    if larger)."""
+
+    kind: str
+    model: SpecimenModel
+    base: tuple
+    added: tuple
+    precheck: Precheck
+    notes: tuple[str, ...]
+    bound: float
+    seconds: float = 0.0
+    pairings: dict | None = None   # followed from the start of the refit
+
+
+def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | None = None) -> Prepared | AddedEffect:
+    """One evaluation of ``state``'s model with effect ``kind`` switched on, at the start
+    of its refit (``precheck``): the shear moduli to free, the conditioning, the bound.
+    ``start``: a fit of the same data whose layer and shear values (and pairing) the
+    refit starts from (a refinement starts where what it refines ended), default
+    ``state``'s.  An ``AddedEffect`` without a fit when the effect has nothing to act on
+    or fails."""
+    started = time.perf_counter()
+    origin = start or state
+    try:
+        on = effect(kind).free_all(state.model.with_specimen(origin.specimen))
+    except NotApplicableError as exc:
+        return AddedEffect(kind, None, error=str(exc), applicable=False)
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, error=str(exc))
+    base = list(state.parameters)
+    covered = {plain(p) for p in base} | {f for p in base if isinstance(p, Tied) for f, _ in p.followers}
+    new = [p for p in on.free if p not in covered]
+    notes = []
+    try:
+        model, sensitivities, started_at = _shear_start(on.model, origin, base + new)
+        notes += [started_at] if started_at else []
+        shear = [p for p in new if p.kind in SHEAR_MODULI]
+        if shear:
+            choice = choose_shear_moduli(sensitivities, base + [p for p in new if p not in shear], shear,
+                                         model.specimen)
+            new = [p for p in new if p not in shear] + list(choice.parameters)
+            notes.append(choice.describe(model.specimen))
+            for material in choice.kept:  # not freed: back to the given or default values
+                model = model.with_specimen(with_shear_moduli(model.specimen, on.model.specimen.materials[material]))
+        check = precheck(sensitivities, base, new)
+        now = state.statistics.sum_squares
+        bound = max(0.0, now - sensitivities.predicted_sum_squares(base + new))  # linearised: may undershoot 0
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, tuple(new), error=str(exc))
+    if kind == "point_mass":
+        bound = max([bound] + [h.get("share", 0.0) * now for h in hints])
+    if start is not None:
+        notes.append(f"started from the {' + '.join(sorted(set(start.effect_of.values()))) or 'fit'}'s values")
+    return Prepared(kind, model, tuple(base), tuple(new), check, tuple(notes), float(bound),
+                    time.perf_counter() - started, origin.pairings)
+
+
+def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[SpecimenModel, Sensitivities, str]:
+    """Where the refit of freed transverse shear moduli that only default to G12 starts:
+    each of ``SHEAR_STARTS`` evaluated once (all such materials at once), the one whose
+    linearised refit (one Gauss-Newton step, every parameter free) leaves the least misfit
+    kept.  Returns (the model there, its sensitivities, a note when it is not G12)."""
+    specimen = model.specimen
+    defaulted = [p for p in parameters if p.kind in SHEAR_MODULI
+                 and p.kind in specimen.materials[p.target].defaulted_shear_moduli]
+    starts = SHEAR_STARTS if defaulted else SHEAR_STARTS[:1]
+    best = None
+    for f13, f23 in starts:
+        try:
+            trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
+                                       for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
+            sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+        except LayerIdError:
+            continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
+        left = sensitivities.predicted_sum_squares(parameters)
+        if best is None or left < best[0]:
+            best = (left, trial, sensitivities, (f13, f23))
+    if best is None:
+        raise LayerIdError("no transverse-shear start is a valid material: " + ", ".join(
+            f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted))
+    _, trial, sensitivities, (f13, f23) = best
+    note = "" if (f13, f23) == (1.0, 1.0) else (
+        f"the refit started at G13 = {f13:.3g} G12, G23 = {f23:.3g} G12 for "
+        f"{', '.join(sorted({p.target for p in defaulted}))} (of {len(starts)} starts, the lowest misfit after one "
+        "linearised step; G13 = G23 = G12 is only the default)")
+    return trial, sensitivities, note
+
+
+def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(), *,
+               settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
+               skip_singular: bool = True, options: FitOptions | None = None,
+               prune_below: float | None = None, prepared: Prepared | None = None) -> AddedEffect:
+    """``state`` (a finished fit, its effects on) refitted with effect ``kind`` switched on
+    and its parameters free too.  First one evaluation with the effect (``prepare_effect``,
+    unless ``prepared`` is given): it decides which transverse shear moduli to free and,
+    when the augmented sensitivity matrix is singular (and ``skip_singular``), the refit is
+    not run.  ``hints``: point-mass start positions from the residual scan; ``nominal``: the
+    spec's specimen, against which the estimates' plausibility is judged; ``settle``: the
+    pairing check at the solution (True: in full, "quick": ``repair``); ``options``: of the
+    refit (default ``EFFECT_ITERATIONS`` iterations); ``prune_below``: a reduction of the
+    weighted sum of squares another candidate achieved: a refit whose bound does not come
+    within ``PRUNE_FACTOR`` of it is not run."""
+    options = options or FitOptions(max_iterations=EFFECT_ITERATIONS)
+    started = time.perf_counter()
+    ready = prepared or prepare_effect(state, kind, hints)
+    if isinstance(ready, AddedEffect):
+        return replace(ready, seconds=time.perf_counter() - started)
+    added = _refit(state, ready, measurements, nominal, hints, settle, progress, skip_singular, options, prune_below)
+    return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
+
+
+def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progress, skip_singular, options,
+           prune_below) -> AddedEffect:
+    kind, new, check, notes = ready.kind, list(ready.added), ready.precheck, list(ready.notes)
+    if check.singular and skip_singular:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}")
+    if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), pruned=True,
+                           error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
+                                 f"(linearised{', residual scan' if kind == 'point_mass' else ''}), less than 1/"
+                                 f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
+    base = list(ready.base)
+    effect_of = {**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
+    if progress:
+        progress(f"fitting with {kind}")
+    try:
+        if kind == "point_mass":
+            result, rivals = _point_mass(state, measurements, hints, base, effect_of, settle, progress, options)
+            notes += rivals
+        else:
+            result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
+                                explain=False, settle=settle, pairings=ready.pairings or state.pairings)
+            result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
+                                                options)
+            notes += restarted
+            result, new, held = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
+                                            settle, options)
+            notes += held
+    except LayerIdError as exc:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
+    first_hz = float(state.measurements.table["frequency_hz"].min())
+    reasons = implausible(new, result.specimen, nominal, first_hz)
+    notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
+    return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
+                       tuple(notes), reasons)
+
+
+def _shear_targets(parameters) -> list[Parameter]:
+    return [p for p in parameters if p.kind in SHEAR_MODULI]
+
+
+def _worse(result: FitResult, state: FitResult) -> bool:
+    """A refit that ends with more misfit than the fit it started from (which is the same
+    model with the effect off) has failed: it stopped in a local minimum or diverged."""
+    return not result.statistics.sum_squares <= state.statistics.sum_squares
+
+
+def _restarted(state, ready: Prepared, result, new, measurements, base, effect_of, settle, options):
+    """A transverse-shear refit that ended worse than ``state`` is a failed start, not a
+    result: the other ``SHEAR_STARTS`` and ``CONTINUATION_START`` (shear moduli so stiff
+    that the model starts at the fit without shear, from where every step can only lower
+    the misfit) are tried, the lowest misfit kept.  Returns (result, parameters, notes)."""
+    shear = _shear_targets(new)
+    if not shear or not _worse(result, state):
+        return result, new, []
+    specimen = ready.model.specimen
+    tried = [(result, "the screened start")]
+    for f13, f23 in SHEAR_STARTS + (CONTINUATION_START,):
+        values = {}
+        for p in shear:
+            for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
+                values[Parameter(q.kind, q.target)] = (f13 if q.kind == "G13" else f23) * \
+                    specimen.materials[q.target].G12
+        trial = fit_layers(ready.model.with_values(values), measurements, base + list(new), options,
+                           effect_of=effect_of, like=state, explain=False, settle=settle,
+                           pairings=ready.pairings or state.pairings)
+        tried.append((trial, f"G13 = {f13:g} G12, G23 = {f23:g} G12"))
+        if not _worse(trial, state):
+            break
+    best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
+    note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
+            f"restarted {len(tried) - 1} time(s), kept {where}")
+    return best, new, [note]
+
+
+def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base, effect_of, settle, options):
+    """Freed shear moduli that ended implausible (at a bound, or beyond
+    ``plausibility.MAX_SHEAR_RATIO`` x G12) are ones the data do not see (a thin skin's
+    G13/G23 in a sandwich): they are held at their start values and the candidate refitted
+    without them, so that they cannot sink the candidate that holds the right physics."""
+    shear = _shear_targets(new)
+    if not shear:
+        return result, new, []
+    first_hz = float(state.measurements.table["frequency_hz"].min())
+    wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
+    if not wandered:
+        return result, new, []
+    kept = [p for p in new if not (p.kind in SHEAR_MODULI and p.target in wandered)]
+    specimen = result.model.specimen
+    for material in wandered:
+        specimen = with_shear_moduli(specimen, ready.model.specimen.materials[material])
+    refit = fit_layers(result.model.with_specimen(specimen), measurements, base + kept, options,
+                       effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
+    note = (f"G13, G23 of {', '.join(wandered)} ran out of the plausible range (the data do not see them): held at "
+            f"their start values and refitted without them")
+    return refit, kept, [note]
+
+
+def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
+                          options: FitOptions | None = None, settle: bool | str = "quick") -> tuple[FitResult, list]:
+    """The fit refitted until every transverse shear modulus an effect freed is still
+    determined at the solution (``shear_moduli.reconsidered``); with the notes saying what
+    changed."""
+    notes = []
+    scatter = 1.0 if result.measurements.has_std else ASSUMED_SCATTER_REL
+    for _ in range(2 * len(nominal.materials)):
+        change = reconsidered(result, nominal, scatter) if result.jacobian is not None else None
+        if change is None:
+            break
+        parameters, model, note = change
+        notes.append(note)
+        result = fit_layers(model, measurements, parameters, options or FitOptions(max_iterations=EFFECT_ITERATIONS),
+                            effect_of=result.effect_of, like=result, explain=False, settle=settle,
+                            pairings=result.pairings)
+    return result, notes
+
+
+def point_mass_hints(state: FitResult) -> tuple:
+    """Point-mass start positions from the residual scan of a fit (``compare``), ranked
+    (``point_mass_starts``)."""
+    _, shares, xy, hints = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
+                                             state.model_hz, state.pairings, state.jacobian)
+    return point_mass_starts(state.model, hints, shares, xy)
+
+
+def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tuple:
+    """Where a point mass's refit starts: the residual scan's best position and a 3 x 3
+    grid over its quarter of the plate (``_quadrant_grid``), ranked by the share of the
+    misfit the scan says a mass there explains (``shares`` per node at ``xy``); the best
+    ``POINT_MASS_STARTS`` (all of them without a scan)."""
+    starts = tuple(hints[:1]) + _quadrant_grid(model, hints[0] if hints else None)
+    if shares is None or xy is None or not len(shares):
+        return starts
+
+    def share(start):
+        return float(shares[int(np.argmin(np.hypot(*(xy - np.array(start["xy"])).T)))])
+
+    return tuple(sorted(starts, key=lambda start: -share(start))[:POINT_MASS_STARTS])
+
+
+def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options):
+    """The point mass from several starts: each screened with ``POINT_MASS_SCREEN``
+    iterations, the best ``POINT_MASS_CONTINUED`` distinct ones continued to convergence.
+    Returns (the best fit, notes on rivals that fit about as well)."""
+    starts = tuple(hints) if hints else point_mass_starts(state.model, ())
+    screened = []
+    for hint in starts:
+        for on in effect("point_mass").free(state.model, hint):
+            trial = fit_layers(on.model, measurements, base + list(on.free),
+                               replace(options, max_iterations=POINT_MASS_SCREEN), effect_of=effect_of, like=state,
+                               explain=False, settle=False, pairings=state.pairings)
+            screened.append((trial, on))
+    screened.sort(key=lambda t: t[0].statistics.sum_squares)
+    chosen = []
+    for trial, on in screened:
+        if all(_differs(trial, other, on.free) for other, _ in chosen):
+            chosen.append((trial, on))
+        if len(chosen) == POINT_MASS_CONTINUED:
+            break
+    if progress:
+        progress(f"point_mass: {len(screened)} starts screened, {len(chosen)} continued")
+    trials = [(continued(t, measurements, options, settle, effect_of), on) for t, on in chosen]
+    result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
+    rivals = [t for t, o in trials if t is not result and t.finished
+              and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
+              and _differs(t, result, o.free)]
+    notes = []
+    if rivals:
+        described = "; ".join(", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals)
+        notes.append(f"point_mass: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
+                     "parameters are not unique with these modes; measure more modes to separate them")
+    return result, notes
+
+
+def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
+    """Point-mass starts on a 3 x 3 grid over the quarter of the plate that holds the
+    residual scan's best point (mirrored quarters are equivalent by symmetry)."""
+    a, b = model.specimen.length, model.specimen.width
+    x0, y0 = best["xy"] if best else (a, b)
+    mass = best["mass_kg"] if best else None
+    out = []
+    for fx in (0.2, 0.5, 0.8):
+        for fy in (0.2, 0.5, 0.8):
+            x = a / 2 + (1 if x0 >= a / 2 else -1) * fx * a / 2
+            y = b / 2 + (1 if y0 >= b / 2 else -1) * fy * b / 2
+            out.append({"xy": (x, y), "mass_kg": mass})
+    return tuple(out)
+
+
+def _differs(a: FitResult, b: FitResult, parameters, tolerance: float = 0.05) -> bool:
+    """Effect parameters more than 5 % apart (positions: 5 % of the plate, folded by symmetry)."""
+    span = max(a.specimen.length, a.specimen.width)
+    for p in parameters:
+        va, vb = a.value(p), b.value(p)
+        if p.kind in ("x", "y"):
+            size = a.specimen.length if p.kind == "x" else a.specimen.width
+            va, vb = abs(va - size / 2), abs(vb - size / 2)
+            if abs(va - vb) > tolerance * span:
+                return True
+        elif abs(va - vb) > tolerance * max(abs(vb), 1e-300):
+            return True
+    return False
+
+
+__all__ = ["fit", "fit_with_effects", "add_effect", "prepare_effect", "AddedEffect", "Prepared",
+           "with_determined_shear"]

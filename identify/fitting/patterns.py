@@ -1,0 +1,139 @@
+"""Residual signatures that point at missing physics, scored against a fit.
+
+After the layer properties are fitted (or at the spec's values), the relative errors
+e = model / measured - 1 of all configurations are tested against the signatures of
+the effects a Kirchhoff free-plate model leaves out:
+
+- growing with the mode's wavenumber (q = f / f_1 of its configuration, ~ k^2):
+  transverse shear and rotary inertia soften short waves (model too stiff);
+- following the squared mode amplitude at one point, e = c phi(x, y)^2 with
+  mass-normalised shapes: a point mass there lowers every frequency by
+  df/f = -m phi^2 / 2 (a sensor, a glue blob), so c estimates m / 2;
+- largest in the lowest modes, e = a + b / q^2: springs in the suspension raise low
+  frequencies most (df/f = k w^2 / (2 omega^2));
+- only in bonded configurations: the adhesive or the added plates are off.
+
+Each signature is scored by the share of the weighted misfit it explains beyond what
+the fitted layer properties can absorb (a score test: its columns are projected on the
+complement of the fit's Jacobian).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fem.model import SpecimenModel
+
+from ..measurements import Measurements
+
+
+#: A signature explaining more than this share of the misfit is reported as present.
+PATTERN_SHARE = 0.5
+#: A signature whose part outside the fit's Jacobian is below this fraction of it is
+#: absorbed by the layer properties (what is left is round-off).
+ABSORBED = 1e-8
+#: Distinct start positions the diagnosis tries for a point mass.
+POINT_MASS_STARTS = 4
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """A residual signature: the share of the misfit it explains and what it suggests."""
+
+    name: str
+    share: float
+    detail: str
+    suggests: tuple[str, ...]
+
+
+class ScoreTest:
+    """Share of the weighted misfit a signature explains beyond what the fitted layer
+    properties can absorb: the signature columns are projected onto the complement of the
+    baseline Jacobian before the least-squares fit (a score test for the missing term)."""
+
+    def __init__(self, e: np.ndarray, weight: np.ndarray, jacobian: np.ndarray | None):
+        self.weight = weight
+        self.r = e * weight
+        self.total = float(self.r @ self.r)
+        self.q = np.linalg.qr(jacobian)[0] if jacobian is not None and jacobian.size else None
+
+    def __call__(self, columns: np.ndarray) -> tuple[float, np.ndarray]:
+        weighted = columns * self.weight[:, None]
+        b = weighted
+        if self.q is not None:
+            b = weighted - self.q @ (self.q.T @ weighted)
+            # A signature the layer properties reproduce leaves only round-off: it explains nothing.
+            absorbed = np.linalg.norm(b, axis=0) <= ABSORBED * np.linalg.norm(weighted, axis=0)
+            b = np.where(absorbed[None, :], 0.0, b)
+        coef, *_ = np.linalg.lstsq(b, self.r, rcond=None)
+        explained = b @ coef
+        return (float(explained @ explained) / self.total if self.total > 0 else 0.0), coef
+
+
+def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz: np.ndarray,
+                      pairings=None, jacobian: np.ndarray | None = None):
+    """Score every signature of the residuals of ``model`` (solved as the fit solved it);
+    returns (patterns, per-node share map of the point signature, node coordinates,
+    point-mass hints best first)."""
+    specimen = model.specimen
+    table = measurements.table
+    measured = table["frequency_hz"].to_numpy()
+    e = model_hz / measured - 1
+    sigma_rel = (table["std_hz"].to_numpy() / measured) if measurements.has_std else np.ones_like(e)
+    score = ScoreTest(e, 1 / sigma_rel, jacobian)
+    configs = table["configuration"].to_numpy()
+    q = np.empty_like(e)
+    for name in measurements.configurations:
+        rows = configs == name
+        q[rows] = measured[rows] / measured[rows].min()
+    patterns = []
+    share, coef = score(q[:, None])
+    patterns.append(Pattern("grows with wavenumber", share if coef[0] > 0 else 0.0,
+                            f"{coef[0]:+.2e} per unit f/f1 (model stiffer for short waves if > 0)",
+                            ("transverse_shear", "rotary_inertia")))
+    share, coef = score((1 / q**2)[:, None])
+    patterns.append(Pattern("largest in the lowest modes", share if coef[0] < 0 else 0.0,
+                            f"{coef[0]:+.2e} x (f1/f)^2 (model too soft at low modes if < 0)", ("suspension",)))
+    bonded = np.array([not specimen.configuration(c).is_original for c in configs])
+    if bonded.any() and (~bonded).any():
+        share, _ = score(bonded[:, None].astype(float))
+        ratio = float(np.mean((score.r[bonded]) ** 2) / max(np.mean(score.r[~bonded] ** 2), 1e-300))
+        patterns.append(Pattern("only in bonded configurations", share if ratio > 4 else 0.0,
+                                f"mean squared error bonded / original = {ratio:.3g}", ("adhesive", "thickness")))
+    # Point-mass signature: e = (m / 2) phi(x, y)^2, scanned over every node.
+    phi2 = []
+    for name in measurements.configurations:
+        solution = model.solve(name)
+        group = table[configs == name]
+        units = solution.units
+        w_index = units.element_type.NODE_DOFS.index("w")
+        shapes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, solution.modes.shapes.shape[1])[:, w_index, :]
+        indices = pairings[name].indices if pairings else group["mode"].to_numpy() - 1
+        phi2.append(shapes[:, indices].T ** 2)  # (rows, nodes) [1/kg]
+    phi2 = np.vstack(phi2)
+    fits = [score(phi2[:, k : k + 1]) for k in range(phi2.shape[1])]
+    shares = np.array([f[0] if f[1][0] > 0 else 0.0 for f in fits])
+    masses = np.array([2 * f[1][0] for f in fits])
+    xy = model.mesh.node_xy
+    span = max(specimen.length, specimen.width)
+    # Distinct start positions: on a plate symmetric about its centre lines, mirrored
+    # points are equivalent, so positions are compared folded into one quarter.
+    folded = np.abs(xy - np.array([specimen.length, specimen.width]) / 2)
+    hints, chosen = [], []
+    for k in np.argsort(-shares):
+        if shares[k] <= 0 or len(hints) == POINT_MASS_STARTS:
+            break
+        if all(np.hypot(*(folded[k] - folded[j])) > 0.2 * span for j in chosen):
+            chosen.append(k)
+            hints.append({"xy": tuple(xy[k]), "mass_kg": float(masses[k]), "share": float(shares[k])})
+    best = int(np.argmax(shares))
+    equivalent = int(np.sum(shares > shares[best] - 0.01))
+    patterns.append(Pattern("follows one point's mode amplitude", float(shares[best]),
+                            f"best at x = {1e3 * xy[best, 0]:.0f} mm, y = {1e3 * xy[best, 1]:.0f} mm "
+                            f"({equivalent} points about as good), about {1e3 * masses[best]:.2g} g there",
+                            ("point_mass",)))
+    return tuple(patterns), shares, xy, hints
+
+
+__all__ = ["Pattern", "ScoreTest", "residual_patterns", "PATTERN_SHARE", "ABSORBED", "POINT_MASS_STARTS"]

@@ -1,0 +1,115 @@
+"""Is an effect's estimate physically plausible?
+
+A missing effect can be imitated by another one: the error pattern of transverse shear
+on a thick plate is matched in part by a heavy mass near the centre, a suspension as
+stiff as the plate, or a layer turned by tens of degrees.  Such estimates are marked, and
+the diagnosis does not prefer them over a plausible rival that fits about as well.  The
+limits (each judged on the estimate, not on its std):
+
+- a point mass heavier than ``MAX_MASS_SHARE`` of the plate (the original configuration):
+  accelerometers and glue blobs are grams on plates of hundreds of grams;
+- suspension springs whose rigid-body frequency (the plate bouncing on them, sqrt(k_total
+  / m)) exceeds ``MAX_SUSPENSION_RATIO`` of the first measured frequency: a support that
+  stiff is not a free suspension (test practice keeps it below 10-20 %);
+- a layer's material axes turned more than ``MAX_TURN_DEG`` from the spec's ``angle_deg``
+  (a spec that means a turned layer says so with its angle);
+- specimen layer thicknesses more than ``MAX_THICKNESS_CHANGE`` off the spec (callipers
+  do better), bond lines outside ``BOND_LINE_RANGE`` times their nominal thickness;
+- transverse shear moduli above ``MAX_SHEAR_RATIO`` x the material's G12 (isotropic: G13 =
+  G23 = G12; fibre plies and wood: G13 about G12, G23 below it) or below G12 /
+  ``MIN_SHEAR_FRACTION`` (wood's rolling shear G_RT is about G_LR / 10-20).
+"""
+from __future__ import annotations
+
+import math
+
+from fem.solver.attachments import PointMass, Suspension
+from fem.specimen import Parameter, Specimen
+
+MAX_MASS_SHARE = 0.05
+MAX_SUSPENSION_RATIO = 0.2
+MAX_TURN_DEG = 5.0
+MAX_THICKNESS_CHANGE = 0.1
+BOND_LINE_RANGE = (1 / 3, 3.0)
+MAX_SHEAR_RATIO = 1.5
+MIN_SHEAR_FRACTION = 100.0
+
+
+def plate_mass(specimen: Specimen) -> float:
+    """Mass of the specimen alone [kg]: the original plate."""
+    return float(sum(layer.material.density * layer.thickness for layer in specimen.layers)
+                 * specimen.length * specimen.width)
+
+
+def implausible(parameters, fitted: Specimen, nominal: Specimen, first_hz: float | None = None) -> tuple[str, ...]:
+    """Why the effect estimates ``parameters`` in the ``fitted`` specimen are physically
+    unlikely, judged against the ``nominal`` one (the spec's); empty when plausible.
+    ``first_hz``: the lowest measured frequency (for the suspension)."""
+    reasons = []
+    done = set()
+    layer_labels = {layer.label for layer in nominal.layers}
+    for p in parameters:
+        p = Parameter(p.kind, p.target)
+        if (p.kind, p.target) in done:
+            continue
+        done.add((p.kind, p.target))
+        if p.kind == "mass":
+            mass, plate = fitted.value(p), plate_mass(fitted)
+            if mass > MAX_MASS_SHARE * plate:
+                reasons.append(f"a point mass of {1e3 * mass:.3g} g is {100 * mass / plate:.2g} % of the plate's "
+                               f"{1e3 * plate:.4g} g (more than {100 * MAX_MASS_SHARE:.0f} %: heavier than a sensor or "
+                               "glue blob)")
+        elif p.kind == "stiffness":
+            springs = fitted.attachment(p.target)
+            if isinstance(springs, Suspension) and first_hz:
+                total = springs.stiffness * len(springs.points)
+                bounce = math.sqrt(total / _total_mass(fitted)) / (2 * math.pi)
+                if bounce > MAX_SUSPENSION_RATIO * first_hz:
+                    reasons.append(f"suspension springs of {springs.stiffness:.3g} N/m hold the plate at "
+                                   f"{bounce:.3g} Hz, {100 * bounce / first_hz:.2g} % of the first mode (more than "
+                                   f"{100 * MAX_SUSPENSION_RATIO:.0f} %: stiffer than a free suspension)")
+        elif p.kind == "angle":
+            turn = math.degrees(fitted.value(p) - nominal.value(p))
+            if abs(turn) > MAX_TURN_DEG:
+                reasons.append(f"layer {p.target} turned {turn:+.3g} deg from the spec's angle (more than "
+                               f"{MAX_TURN_DEG:g} deg; give angle_deg in the spec if it is meant)")
+        elif p.kind == "thickness":
+            ratio = fitted.value(p) / nominal.value(p)
+            if p.target in layer_labels and abs(ratio - 1) > MAX_THICKNESS_CHANGE:
+                reasons.append(f"layer {p.target} {100 * (ratio - 1):+.3g} % off its nominal thickness (more than "
+                               f"{100 * MAX_THICKNESS_CHANGE:.0f} %)")
+            elif p.target not in layer_labels and not BOND_LINE_RANGE[0] <= ratio <= BOND_LINE_RANGE[1]:
+                reasons.append(f"bond line {p.target} at {ratio:.3g} x its nominal thickness (outside "
+                               f"{BOND_LINE_RANGE[0]:.2g}-{BOND_LINE_RANGE[1]:g} x)")
+        elif p.kind in ("G13", "G23") and ("shear", p.target) not in done:
+            done.add(("shear", p.target))
+            material = fitted.materials[p.target]
+            for kind, value in zip(("G13", "G23"), material.transverse_shear_moduli):
+                ratio = value / material.G12
+                if ratio > MAX_SHEAR_RATIO or ratio < 1 / MIN_SHEAR_FRACTION:
+                    reasons.append(f"{p.target} {kind} = {value / 1e9:.3g} GPa is {ratio:.3g} x its G12 (outside "
+                                   f"1/{MIN_SHEAR_FRACTION:g}-{MAX_SHEAR_RATIO:g} x)")
+    return tuple(reasons)
+
+
+def _total_mass(specimen: Specimen) -> float:
+    return plate_mass(specimen) + sum(a.mass for a in specimen.attachments if isinstance(a, PointMass))
+
+
+def plausible_first(candidates, chi2_unit: float, margin: float, key=lambda c: c.bic, judged=lambda c: c.plausible,
+                    related=lambda a, b: False):
+    """``candidates`` ordered by criterion (lower first), an implausible one moved behind
+    the plausible rivals whose criterion is within ``margin`` x ``chi2_unit`` of it.  A
+    rival is another explanation: not one ``related`` to it (e.g. the same physics with or
+    without a part, which estimates the same parameters)."""
+    def penalty(c):
+        if judged(c):
+            return 0.0
+        rivals = [r for r in candidates if r is not c and judged(r) and not related(r, c)
+                  and abs(key(r) - key(c)) < margin * chi2_unit]
+        return margin * chi2_unit if rivals else 0.0
+
+    return sorted(candidates, key=lambda c: key(c) + penalty(c))
+
+
+__all__ = ["implausible", "plate_mass", "plausible_first", "MAX_MASS_SHARE"]

@@ -1,0 +1,773 @@
+"""Modal peaks of one configuration from its impact-test recordings.
+
+The pipeline: recordings -> hits (:mod:`identify.recordings.readers`) -> averaged FRF H1 with
+coherence (:mod:`identify.recordings.frf`) -> poles -> a peak list.
+
+Poles.  The LSCF estimator of sdypy-EMA (least-squares complex frequency domain) is run
+on H1 for model orders 2, 4, ..., 2 x ``max_order``: the stabilisation diagram.  A pole
+is *stable* when the previous order has one within ``FREQ_TOL`` in frequency and
+``DAMP_TOL`` in damping; stable poles closer than a quarter of their half-power
+half-bandwidth are one column, and a column stable in at least ``STABLE_FRACTION`` of
+the orders is a mode candidate.  Each candidate is refined by a local pole-residue fit
+on H1 (variable projection: complex residues, the neighbouring modes' poles with free
+residues so a strong neighbour's skirt does not bias it, and a linear residual term;
+the poles by ``scipy.optimize.least_squares``; overlapping candidates are fitted
+together), kept when its modal peak stands ``SNR_MIN`` times above the fit's residual,
+and cross-checked against peak picking (``scipy.signal.find_peaks`` on |H1| in dB,
+Gaussian interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
+(e.g. a square plate's pair 0.01 % apart) make one column and are reported as one peak:
+one sensor cannot tell them apart.  ``frequency_hz`` is the undamped natural frequency
+|p| / 2 pi of the pole p (what an FE model predicts), ``damping_ratio`` -Re p / |p|.
+
+Scatter.  The same local fit, seeded with the H1 poles, estimates every mode on each
+hit's FRF H_k = Y_k / X_k.  ``std_hz`` is the standard error of ``frequency_hz``:
+
+    std_hz = s / c4(n) * sqrt(sum_k w_k^2)
+
+with s the sample standard deviation of the n per-hit frequencies, c4(n) its small-sample
+bias factor (E[s] = c4 sigma) and w_k the hit's weight in H1 at the mode (|X_k|^2 /
+sum |X|^2; 1/n for equal hits), because H1 = sum_k w_k H_k puts the H1 pole at the
+weighted mean of the hits' poles to first order.  It is the standard deviation of
+``frequency_hz`` over repeated sessions of as many hits (hit-to-hit scatter and noise),
+not the model's error; its mean over sessions matches the observed scatter (tests and
+``benchmarks.peaks``: ratio 0.97-1.09).  With n hits it is itself uncertain by about
+1 / sqrt(2 (n - 1)) (35 % at 5 hits) and (frequency_hz - truth) / std_hz follows
+Student's t with n - 1 degrees of freedom.  A mode with fewer than two hit estimates gets
+the median relative std of the other modes (flag ``std_pooled``); one hit (or one FRF
+record): NaN for all (the CSV's std_hz column is then empty, i.e. not given).
+
+Exponential window: frequencies and damping ratios are corrected with
+:func:`identify.recordings.frf.correct_for_window` (true pole = windowed pole + r).
+
+Response-only recordings (a one-channel WAV): no FRF, so no poles; peaks are picked on
+the RMS response spectrum (prominence >= ``RESPONSE_ONLY_DB``), std_hz from each hit's
+picked peak, no damping; quality "response_only" and a note say so.
+
+Flags (``quality`` is the first that applies, else "good"): ``suspension`` (below
+``frf.SUSPENSION_HZ``: a rigid-body mode on the suspension, kept only when the caller's
+band reaches down there; the default band starts at that frequency, so suspension peaks
+are left out and named in the notes), ``low_coherence`` (gamma^2 < ``COHERENCE_MIN`` at
+the peak), ``weak`` (prominence < ``WEAK_DB`` in |H1| or no local maximum of its own,
+or SNR < 3 x ``SNR_MIN``), ``close`` (another mode within two half-power bandwidths),
+``single_hit`` (fewer than two hit estimates), ``guided`` (found only by looking near a
+``guide_hz`` frequency), ``std_pooled``, ``unpicked`` (no peak picked on |H1| within
+the mode's half-power half-bandwidth: ``peak_hz`` is missing, null in JSON and blank in
+the report, never NaN).  Peaks picked on |H1| with no stable pole (a
+suspension, an anti-resonance's neighbour, a cable) are left out and named in the notes.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import optimize, signal
+from scipy.special import gammaln
+
+from fem.errors import MeasurementError
+from fem.io import atomic_path, write_text
+from fem.model import one_blas_thread
+
+from . import frf as frf_module
+from .frf import AveragedFRF, Rejection, correct_for_window
+from .readers import Hit, MeasuredFRF, check_together, read_recordings, recording_notes
+
+#: Stability between successive orders: relative change of frequency and of damping.
+FREQ_TOL = 2e-3
+DAMP_TOL = 0.10
+#: A column must be stable in this fraction of the orders.
+STABLE_FRACTION = 0.3
+#: Damping ratios above this are not plate modes (nor computational poles we keep).
+MAX_DAMPING = 0.1
+#: Modal peak |A| / |Re p| over the local fit's RMS residual per line: kept at SNR_MIN,
+#: found near a guide frequency at SNR_GUIDED.
+SNR_MIN = 10.0
+SNR_GUIDED = 3.0
+#: Prominence in |H1| [dB]: below WEAK_DB a mode is "weak"; peaks picked from PICK_DB
+#: (the lab's weakest modes stand 0.5 dB above their neighbourhood).
+WEAK_DB = 1.0
+PICK_DB = 0.3
+COHERENCE_MIN = 0.9
+#: Prominence of a peak picked on a response spectrum (no force, no stabilisation).
+RESPONSE_ONLY_DB = 3.0
+#: Prominence of a peak below the band named in the notes (a suspension mode stands tall).
+SUSPENSION_DB = 6.0
+#: Half-width of a local fit's window, in half-power half-bandwidths (zeta f).
+FIT_HALF_WIDTHS = 4.0
+GUIDE_REL = 0.03
+#: Spurious peaks named in the notes (the most prominent).
+NOTED_PEAKS = 8
+CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
+FLAG_ORDER = ("suspension", "low_coherence", "weak", "close", "single_hit", "guided", "std_pooled", "unpicked")
+
+
+@dataclass(frozen=True, eq=False)
+class Stabilisation:
+    """The stabilisation diagram: every LSCF pole in the band with its model order,
+    frequency [Hz] and damping ratio (window-corrected), and whether it is stable."""
+
+    order: np.ndarray
+    frequency_hz: np.ndarray
+    damping_ratio: np.ndarray
+    stable: np.ndarray
+    pole: np.ndarray  # as identified on the (windowed) FRF [rad/s]
+
+
+@dataclass(frozen=True, eq=False)
+class PeakList:
+    """The peaks of one configuration.
+
+    table: one row per mode: frequency_hz [Hz], std_hz [Hz] (standard error of
+    frequency_hz, see the module docstring), damping_ratio [-], coherence [-] (gamma^2
+    at the peak), prominence_db [dB] (of the peak in |H1|, 0 when it has no local
+    maximum of its own), snr [-] (modal peak / fit residual), hits (estimates behind
+    std_hz), peak_hz [Hz] (peak picking with interpolation: the cross-check), quality
+    and flags.  frf: the averaged FRF; band_hz: the searched band [Hz]; rejected: hits
+    left out and why; notes: what was done and what was left out.
+    """
+
+    configuration: str
+    table: pd.DataFrame
+    frf: AveragedFRF
+    band_hz: tuple[float, float]
+    rejected: tuple[Rejection, ...] = ()
+    notes: tuple[str, ...] = ()
+    diagram: Stabilisation | None = None
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    def to_frame(self) -> pd.DataFrame:
+        return self.table.assign(configuration=self.configuration)[["configuration", *self.table.columns]]
+
+    def to_dict(self) -> dict:
+        """JSON-ready: NaN becomes None."""
+        def plain(v):
+            v = v.item() if isinstance(v, np.generic) else v
+            return None if isinstance(v, float) and not math.isfinite(v) else v
+
+        return {
+            "configuration": self.configuration,
+            "band_hz": list(self.band_hz),
+            "hits_used": list(self.frf.sources),
+            "exponential_window_rate": self.frf.decay_rate,
+            "peaks": [{k: plain(v) for k, v in row.items()} for row in self.table.to_dict("records")],
+            "rejected": [{"source": r.source, "reason": r.reason} for r in self.rejected],
+            "notes": list(self.notes),
+        }
+
+    def report(self) -> str:
+        title = (f"Peaks of configuration '{self.configuration}': {len(self)} modes in "
+                 f"{self.band_hz[0]:.1f}-{self.band_hz[1]:.1f} Hz from {self.frf.n_hits} hit(s) "
+                 f"({', '.join(self.frf.sources)})")
+        lines = [title, ""]
+        if len(self):
+            shown = self.table.assign(damping_ratio=100 * self.table["damping_ratio"],
+                                      damping_std=100 * self.table["damping_std"],
+                                      flags=self.table["flags"].replace("", "good")).rename(
+                columns={"damping_ratio": "damping_%", "damping_std": "damping_std_%"}).drop(columns="quality")
+            formats = {"frequency_hz": "{:.3f}", "std_hz": "{:.3f}", "damping_%": "{:.3f}", "damping_std_%": "{:.4f}",
+                       "coherence": "{:.4f}",
+                       "prominence_db": "{:.1f}", "snr": "{:.0f}", "peak_hz": "{:.2f}"}
+            lines.append(shown.to_string(index=False, formatters={k: _blank_if_missing(v) for k, v in formats.items()}))
+        else:
+            lines.append("no peaks found")
+        if self.rejected:
+            lines += ["", "Rejected hits:"] + [f"  {r.source}: {r.reason}" for r in self.rejected]
+        if self.notes:
+            lines += ["", "Notes:"] + [f"  {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def write_csv(self, path: str | Path) -> None:
+        """The peak-list CSV: configuration,frequency_hz,std_hz,damping_ratio,damping_std."""
+        write_text(path, self.to_frame()[CSV_COLUMNS].to_csv(index=False, float_format="%.7g"))
+
+    def plot(self, directory: str | Path) -> list[Path]:
+        return plot_peaks(self, directory)
+
+
+def _blank_if_missing(form: str):
+    """A formatter printing a missing (NaN) value blank: its flag or a note says why."""
+    return lambda v: form.format(v) if np.isfinite(v) else ""
+
+
+# --- local pole-residue fit ------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class LocalFit:
+    """Poles [rad/s] of a local fit, each mode's SNR, and whether the fit converged
+    with every pole inside its window."""
+
+    pole: np.ndarray
+    snr: np.ndarray
+    ok: bool
+
+
+def _basis(s: np.ndarray, pole: np.ndarray, centre: float) -> np.ndarray:
+    """Real-stacked basis (rows: real parts, then imaginary parts) of
+    sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc) with real coefficients
+    (Re A_r for every pole, then Im A_r, then the residual terms)."""
+    a = 1 / (s[:, None] - pole)
+    b = 1 / (s[:, None] - pole.conj())
+    x = (s.imag - centre)[:, None] / centre
+    m = np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x])
+    return np.vstack([m.real, m.imag])
+
+
+class _Projection:
+    """Variable projection of the local model (Golub & Pereyra 1973): for the poles
+    p(x) the linear coefficients c(x) = A(x)^+ h are projected out, the residual is
+    r(x) = A c - h and its exact Jacobian
+
+        dr/dx_k = (I - Q Q^T) (dA/dx_k) c - Q R^-T (dA/dx_k)^T r
+
+    (A = Q R).  Only the two columns of the pole moved by x_k depend on it, so each
+    Jacobian costs one small QR and a few matrix-vector products.  Pole r is
+    p_r = -d_r exp(x_2r+1) + i (Im seed_r + d_r x_2r), d_r = |Re seed_r|."""
+
+    def __init__(self, frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray):
+        self.s = 2j * np.pi * frequency_hz
+        self.centre = float(self.s.imag.mean())
+        self.h = np.concatenate([h.real, h.imag])
+        self.seed, self.fixed = seed, fixed
+        self.scale = np.abs(seed.real)
+        self._at = None
+
+    def pole(self, x: np.ndarray) -> np.ndarray:
+        return -self.scale * np.exp(x[1::2]) + 1j * (self.seed.imag + self.scale * x[0::2])
+
+    def _state(self, x: np.ndarray):
+        if self._at is None or not np.array_equal(self._at[0], x):
+            p = self.pole(x)
+            a = _basis(self.s, np.concatenate([p, self.fixed]), self.centre)
+            q, r = np.linalg.qr(a)
+            c = np.linalg.lstsq(r, q.T @ self.h, rcond=None)[0]
+            self._at = (x.copy(), p, a, q, r, c, a @ c - self.h)
+        return self._at[1:]
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        return self._state(x)[-1]
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        p, _, q, rmat, c, res = self._state(x)
+        m, n = len(p), len(p) + len(self.fixed)
+        a = 1 / (self.s[:, None] - p)
+        b = 1 / (self.s[:, None] - p.conj())
+        plus, minus = a**2 + b**2, a**2 - b**2
+        # d(column)/dx for the frequency (x0) and decay (x1) parameters of each free pole
+        d_re = {0: 1j * self.scale * minus, 1: p.real * plus}
+        d_im = {0: -self.scale * plus, 1: 1j * p.real * minus}
+        jac = np.empty((len(res), 2 * m))
+        for k in (0, 1):
+            dc = d_re[k] * c[:m] + d_im[k] * c[n:n + m]  # (dA/dx) c, one column per pole
+            stacked = np.vstack([dc.real, dc.imag])
+            first = stacked - q @ (q.T @ stacked)
+            v = np.zeros((rmat.shape[0], m))
+            cols = np.arange(m)
+            v[cols, cols] = np.concatenate([d_re[k].real, d_re[k].imag]).T @ res
+            v[n + cols, cols] = np.concatenate([d_im[k].real, d_im[k].imag]).T @ res
+            second = q @ np.linalg.lstsq(rmat.T, v, rcond=None)[0]
+            jac[:, k::2] = first - second
+        return jac
+
+
+def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None) -> LocalFit:
+    """Poles near ``seed`` [rad/s] fitted to the complex FRF ``h`` on ``frequency_hz``.
+
+    Model: sum of conjugate pole pairs with complex residues, the neighbouring modes'
+    ``fixed`` poles (residues fitted) and c0 + c1 (w - wc); the linear parameters are
+    projected out (:class:`_Projection`), the poles (frequency shift and log decay, in
+    units of each seed's decay) go to ``least_squares`` with the exact Jacobian.  snr:
+    each mode's peak |A_r| / |Re p_r| over the RMS residual per line."""
+    fixed = np.array([], dtype=complex) if fixed is None else fixed
+    problem = _Projection(frequency_hz, h, seed, fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        result = optimize.least_squares(problem.residual, np.zeros(2 * len(seed)), jac=problem.jacobian,
+                                        method="lm", x_scale=1.0)
+    p, _, _, _, c, r = problem._state(result.x)
+    m, n = len(seed), len(seed) + len(fixed)
+    residue = np.abs(c[:m] + 1j * c[n:n + m])
+    rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
+    inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
+    return LocalFit(p, residue / np.abs(p.real) / rms, bool(result.success and np.all(np.isfinite(p)) and inside.all()))
+
+
+def _half_window(frf: AveragedFRF, pole: np.ndarray) -> np.ndarray:
+    """Half-width [Hz] of each pole's fit window: FIT_HALF_WIDTHS half-power
+    half-bandwidths, at least two lines' worth."""
+    return FIT_HALF_WIDTHS * np.maximum(np.abs(pole.real) / (2 * np.pi), 2 * frf.resolution_hz)
+
+
+def _neighbourhoods(frf: AveragedFRF, seeds: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """For each seed: the poles fitted with it (those whose fit windows overlap its
+    own), the fixed neighbours (every other seed inside the joint window, and the
+    nearest one beyond each edge) and the window's lines.  Not transitive: in a dense
+    band (a plate's modal density is constant, its half-bandwidths grow with
+    frequency) overlapping windows would otherwise chain every mode into one fit."""
+    f = seeds.imag / (2 * np.pi)
+    half = _half_window(frf, seeds)
+    order = np.argsort(f)
+    out = []
+    for i in range(len(seeds)):
+        joint = np.flatnonzero(np.abs(f - f[i]) < half + half[i])
+        joint = joint[np.argsort(f[joint])]
+        lo, hi = (f[joint] - half[joint]).min(), (f[joint] + half[joint]).max()
+        inside = (f >= lo) & (f <= hi)
+        inside[joint] = False
+        below, above = order[f[order] < lo], order[f[order] > hi]
+        fixed = np.concatenate([below[-1:], np.flatnonzero(inside), above[:1]])
+        out.append((joint, fixed, frf.lines((lo, hi))))
+    return out
+
+
+def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray,
+             cache: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Local fits of every seed with its neighbourhood (:func:`_neighbourhoods`) on
+    ``h``: poles, SNR, success per seed.  ``cache`` (a dict kept by the caller for one
+    ``h``) skips fits already made with the same free and fixed poles."""
+    pole = np.full(len(seeds), np.nan + 0j)
+    snr = np.zeros(len(seeds))
+    ok = np.zeros(len(seeds), dtype=bool)
+    cache = {} if cache is None else cache
+    for i, (joint, fixed, lines) in enumerate(_neighbourhoods(frf, seeds)):
+        if len(lines) < 2 * (len(joint) + len(fixed)) + 4:
+            continue
+        key = (seeds[joint].tobytes(), seeds[fixed].tobytes())
+        if key not in cache:
+            cache[key] = local_fit(frf.frequency_hz[lines], h[lines], seeds[joint], seeds[fixed])
+        fit = cache[key]
+        at = int(np.flatnonzero(joint == i)[0])
+        pole[i], snr[i], ok[i] = fit.pole[at], fit.snr[at], fit.ok
+    return pole, snr, ok
+
+
+# --- stabilisation diagram ---------------------------------------------------------------
+
+def stabilisation(frf: AveragedFRF, band_hz, max_order: int) -> Stabilisation:
+    """LSCF poles (sdypy-EMA) of H1 in the band for orders 2..2 max_order, with stability."""
+    from sdypy.EMA import Model
+
+    lines = np.flatnonzero(frf.frequency_hz <= band_hz[1])
+    lines = np.append(lines, lines[-1] + 1) if lines[-1] + 1 < len(frf.frequency_hz) else lines
+    freq = frf.frequency_hz[lines]
+    model = Model(frf=frf.h1[lines], freq=freq, lower=band_hz[0], upper=freq[-1], pol_order_high=max_order)
+    model.get_poles("lscf", show_progress=False)
+    orders, poles = [], []
+    for i, p in enumerate(model.all_poles):
+        p = np.asarray(p)
+        f, zeta = correct_for_window(p, frf.decay_rate)
+        keep = (p.imag > 0) & (p.real < 0) & (f >= band_hz[0]) & (f <= band_hz[1]) & (zeta > 0) & (zeta < MAX_DAMPING)
+        orders.append(np.full(keep.sum(), 2 * (i + 1)))
+        poles.append(p[keep])
+    order, pole = np.concatenate(orders), np.concatenate(poles)
+    f, zeta = correct_for_window(pole, frf.decay_rate)
+    wf, wz = np.abs(pole), -pole.real / np.abs(pole)
+    stable = np.zeros(len(pole), dtype=bool)
+    for o in np.unique(order)[1:]:
+        now, before = order == o, order == o - 2
+        if before.any():
+            close_f = np.abs(wf[now][:, None] / wf[before] - 1) < FREQ_TOL
+            close_z = np.abs(wz[now][:, None] / wz[before] - 1) < DAMP_TOL
+            stable[now] = (close_f & close_z).any(axis=1)
+    return Stabilisation(order, f, zeta, stable, pole)
+
+
+def _columns(diagram: Stabilisation, n_orders: int) -> np.ndarray:
+    """Seed poles [rad/s] of the stable columns (single linkage within a quarter of the
+    half-power half-bandwidth), each the median over its poles."""
+    p = diagram.pole[diagram.stable]
+    o = diagram.order[diagram.stable]
+    if not len(p):
+        return np.array([], dtype=complex)
+    idx = np.argsort(p.imag)
+    p, o = p[idx], o[idx]
+    gap = np.diff(p.imag) > 0.25 * np.abs(p.real[1:])
+    seeds = []
+    for members in np.split(np.arange(len(p)), np.flatnonzero(gap) + 1):
+        if len(np.unique(o[members])) >= STABLE_FRACTION * n_orders:
+            seeds.append(np.median(p[members].real) + 1j * np.median(p[members].imag))
+    return np.array(seeds)
+
+
+# --- peak picking --------------------------------------------------------------------------
+
+def picked_peaks(frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndarray,
+                 prominence_db: float = PICK_DB) -> pd.DataFrame:
+    """Local maxima of 20 log10 |H| in ``lines`` with at least ``prominence_db``:
+    frequency by Gaussian interpolation (a parabola through the three dB values)."""
+    level = 20 * np.log10(np.abs(magnitude[lines]) + 1e-300)
+    i, props = signal.find_peaks(level, prominence=prominence_db)
+    keep = (i > 0) & (i < len(level) - 1)
+    i, prom = i[keep], props["prominences"][keep]
+    a, b, c = level[i - 1], level[i], level[i + 1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        shift = np.where(a - 2 * b + c < 0, 0.5 * (a - c) / (a - 2 * b + c), 0.0)
+    df = frequency_hz[1] - frequency_hz[0]
+    return pd.DataFrame({"frequency_hz": frequency_hz[lines][i] + shift * df, "prominence_db": prom,
+                         "line": lines[i]})
+
+
+def _prominence_at(frf: AveragedFRF, lines: np.ndarray, f: float, half_bw: float) -> float:
+    """Prominence [dB] of the local maximum of |H1| within half_bw of f (0: none)."""
+    level = 20 * np.log10(np.abs(frf.h1[lines]) + 1e-300)
+    maxima = signal.find_peaks(level)[0]
+    near = maxima[np.abs(frf.frequency_hz[lines][maxima] - f) <= half_bw]
+    if not near.size:
+        return 0.0
+    return float(signal.peak_prominences(level, near)[0].max())
+
+
+# --- the entry point -------------------------------------------------------------------
+
+def _c4(n: np.ndarray) -> np.ndarray:
+    n = np.asarray(n, dtype=float)
+    return np.sqrt(2 / (n - 1)) * np.exp(gammaln(n / 2) - gammaln((n - 1) / 2))
+
+
+def _check_band(band_hz, nyquist: float) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in band_hz)
+    except (TypeError, ValueError):
+        raise MeasurementError(f"band_hz = {band_hz!r} must be two frequencies (low, high) in Hz, "
+                               "e.g. (20, 1000)") from None
+    if not (0 <= lo < hi <= nyquist):
+        raise MeasurementError(f"band_hz = ({lo:g}, {hi:g}) must satisfy 0 <= low < high <= {nyquist:g} Hz (half the "
+                               "sample rate); give a band inside the measured range")
+    return lo, hi
+
+
+def _check_guide(guide_hz) -> np.ndarray:
+    try:
+        guide = np.sort(np.atleast_1d(np.asarray(guide_hz, dtype=float)))
+    except (TypeError, ValueError):
+        guide = np.array([np.nan])
+    if not len(guide) or not np.all(np.isfinite(guide) & (guide > 0)):
+        raise MeasurementError(f"guide_hz = {guide_hz!r} must be positive frequencies in Hz, e.g. the model's "
+                               "[129.3, 191.2]; leave it out to search the whole band")
+    return guide
+
+
+def _band(frf_records, hits, band_hz, guide_hz, nyquist) -> tuple[float, float]:
+    if band_hz is not None:
+        return _check_band(band_hz, nyquist)
+    if hits:
+        lo, hi = frf_module.default_band(hits)
+    else:
+        f = frf_records[0].frequency_hz
+        lo, hi = max(frf_module.SUSPENSION_HZ, f[0]), f[-1]
+    if guide_hz is not None and len(guide_hz):
+        lo, hi = max(lo, 0.8 * min(guide_hz)), min(nyquist, 1.2 * max(guide_hz))
+    return lo, hi
+
+
+@one_blas_thread
+def extract_peaks(recordings, configuration: str = "original", sample_rate: float | None = None,
+                  band_hz: tuple[float, float] | None = None, guide_hz=None,
+                  max_order: int | None = None) -> PeakList:
+    """The peak list of one configuration from its recordings.
+
+    recordings: file paths (CSV, WAV, UFF/UNV; several files = several hits), or Hit /
+    MeasuredFRF records already read.  sample_rate [Hz]: for CSV files without a time_s
+    column (checked against the files otherwise).  band_hz: (low, high) [Hz] searched;
+    default: from 20 Hz (suspension modes below) to where the hammer's force spectrum has
+    dropped 10 dB, or 0.8-1.2 x the ``guide_hz`` range when given.  guide_hz: predicted
+    model frequencies [Hz] (optional): modes not found near them are looked for harder
+    (flag "guided").  max_order: highest LSCF order / 2 (default from the number of
+    peaks picked on |H1|).
+    """
+    given = recordings if isinstance(recordings, (list, tuple)) else [recordings]
+    if given and all(isinstance(r, (Hit, MeasuredFRF)) for r in given):
+        records = check_together(given)
+    else:
+        records = read_recordings(recordings, sample_rate)
+    hits = [r for r in records if isinstance(r, Hit)]
+    frfs = [r for r in records if isinstance(r, MeasuredFRF)]
+    nyquist = hits[0].sample_rate / 2 if hits else float(frfs[0].frequency_hz[-1])
+    guide = None if guide_hz is None else _check_guide(guide_hz)
+    band = _band(frfs, hits, band_hz, guide, nyquist)
+    frf = frf_module.average_hits(hits, band) if hits else frf_module.from_measured(frfs)
+    notes = recording_notes(records) + list(frf.notes)
+    lines = frf.lines(band)
+    if len(lines) < 16:
+        raise MeasurementError(f"band_hz = ({band[0]:g}, {band[1]:g}) holds {len(lines)} spectral lines; need at least "
+                               "16: widen the band or record longer hits")
+    picked = picked_peaks(frf.frequency_hz, frf.h1, lines, PICK_DB if frf.has_force else RESPONSE_ONLY_DB)
+    _note_below_band(frf, band, notes)
+    if not frf.has_force:
+        return _response_only(frf, configuration, band, picked, notes)
+    if max_order is None:
+        max_order = int(np.clip(2 * len(picked) + 20, 20, 100))
+    max_order = int(min(max_order, len(frf.frequency_hz[frf.frequency_hz <= band[1]]) // 8))
+    diagram = stabilisation(frf, band, max_order)
+    seeds = _columns(diagram, max_order)
+    pole, snr, guided = _refine(frf, seeds, notes)
+    if guide is not None:
+        pole, snr, guided = _look_near_guides(frf, guide, picked, diagram, pole, snr, notes)
+    table = _table(frf, band, lines, pole, snr, guided, picked, notes)
+    if frf.n_hits == 1:
+        notes.append("one hit: std_hz cannot be estimated (NaN); repeat the hit for a scatter")
+    return PeakList(configuration, table, frf, band, frf.rejected, tuple(notes), diagram)
+
+
+def _note_below_band(frf: AveragedFRF, band, notes: list[str]) -> None:
+    below = np.flatnonzero((frf.frequency_hz >= 1.0) & (frf.frequency_hz < band[0]))
+    if len(below) >= 3:
+        low = picked_peaks(frf.frequency_hz, frf.h1, below, SUSPENSION_DB)
+        if len(low):
+            notes.append(f"peaks below the band at {', '.join(f'{f:.1f}' for f in low['frequency_hz'])} Hz "
+                         "(suspension modes of a free plate?) left out")
+
+
+def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
+    """Fit the stable columns on H1; drop weak or duplicated ones and refit."""
+    cache: dict = {}
+    while True:
+        pole, snr, ok = _fit_all(frf, frf.h1, seeds, cache)
+        f, zeta = correct_for_window(pole, frf.decay_rate)
+        bad = ~ok | (snr < SNR_MIN) | ~(zeta > 0) | (zeta > MAX_DAMPING)
+        dup = np.zeros(len(seeds), dtype=bool)
+        order = np.argsort(f)
+        for a, b in itertools.pairwise(order):
+            if abs(pole[b].imag - pole[a].imag) < 0.1 * abs(pole[a].real):
+                dup[a if snr[a] < snr[b] else b] = True
+        drop = bad | dup
+        if not drop.any():
+            return pole, snr, np.zeros(len(pole), dtype=bool)
+        w = int(np.argmin(np.where(drop, snr, np.inf)))
+        reason = ("the local fit failed" if not ok[w] else
+                  f"damping ratio {zeta[w]:.3g} outside (0, {MAX_DAMPING:g})" if not 0 < zeta[w] <= MAX_DAMPING else
+                  f"its peak is only {snr[w]:.1f} times the fit residual (need {SNR_MIN:g})" if snr[w] < SNR_MIN else
+                  "it duplicates a neighbour")
+        notes.append(f"stable pole near {seeds[w].imag / (2 * np.pi):.2f} Hz left out: {reason}")
+        seeds = np.delete(seeds, w)
+
+
+def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
+    """For guide frequencies with no mode within GUIDE_REL: fit the best nearby picked
+    peak or pole, keep it at SNR >= SNR_GUIDED (flag "guided")."""
+    f, _ = correct_for_window(pole, frf.decay_rate)
+    guided = np.zeros(len(pole), dtype=bool)
+    for g in guide:
+        if len(f) and np.min(np.abs(f / g - 1)) < GUIDE_REL:
+            continue
+        near = picked[np.abs(picked["frequency_hz"] / g - 1) < GUIDE_REL]
+        if len(near):
+            fp = float(near["frequency_hz"].iloc[np.argmax(near["prominence_db"])])
+            candidates = diagram.pole[np.abs(diagram.frequency_hz / fp - 1) < FREQ_TOL * 5]
+            decay = np.median(candidates.real) if len(candidates) else -2 * np.pi * fp * 0.005  # start: 0.5 % damping
+            seed = decay + 2j * np.pi * fp
+        else:
+            candidates = diagram.pole[np.abs(diagram.frequency_hz / g - 1) < GUIDE_REL]
+            if not len(candidates):
+                notes.append(f"nothing found near the guide frequency {g:.1f} Hz (node at the sensor?)")
+                continue
+            seed = np.median(candidates.real) + 1j * np.median(candidates.imag)
+        p, s, ok = _fit_all(frf, frf.h1, np.array([seed]))
+        fn, zeta = correct_for_window(p, frf.decay_rate)
+        if ok[0] and s[0] >= SNR_GUIDED and 0 < zeta[0] < MAX_DAMPING and abs(fn[0] / g - 1) < GUIDE_REL:
+            pole, snr, guided = np.append(pole, p), np.append(snr, s), np.append(guided, True)
+            notes.append(f"mode at {fn[0]:.2f} Hz found only by looking near the guide frequency {g:.1f} Hz")
+        else:
+            notes.append(f"nothing found near the guide frequency {g:.1f} Hz (node at the sensor?)")
+    return pole, snr, guided
+
+
+def _per_hit(frf: AveragedFRF, pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(hits, modes) frequency [Hz] and damping ratio [-] (window-corrected) of every mode
+    fitted on each hit's FRF (NaN: failed)."""
+    out, damping = np.full((frf.n_hits, len(pole)), np.nan), np.full((frf.n_hits, len(pole)), np.nan)
+    if frf.n_hits < 2:
+        return out, damping
+    for k in range(frf.n_hits):
+        p, _, ok = _fit_all(frf, frf.per_hit[k], pole)
+        f, zeta = correct_for_window(p, frf.decay_rate)
+        near = np.abs(p.imag - pole.imag) < FIT_HALF_WIDTHS * np.abs(pole.real)
+        good = ok & near & (zeta > 0) & (zeta < MAX_DAMPING)
+        out[k, good], damping[k, good] = f[good], zeta[good]
+    return out, damping
+
+
+def broadening(frf: AveragedFRF, per_hit_hz: np.ndarray, frequency_hz: np.ndarray,
+               damping_ratio: np.ndarray) -> np.ndarray:
+    """How much wider than each hit's the H1 peak is [damping ratio]: averaging hits
+    whose peaks scatter in frequency, s_f^2 / (zeta f^2), s_f^2 the H1-weighted variance of
+    the (hits, modes) per-hit frequencies (NaN with fewer than two)."""
+    line = frf.line(frequency_hz)
+    out = np.full(len(frequency_hz), np.nan)
+    for j in range(len(frequency_hz)):
+        have = np.isfinite(per_hit_hz[:, j])
+        if have.sum() >= 2:
+            w = frf.weights[have, line[j]] / frf.weights[have, line[j]].sum()
+            spread = (w @ (per_hit_hz[have, j] - w @ per_hit_hz[have, j]) ** 2) / (1 - np.sum(w**2))
+            out[j] = spread / (damping_ratio[j] * frequency_hz[j] ** 2)
+    return out
+
+
+def damping_std(frf: AveragedFRF, per_hit_damping: np.ndarray, frequency_hz: np.ndarray,
+                broadened: np.ndarray) -> np.ndarray:
+    """damping_std [-] of the damping ratio corrected for ``broadening``: the standard error
+    of the per-hit damping ratios (each hit's exponential window corrected; the formula of
+    std_hz, module docstring) and the uncertainty of the broadening, a sample variance of
+    n hits (relative std sqrt(2 / (n - 1))), added in quadrature."""
+    standard_error, n = _std(frf, per_hit_damping, frequency_hz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.hypot(standard_error, broadened * np.sqrt(2 / (n - 1)))
+
+
+def _std(frf: AveragedFRF, per_hit: np.ndarray, frequency_hz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """std_hz (module docstring) from the (hits, modes) per-hit frequencies (or the
+    standard error of another per-hit estimate), and the number of hit estimates per
+    mode; the weights are H1's at ``frequency_hz``."""
+    line = frf.line(frequency_hz)
+    n = np.sum(np.isfinite(per_hit), axis=0)
+    std = np.full(len(frequency_hz), np.nan)
+    for j in np.flatnonzero(n >= 2):
+        have = np.isfinite(per_hit[:, j])
+        w = frf.weights[have, line[j]] / frf.weights[have, line[j]].sum()
+        std[j] = np.std(per_hit[have, j], ddof=1) / _c4(n[j]) * np.sqrt(np.sum(w**2))
+    return std, n
+
+
+def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
+    order = np.argsort(pole.imag)
+    pole, snr, guided = pole[order], snr[order], guided[order]
+    f, zeta = correct_for_window(pole, frf.decay_rate)
+    per_hit_f, per_hit_zeta = _per_hit(frf, pole)
+    std, n = _std(frf, per_hit_f, pole.imag / (2 * np.pi))
+    broadened = broadening(frf, per_hit_f, f, zeta)
+    zeta = np.where(np.isfinite(broadened) & (broadened < 0.5 * zeta), zeta - broadened, zeta)
+    zeta_std = damping_std(frf, per_hit_zeta, f, np.nan_to_num(broadened))
+    half_bw = np.abs(pole.real) / (2 * np.pi)
+    pooled = np.isnan(std) & np.isfinite(std).any()
+    if pooled.any():
+        std[pooled] = np.nanmedian(std / f) * f[pooled]
+        zeta_std[pooled] = np.nanmedian(zeta_std / zeta) * zeta[pooled]
+    line = frf.line(pole.imag / (2 * np.pi))
+    peak_hz = np.full(len(f), np.nan)
+    used = set()
+    for j in range(len(f)):
+        near = np.abs(picked["frequency_hz"].to_numpy() - pole[j].imag / (2 * np.pi)) <= half_bw[j]
+        if near.any():
+            i = int(np.flatnonzero(near)[np.argmin(np.abs(picked["frequency_hz"].to_numpy()[near] - f[j]))])
+            peak_hz[j] = picked["frequency_hz"].iloc[i]
+            used.add(i)
+    prominence = np.array([_prominence_at(frf, lines, pole[j].imag / (2 * np.pi), half_bw[j]) for j in range(len(f))])
+    sep = np.diff(f)
+    close = np.zeros(len(f), dtype=bool)
+    close[:-1] |= sep < 4 * half_bw[:-1]
+    close[1:] |= sep < 4 * half_bw[1:]
+    flags = {
+        "suspension": f < frf_module.SUSPENSION_HZ,
+        "low_coherence": frf.coherence[line] < COHERENCE_MIN,
+        "weak": (prominence < WEAK_DB) | (snr < 3 * SNR_MIN),
+        "close": close,
+        "single_hit": n < 2,
+        "guided": guided,
+        "std_pooled": pooled,
+        "unpicked": np.isnan(peak_hz),
+    }
+    names = [[k for k in FLAG_ORDER if flags[k][j]] for j in range(len(f))]
+    left = picked.drop(index=list(used)).nlargest(NOTED_PEAKS, "prominence_db").sort_values("frequency_hz")
+    if len(left):
+        listed = ", ".join(f"{x:.1f} Hz ({p:.1f} dB)" for x, p in zip(left["frequency_hz"], left["prominence_db"], strict=True))
+        more = len(picked) - len(used) - len(left)
+        notes.append(f"peaks picked on |H1| without a stable pole (spurious: suspension, anti-resonance, cable, "
+                     f"noise?) left out: {listed}" + (f" and {more} smaller ones" if more else ""))
+    return pd.DataFrame({
+        "frequency_hz": f, "std_hz": std, "damping_ratio": zeta, "damping_std": zeta_std,
+        "coherence": frf.coherence[line],
+        "prominence_db": prominence, "snr": snr, "hits": n, "peak_hz": peak_hz,
+        "quality": [k[0] if k else "good" for k in names], "flags": [",".join(k) for k in names],
+    })
+
+
+def _response_only(frf: AveragedFRF, configuration: str, band, picked: pd.DataFrame, notes: list[str]) -> PeakList:
+    """Peak picking on the response spectrum: frequency by interpolation, scatter from
+    each hit's spectrum, no damping."""
+    per_hit = np.full((frf.n_hits, len(picked)), np.nan)
+    for k in range(frf.n_hits):
+        for j, line in enumerate(picked["line"]):
+            near = np.arange(line - 2, line + 3)
+            one = picked_peaks(frf.frequency_hz, frf.per_hit[k], near, 0.0)
+            if len(one):
+                per_hit[k, j] = one["frequency_hz"].iloc[np.argmin(np.abs(one["line"] - line))]
+    std, n = _std(frf, per_hit, picked["frequency_hz"].to_numpy())
+    table = pd.DataFrame({
+        "frequency_hz": picked["frequency_hz"].to_numpy(), "std_hz": std, "damping_ratio": np.nan, "damping_std": np.nan,
+        "coherence": np.nan, "prominence_db": picked["prominence_db"].to_numpy(), "snr": np.nan, "hits": n,
+        "peak_hz": picked["frequency_hz"].to_numpy(), "quality": "response_only", "flags": "response_only",
+    })
+    return PeakList(configuration, table, frf, band, frf.rejected, tuple(notes), None)
+
+
+# --- plots ---------------------------------------------------------------------------------
+
+def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
+    """frf.png (|H1| with the peaks), stabilisation.png (the diagram over |H1|) and
+    coherence.png in ``directory``; returns the paths."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    directory = Path(directory)
+    frf, table = result.frf, result.table
+    lines = frf.lines(result.band_hz)
+    f, mag = frf.frequency_hz[lines], 20 * np.log10(np.abs(frf.h1[lines]) + 1e-300)
+    at = np.interp(table["frequency_hz"], f, mag) if len(table) else np.array([])
+    paths = []
+
+    def save(fig, name):
+        fig.tight_layout()
+        path = directory / name
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        paths.append(path)
+
+    fig = Figure(figsize=(9, 4))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    ax.plot(f, mag, lw=0.8, color="0.2", label="|H1|" if frf.has_force else "response spectrum")
+    good = (table["quality"] == "good").to_numpy()
+    ax.plot(table["frequency_hz"][good], at[good], "v", color="tab:green", label="peak (good)")
+    ax.plot(table["frequency_hz"][~good], at[~good], "v", color="tab:orange", label="peak (flagged)")
+    for x, y, q in zip(table["frequency_hz"], at, table["quality"], strict=True):
+        ax.annotate(f"{x:.1f}" + ("" if q == "good" else f"\n{q}"), (x, y), textcoords="offset points", xytext=(0, 6),
+                    ha="center", fontsize=7)
+    ax.set(xlabel="frequency [Hz]", ylabel="magnitude [dB]", title=f"{result.configuration}: averaged FRF and peaks")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    save(fig, "frf.png")
+
+    if result.diagram is not None:
+        d = result.diagram
+        fig = Figure(figsize=(9, 5))
+        FigureCanvasAgg(fig)
+        ax = fig.subplots()
+        ax.plot(d.frequency_hz[~d.stable], d.order[~d.stable], ".", ms=3, color="0.7", label="pole")
+        ax.plot(d.frequency_hz[d.stable], d.order[d.stable], "+", ms=5, color="tab:blue", label="stable pole")
+        for x in table["frequency_hz"]:
+            ax.axvline(x, color="tab:green", lw=0.6, alpha=0.6)
+        ax.set(xlabel="frequency [Hz]", ylabel="model order", title="LSCF stabilisation diagram",
+               xlim=result.band_hz)
+        twin = ax.twinx()
+        twin.plot(f, mag, lw=0.6, color="0.3")
+        twin.set_ylabel("|H1| [dB]")
+        ax.legend(fontsize=8, loc="upper left")
+        save(fig, "stabilisation.png")
+
+    if np.isfinite(frf.coherence[lines]).any():
+        fig = Figure(figsize=(9, 3))
+        FigureCanvasAgg(fig)
+        ax = fig.subplots()
+        ax.plot(f, frf.coherence[lines], lw=0.8)
+        for x in table["frequency_hz"]:
+            ax.axvline(x, color="tab:green", lw=0.6, alpha=0.6)
+        ax.axhline(COHERENCE_MIN, color="tab:red", lw=0.6, ls="--")
+        ax.set(xlabel="frequency [Hz]", ylabel="coherence", ylim=(0, 1.05), title="coherence of the averaged hits")
+        ax.grid(alpha=0.3)
+        save(fig, "coherence.png")
+    return paths
