@@ -50,7 +50,8 @@ def history_table(result) -> pd.DataFrame:
 
 
 def to_dict(result) -> dict:
-    """The fit JSON of DESIGN.md, with status, conditioning, warnings and history added."""
+    """The fit JSON (``fit --json``): status, materials and effects with std, residuals,
+    conditioning, statistics, warnings, history and why the iterations stopped."""
     materials: dict[str, dict] = {}
     effects: dict[str, dict] = {}
     for p, value, sd, flags in zip(result.parameters, result.values, result.uncertainty.std, result.uncertainty.flags):
