@@ -74,7 +74,7 @@ from fem.model import one_blas_thread
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window
-from .readers import Hit, MeasuredFRF, check_together, read_recordings, recording_notes
+from .readers import Hit, MeasuredFRF, check_together, read_recordings
 
 #: Stability between successive orders: relative change of frequency and of damping.
 FREQ_TOL = 2e-3
@@ -491,7 +491,7 @@ def extract_peaks(recordings, configuration: str = "original", sample_rate: floa
     guide = None if guide_hz is None else _check_guide(guide_hz)
     band = _band(frfs, hits, band_hz, guide, nyquist)
     frf = frf_module.average_hits(hits, band) if hits else frf_module.from_measured(frfs)
-    notes = recording_notes(records) + list(frf.notes)
+    notes = list(frf.notes)
     lines = frf.lines(band)
     if len(lines) < 16:
         raise MeasurementError(f"band_hz = ({band[0]:g}, {band[1]:g}) holds {len(lines)} spectral lines; need at least "

@@ -30,9 +30,6 @@ RATE_TOLERANCE = 1e-4
 #: Lowest sample rate [Hz] a plate's modes can be recorded at (a 150 mm plate's first mode
 #: lies near 100 Hz); below it a time column is in ms, or the rate is mistyped.
 MIN_SAMPLE_RATE = 500.0
-#: A channel is clipped when its extreme value is held by at least this many samples (a
-#: free decay peaks at one sample; a saturated converter or amplifier holds its limit).
-CLIPPED_SAMPLES = 3
 #: UFF58 specific data types (ordinate): response quantity by code, and the force codes.
 UFF_RESPONSE = {8: "displacement", 11: "velocity", 12: "acceleration"}
 UFF_FORCE = (9, 13)
@@ -353,13 +350,14 @@ def read_mat(path: str | Path, sample_rate: float | None = None) -> Hit:
     response (acceleration, velocity, displacement or response), and ``time_s`` or a
     scalar ``sample_rate`` [Hz] (or the ``sample_rate`` argument)."""
     from scipy.io import loadmat
+    from scipy.io.matlab import MatReadError
 
     source = Path(path).name
     try:
         data = loadmat(path, squeeze_me=True)
     except NotImplementedError:
         raise _fail(source, "MATLAB v7.3 (HDF5) file; save it with save(..., '-v7')") from None
-    except (OSError, ValueError, TypeError) as exc:
+    except (OSError, ValueError, TypeError, MatReadError) as exc:
         raise _fail(source, f"cannot read as a MAT file ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
                     "save the hit's vectors with MATLAB's save or scipy.io.savemat") from None
     channels = {k: v for k, v in data.items() if not k.startswith("__")}
@@ -421,27 +419,6 @@ def read_recordings(paths, sample_rate: float | None = None) -> list[Recording]:
 def _same_samples(a: Hit, b: Hit) -> bool:
     return (np.array_equal(a.response, b.response)
             and (a.force is None) == (b.force is None) and (a.force is None or np.array_equal(a.force, b.force)))
-
-
-def check_clipping(hit: Hit) -> list[str]:
-    """A note per clipped channel of a hit: its extreme value held by at least
-    ``CLIPPED_SAMPLES`` samples (the converter's or amplifier's limit).  Clipping bends
-    the spectrum: peaks appear at harmonics and true modes are lost."""
-    notes = []
-    for name, channel in (("force", hit.force), ("response", hit.response)):
-        if channel is None or not len(channel):
-            continue
-        extreme = np.max(np.abs(channel))
-        held = int(np.count_nonzero(np.abs(channel) == extreme))
-        if extreme > 0 and held >= CLIPPED_SAMPLES:
-            notes.append(f"{hit.source}: the {name} is clipped ({held} samples at its limit {extreme:g}): the peaks "
-                         "are not to be trusted; lower the gain or hit softer and record again")
-    return notes
-
-
-def recording_notes(records: list[Recording]) -> list[str]:
-    """What the user must know about the recordings themselves (clipped channels)."""
-    return [note for r in records if isinstance(r, Hit) for note in check_clipping(r)]
 
 
 def check_together(records: list[Recording]) -> list[Recording]:

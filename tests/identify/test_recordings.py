@@ -189,8 +189,10 @@ def test_sample_rate_rules(tmp_path):
 def test_bad_files_and_mixtures(tmp_path, hits):
     with pytest.raises(MeasurementError, match=r"missing.csv: no such file"):
         read_recordings([tmp_path / "missing.csv"])
-    with pytest.raises(MeasurementError, match=r"hit.mat: file type '.mat' is not supported; allowed: .csv, .wav"):
+    with pytest.raises(MeasurementError, match=r"hit.mat: cannot read as a MAT file"):
         read_recordings([_csv(tmp_path, "x", "hit.mat")])
+    with pytest.raises(MeasurementError, match=r"hit.xlsx: file type '.xlsx' is not supported; allowed: .csv, .wav"):
+        read_recordings([_csv(tmp_path, "x", "hit.xlsx")])
     with pytest.raises(MeasurementError, match=r"no recordings given"):
         read_recordings([])
     junk = tmp_path / "junk.wav"
