@@ -3,7 +3,7 @@ relative errors of every configuration and mode, scored against the signatures o
 effects a Kirchhoff free-plate model leaves out (``patterns``)."""
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -15,7 +15,6 @@ from ..fitting.driver import fit_layers
 from ..measurements import Measurements
 from ..engine.objective import Objective, solving_model
 from ..fitting.patterns import PATTERN_SHARE, Pattern, residual_patterns
-from ..fitting.global_start import global_fit
 from ..engine.peak_lists import matched_at
 from ..reporting.report import shown_residuals
 from ..reporting.residuals import residual_table
@@ -93,10 +92,6 @@ class Comparison:
 def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
     """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
     fitted = fit_layers(model, measurements, explain=False) if refit else None
-    if fitted is not None:
-        fitted, note = global_fit(model, measurements, fitted)
-        if note:
-            fitted = replace(fitted, warnings=fitted.warnings + (note,))
     if fitted is not None:
         now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
         pairings, jacobian = fitted.pairings, fitted.jacobian
