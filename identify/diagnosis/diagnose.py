@@ -573,6 +573,15 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
     finally:
         if pool is not None:
             pool.shutdown()
+    completion = _completed(state, selected, kinds, measurements, nominal, say) if selected else None
+    if completion is not None:
+        before = tuple(c.kind for c in selected)
+        steps.append(Step(len(steps) + 1, before, state, (completion,), completion,
+                          f"add {completion.kind} beside transverse_shear (gain / c = {completion.scaled_gain:.1f}): "
+                          "the physics every real plate has besides, with no parameter more (the more complete "
+                          f"model is preferred unless it is worse by more than {COMPLETE_MARGIN:g} in units of c)"))
+        selected.append(completion)
+        state = completion.fit
     final = _final(state, measurements, baseline, selected, say) if selected else None
     first = steps[0].candidates if steps else ()
     return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started)
@@ -595,6 +604,27 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
         if not extended.eligible:
             break
     return candidates
+
+
+def _completed(state: FitResult, selected, kinds, measurements: Measurements, nominal, say) -> Candidate | None:
+    """Rotary inertia beside a selected transverse shear, when the candidates allow the
+    Mindlin plate and the refit is plausible and no worse than ``COMPLETE_MARGIN`` (units of
+    c): the more complete physics wins a tie after the selection too.  Needed because a
+    Mindlin candidate judged in an early round, with another effect still missing (a
+    sensor), can be implausible and so never selected, while shear alone then lets the
+    moduli absorb the rotary inertia at the noise level (a hidden sensor on a thick plate:
+    a layer property 6.9 std off)."""
+    names = {c.kind for c in selected}
+    if ("transverse_shear" not in names or names & {"rotary_inertia", "thick_plate", "layerwise"}
+            or not {"rotary_inertia", "thick_plate"} & set(kinds)):
+        return None
+    say("trying rotary_inertia beside transverse_shear (the more complete physics)")
+    candidate = _candidate(state, add_effect(state, "rotary_inertia", measurements, nominal,
+                                             options=CANDIDATE_OPTIONS))
+    if candidate.fit is None or not candidate.selectable:
+        return None
+    c_hat = _over_dispersion(candidate.fit)
+    return candidate if candidate.gain > -COMPLETE_MARGIN * c_hat else None
 
 
 def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:
