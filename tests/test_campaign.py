@@ -240,3 +240,16 @@ def test_a_point_mass_heavier_than_the_plate_is_refused(files):
         parse_spec(spec)
     spec["effects"][0]["mass_g"] = 6.0
     assert parse_spec(spec).specimen.attachments[0].mass == pytest.approx(6e-3)
+
+
+def test_ctrl_c_while_the_command_loads_is_one_line(monkeypatch, capsys):
+    """Ctrl-C in the first second of ``fit`` (while its modules load) gave a
+    KeyboardInterrupt traceback; the entry points load them inside the interrupt handling."""
+    from identify import entry
+
+    def interrupted(name):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(entry, "import_module", interrupted)
+    assert entry.identify_layers() == 130 and entry.plan_tests() == 130
+    assert capsys.readouterr().err == "interrupted\ninterrupted\n"

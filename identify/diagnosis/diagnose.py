@@ -578,8 +578,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         before = tuple(c.kind for c in selected)
         steps.append(Step(len(steps) + 1, before, state, (completion,), completion,
                           f"add {completion.kind} beside transverse_shear (gain / c = {completion.scaled_gain:.1f}): "
-                          "the physics every real plate has besides, with no parameter more (the more complete "
-                          f"model is preferred unless it is worse by more than {COMPLETE_MARGIN:g} in units of c)"))
+                          "the physics every real plate has besides, with no parameter more, and the misfit falls"))
         selected.append(completion)
         state = completion.fit
     final = _final(state, measurements, baseline, selected, say) if selected else None
@@ -608,8 +607,9 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
 
 def _completed(state: FitResult, selected, kinds, measurements: Measurements, nominal, say) -> Candidate | None:
     """Rotary inertia beside a selected transverse shear, when the candidates allow the
-    Mindlin plate and the refit is plausible and no worse than ``COMPLETE_MARGIN`` (units of
-    c): the more complete physics wins a tie after the selection too.  Needed because a
+    Mindlin plate and the refit is plausible and lowers the misfit (it adds no parameter:
+    a real plate has rotary inertia, so with it the misfit falls; data without it, such as
+    a shear-only model's, do not ask for it).  Needed because a
     Mindlin candidate judged in an early round, with another effect still missing (a
     sensor), can be implausible and so never selected, while shear alone then lets the
     moduli absorb the rotary inertia at the noise level (a hidden sensor on a thick plate:
@@ -623,8 +623,7 @@ def _completed(state: FitResult, selected, kinds, measurements: Measurements, no
                                              options=CANDIDATE_OPTIONS))
     if candidate.fit is None or not candidate.selectable:
         return None
-    c_hat = _over_dispersion(candidate.fit)
-    return candidate if candidate.gain > -COMPLETE_MARGIN * c_hat else None
+    return candidate if candidate.gain > 0 else None
 
 
 def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:
