@@ -16,8 +16,8 @@ For every elastic mode the mid-surface (geometric mid-plane of the configuration
 stack, the plate models' reference surface) displacements w, u, v are interpolated with
 the element's own shape functions on a 13 x 11 grid (x_i = L i / 12, y_j = W j / 10);
 the mode is "flexural" when w carries most of its kinetic energy (integrated over the
-3-D body), else "in-plane"; flexural modes get a nodal-line label "(nx,ny)" (the same
-rule as ``fem.solver.modal.mode_label``, read on a finer 49 x 41 grid of w).
+3-D body), else "in-plane"; flexural modes get a nodal-line label "(nx,ny)" (sign changes
+of w counted along the grid lines, ``nodal_label``, read on a finer 49 x 41 grid of w).
 
 A mesh-convergence study (meshes in ``LEVELS``, refined in-plane and through the
 thickness) gives the frequencies of every density; the finest mesh's are the reference,
@@ -449,8 +449,8 @@ def sample(solved: Solved, case: dict, z_mid: float, nx: int, ny: int) -> np.nda
 
 
 def nodal_label(w: np.ndarray) -> str:
-    """"(nx,ny)": nodal lines crossed along x and along y (fem.solver.modal.mode_label's rule:
-    signs where |w| > 5 % of max, sign changes counted per grid line, median)."""
+    """"(nx,ny)": nodal lines crossed along x and along y (signs where |w| > 5 % of max,
+    sign changes counted per grid line, median)."""
     significant = np.where(np.abs(w) > 0.05 * np.abs(w).max(), np.sign(w), 0)
 
     def crossings(rows: np.ndarray) -> int:
@@ -676,7 +676,7 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
             classification=f"flexural when w carries more than {FLEXURAL_SHARE:g} of the kinetic energy "
                            "(integrated over the 3-D body), else in-plane",
             nodal_lines="(nx,ny): nodal lines of w crossed along x and along y, read on a 49 x 41 mid-plane "
-                        "grid (fem.solver.modal.mode_label's rule)",
+                        "grid (sign changes of w counted per grid line, median)",
         ),
         plate=dict(length_mm=case["length_mm"], width_mm=case["width_mm"]),
         layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
