@@ -6,7 +6,9 @@ import html
 import json
 import os
 import shutil
+import signal
 import tempfile
+import threading
 from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
@@ -149,7 +151,8 @@ def report_folder(path: str | Path):
     them): anything else is refused before work starts, and again just before the swap.
     Leftovers of a run that was killed (``.NAME.tmp-PID-*``, ``.NAME.old-PID-*`` beside
     it) are cleared first; a concurrent run's are not.  A kill between the two renames
-    that swap an old report for the new one leaves the old one as ``.NAME.old-*``."""
+    that swap an old report for the new one leaves the old one as ``.NAME.old-*``; Ctrl-C
+and SIGTERM wait until both are done."""
     path = check_report_folder(path)
     _clear_leftovers(path)
     tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))
@@ -159,7 +162,7 @@ def report_folder(path: str | Path):
         (tmp / REPORT_MARK).write_text(f"written by layer-id {tool_version()}; its files:\n"
                                        + "".join(f"- {name}\n" for name in written))
         os.chmod(tmp, 0o777 & ~_permissions())
-        with _swap_lock(path):
+        with _swap_lock(path), _interrupts_held():
             check_report_folder(path)  # still ours to replace (nothing foreign put in meanwhile)
             old = None
             if path.exists():
@@ -171,6 +174,20 @@ def report_folder(path: str | Path):
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextmanager
+def _interrupts_held():
+    """Ctrl-C (SIGINT) and SIGTERM wait until the swap's two renames are done: an
+    interruption between them would leave the old report moved aside and no new one."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def write_text(path: str | Path, text: str) -> None:
