@@ -70,7 +70,8 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
     if only is not None and not only <= names:
         raise SystemExit(f"--only {' '.join(sorted(only - names))}: no such benchmark; allowed: {', '.join(sorted(names))}")
     start = f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC on {_machine()}"
-    kept = _sections(page.read_text()) if only is not None and page.exists() else {}
+    previous = page.read_text() if only is not None and page.exists() else ""
+    kept = _sections(previous)
     parts = []
     for heading, module in SECTIONS:
         if only is not None and module.__name__.split(".")[-1] not in only and heading in kept:
@@ -82,8 +83,7 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
     if only is None:
         runs = f"- started: {start}\n- finished: {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC on {_machine()}\n"
     else:  # the last full run's times stay, for the sections kept from it
-        runs = "".join(line + "\n" for line in (page.read_text().splitlines() if page.exists() else ())
-                       if line.startswith(("- started:", "- finished:")))
+        runs = "".join(line + "\n" for line in previous.splitlines() if line.startswith(("- started:", "- finished:")))
         runs += f"- re-measured with --only {' '.join(sorted(only))}: {start}\n"
     text = ("# Accuracy and speed\n\n"
             "Written by `make bench` (`python -m benchmarks`); do not edit by hand. Each section is the\n"

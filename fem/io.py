@@ -152,7 +152,7 @@ def report_folder(path: str | Path):
     Leftovers of a run that was killed (``.NAME.tmp-PID-*``, ``.NAME.old-PID-*`` beside
     it) are cleared first; a concurrent run's are not.  A kill between the two renames
     that swap an old report for the new one leaves the old one as ``.NAME.old-*``; Ctrl-C
-and SIGTERM wait until both are done."""
+    and SIGTERM wait until both are done."""
     path = check_report_folder(path)
     _clear_leftovers(path)
     tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.numbers import finite_or_none
 from fem.solver.damping import close_groups, first_order_loss_factors, loss_columns
 from fem.laminates.material import LOSS_FACTORS
 from fem.model import SpecimenModel
@@ -49,15 +50,12 @@ class DampingScores:
         return [n for n, v, s in zip(self.names, self.nominal, self.predicted_std) if not s < v]
 
     def to_dict(self) -> dict:
-        def finite(x):
-            return float(x) if math.isfinite(x) else None
-
         nominal: dict[str, dict] = {}
         predicted: dict[str, dict] = {}
         for (m, k), v, s in zip(self.targets, self.nominal, self.predicted_std):
             nominal.setdefault(m, {})[k] = float(v)
-            predicted.setdefault(m, {})[k] = finite(s)
-        return {"condition_number": finite(self.condition_number), "verdict": self.verdict,
+            predicted.setdefault(m, {})[k] = finite_or_none(s)
+        return {"condition_number": finite_or_none(self.condition_number), "verdict": self.verdict,
                 "damping_std_rel": self.damping_std_rel, "nominal": nominal, "predicted_std": predicted,
                 "useless_for": self.useless}
 

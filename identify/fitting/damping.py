@@ -36,6 +36,7 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import lsq_linear
 
+from fem.numbers import finite_or_none
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import close_groups, known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
 from fem.laminates.material import MAX_LOSS_FACTOR
@@ -116,18 +117,15 @@ class DampingResult:
 
     def to_dict(self) -> dict:
         """The fit JSON's ``"damping"`` block (no NaN: null where a value does not exist)."""
-        def finite(x):
-            return float(x) if x is not None and np.isfinite(x) else None
-
         rows = [{"configuration": r.configuration, "mode": int(r.mode), "measured_damping_ratio": float(r.measured),
-                 "damping_std": float(r.std), "model_damping_ratio": finite(r.model), "group": int(r.group)}
+                 "damping_std": float(r.std), "model_damping_ratio": finite_or_none(r.model), "group": int(r.group)}
                 for r in self.residuals.rename(columns={"measured_damping_ratio": "measured", "damping_std": "std",
                                                         "model_damping_ratio": "model"}).itertuples()]
         return {"status": self.status, "message": self.message, "method": self.method,
-                "condition_number": finite(self.condition_number), "verdict": self.verdict,
-                "rms_rel_error": finite(self.rms_rel_error), "chi2": finite(self.chi2), "dof": self.dof,
-                "p_value": finite(self.p_value), "scatter": self.scatter,
-                "parameters": [{"material": m, "parameter": k, "value": finite(v), "std": finite(s)}
+                "condition_number": finite_or_none(self.condition_number), "verdict": self.verdict,
+                "rms_rel_error": finite_or_none(self.rms_rel_error), "chi2": finite_or_none(self.chi2), "dof": self.dof,
+                "p_value": finite_or_none(self.p_value), "scatter": self.scatter,
+                "parameters": [{"material": m, "parameter": k, "value": finite_or_none(v), "std": finite_or_none(s)}
                                for (m, k), v, s in zip(self.targets, self.values, self.std)],
                 "notes": list(self.notes), "residuals": rows}
 
@@ -145,17 +143,20 @@ class _Rows:
     table: pd.DataFrame       # configuration, mode, model index, lambda, eta, eta_std, group
     n_groups: int
 
+    @property
+    def weights(self) -> np.ndarray:
+        """Each row's share of its group's lambda."""
+        return (self.table["lambda"] / self.table.groupby("group")["lambda"].transform("sum")).to_numpy()
+
     def combine(self, per_row: np.ndarray) -> np.ndarray:
         """Lambda-weighted group sums of a per-row quantity (rows or rows x columns)."""
-        w = (self.table["lambda"] / self.table.groupby("group")["lambda"].transform("sum")).to_numpy()
         out = np.zeros((self.n_groups,) + per_row.shape[1:])
-        np.add.at(out, self.table["group"].to_numpy(), (w.T * per_row.T).T)
+        np.add.at(out, self.table["group"].to_numpy(), (self.weights.T * per_row.T).T)
         return out
 
     def combined_std(self) -> np.ndarray:
-        w = (self.table["lambda"] / self.table.groupby("group")["lambda"].transform("sum")).to_numpy()
         out = np.zeros(self.n_groups)
-        np.add.at(out, self.table["group"].to_numpy(), (w * self.table["eta_std"].to_numpy()) ** 2)
+        np.add.at(out, self.table["group"].to_numpy(), (self.weights * self.table["eta_std"].to_numpy()) ** 2)
         return np.sqrt(out)
 
 

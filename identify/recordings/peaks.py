@@ -69,8 +69,9 @@ from scipy import optimize, signal
 from scipy.special import gammaln
 
 from fem.errors import MeasurementError
-from fem.io import atomic_path, write_text
+from fem.io import write_text
 from fem.model import one_blas_thread
+from fem.plotting import new_figure, save_figure
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window
@@ -710,9 +711,6 @@ def _response_only(frf: AveragedFRF, configuration: str, band, picked: pd.DataFr
 def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
     """frf.png (|H1| with the peaks), stabilisation.png (the diagram over |H1|) and
     coherence.png in ``directory``; returns the paths."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     directory = Path(directory)
     frf, table = result.frf, result.table
     lines = frf.lines(result.band_hz)
@@ -721,15 +719,9 @@ def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
     paths = []
 
     def save(fig, name):
-        fig.tight_layout()
-        path = directory / name
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-        paths.append(path)
+        paths.append(save_figure(fig, directory / name))
 
-    fig = Figure(figsize=(9, 4))
-    FigureCanvasAgg(fig)
-    ax = fig.subplots()
+    fig, ax = new_figure(figsize=(9, 4))
     ax.plot(f, mag, lw=0.8, color="0.2", label="|H1|" if frf.has_force else "response spectrum")
     good = (table["quality"] == "good").to_numpy()
     ax.plot(table["frequency_hz"][good], at[good], "v", color="tab:green", label="peak (good)")
@@ -744,9 +736,7 @@ def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
 
     if result.diagram is not None:
         d = result.diagram
-        fig = Figure(figsize=(9, 5))
-        FigureCanvasAgg(fig)
-        ax = fig.subplots()
+        fig, ax = new_figure(figsize=(9, 5))
         ax.plot(d.frequency_hz[~d.stable], d.order[~d.stable], ".", ms=3, color="0.7", label="pole")
         ax.plot(d.frequency_hz[d.stable], d.order[d.stable], "+", ms=5, color="tab:blue", label="stable pole")
         for x in table["frequency_hz"]:
@@ -760,9 +750,7 @@ def plot_peaks(result: PeakList, directory: str | Path) -> list[Path]:
         save(fig, "stabilisation.png")
 
     if np.isfinite(frf.coherence[lines]).any():
-        fig = Figure(figsize=(9, 3))
-        FigureCanvasAgg(fig)
-        ax = fig.subplots()
+        fig, ax = new_figure(figsize=(9, 3))
         ax.plot(f, frf.coherence[lines], lw=0.8)
         for x in table["frequency_hz"]:
             ax.axvline(x, color="tab:green", lw=0.6, alpha=0.6)

@@ -11,15 +11,12 @@ import pandas as pd
 
 from typing import TYPE_CHECKING
 
+from fem.numbers import finite_or_none
 from fem.solver.damping import loss_from_ratio, loss_slope
 from fem.laminates.material import LOSS_FACTORS
 
 if TYPE_CHECKING:
     from ..fitting.damping import DampingResult
-
-
-def _finite(x):
-    return float(x) if x is not None and math.isfinite(x) else None
 
 
 def material_entries(damping: "DampingResult", model) -> dict[str, dict]:
@@ -37,7 +34,7 @@ def material_entries(damping: "DampingResult", model) -> dict[str, dict]:
                                               damping.at_bound or (False,) * len(damping.targets)):
         entry = out.setdefault(name, {"std": {}, "flags": {}})
         for key in LOSS_FACTORS if kind == "eta" else (kind,):
-            entry[key], entry["std"][key] = _finite(value), _finite(sd)
+            entry[key], entry["std"][key] = finite_or_none(value), finite_or_none(sd)
             flags = (["not identifiable"] if damping.status == "not_identifiable" else []) + (
                 ["at bound"] if bound else []) + (["shared eta"] if kind == "eta" else [])
             if flags:
