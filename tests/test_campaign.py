@@ -253,3 +253,16 @@ def test_ctrl_c_while_the_command_loads_is_one_line(monkeypatch, capsys):
     monkeypatch.setattr(entry, "import_module", interrupted)
     assert entry.identify_layers() == 130 and entry.plan_tests() == 130
     assert capsys.readouterr().err == "interrupted\ninterrupted\n"
+
+
+def test_a_huge_poisson_ratio_is_one_line():
+    """Found by the property test: nu12 = 1.34e154 overflowed squaring it in the
+    positive-definiteness check (OverflowError instead of the spec error)."""
+    import tomllib
+
+    from identify.examples import COATED_PLATE
+
+    spec = tomllib.loads(COATED_PLATE.read_text())
+    spec["materials"]["adhesive"]["nu12"] = 1.3407807929942597e154
+    with pytest.raises(SpecError, match="not positive definite"):
+        parse_spec(spec)

@@ -105,7 +105,7 @@ class Material:
             raise SpecError(f"material '{self.name}': nu12 = {self.nu12!r} for an isotropic material "
                             "(E1 = E2, G12 = E/2(1 + nu)): need -1 < nu < 0.5 (steel 0.3, rubber 0.499)")
         limit = self.E1 / self.E2
-        if not (math.isfinite(self.nu12) and self.nu12**2 < limit):
+        if not (math.isfinite(self.nu12) and abs(self.nu12) < math.sqrt(limit)):  # nu12^2 < E1/E2, no overflow
             raise SpecError(
                 f"material '{self.name}': nu12 = {self.nu12!r} makes the ply stiffness not positive "
                 f"definite: need nu12^2 < E1/E2 = {limit:.4g} (|nu12| < {math.sqrt(limit):.4g})"
