@@ -88,7 +88,7 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
         accepted = None
         for _ in range(options.max_damping_tries):
-            gain = np.where(keep, s / (s**2 + damping), 0.0)
+            gain = np.where(keep, s / np.where(keep, s**2 + damping, 1.0), 0.0)
             dz = np.zeros_like(z)
             dz[~held] = -vt.T @ (gain * ur)
             dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), TINY_STEP))))

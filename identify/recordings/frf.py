@@ -68,8 +68,9 @@ class AveragedFRF:
     """The FRF of one configuration on lines ``frequency_hz`` [Hz].
 
     h1: H1 = sum_k Y_k X_k* / sum_k |X_k|^2 (response unit / force unit); response-only
-    recordings: the RMS response spectrum sqrt(mean_k |Y_k|^2) instead (no force, so no
-    FRF).  coherence: gamma^2 = |sum Y X*|^2 / (sum |X|^2 sum |Y|^2) (NaN without force or
+    recordings: the mean response spectrum mean_k Y_k instead (no force, so no FRF: the
+    FRF times the hammer's smooth force spectrum; the hits are cut at their onsets, so
+    their phases agree).  coherence: gamma^2 = |sum Y X*|^2 / (sum |X|^2 sum |Y|^2) (NaN without force or
     with one hit).  per_hit: each hit's H_k = Y_k / X_k (response-only: Y_k).  weights:
     each hit's share of H1 at each line, |X_k|^2 / sum |X|^2, so H1 = sum_k weights_k H_k
     (response-only: |Y_k|^2 / sum |Y|^2, each hit's share of the response power).
@@ -334,9 +335,10 @@ def average_hits(hits: list[Hit], band_hz: tuple[float, float]) -> AveragedFRF:
     y = np.array([fft.rfft(c.response * w, n) for c, w in zip(kept, window, strict=True)])
     sources = tuple(c.source for c in kept)
     if kept[0].force is None:
-        notes.append("no force channel: peaks are picked on the response spectrum (no FRF, coherence or damping)")
+        notes.append("no force channel: modes fitted to the response spectrum as if the hammer's force were flat "
+                     "over the band (no FRF and no coherence; damping from the free decay)")
         syy = np.sum(np.abs(y) ** 2, axis=0)
-        return AveragedFRF(frequency, np.sqrt(syy / len(y)), np.full(len(frequency), np.nan), y, np.abs(y) ** 2 / syy,
+        return AveragedFRF(frequency, np.mean(y, axis=0), np.full(len(frequency), np.nan), y, np.abs(y) ** 2 / syy,
                            sources, tuple(rejected), rate, False, hits[0].quantity, tuple(notes))
     x = np.array([fft.rfft(c.force * w[:len(c.force)], n) for c, w in zip(kept, window, strict=True)])
     sxx = np.sum(np.abs(x) ** 2, axis=0)

@@ -94,7 +94,11 @@ def test_round_trip_gives_the_same_peaks(tmp_path, hits, kind):
     np.testing.assert_allclose(got, expected, atol=1e-5)
 
 
-def test_wav_response_only_picks_peaks_and_says_so(tmp_path, hits):
+def test_wav_response_only_fits_poles_and_says_so(tmp_path, hits):
+    """A one-channel WAV: poles fitted to the response spectrum (the hammer's force is
+    flat over the band) find exactly the four modes, their frequencies as close as with the
+    force channel (0.1 %: the hits' jitter is 3e-4) and their damping within 10 % (the
+    force pulse's spectrum falls a little over a mode's bandwidth)."""
     paths = [tmp_path / f"{h.source}.wav" for h in hits]
     for hit, path in zip(hits, paths):
         write_wav(hit, path, force_channel=False)
@@ -102,10 +106,29 @@ def test_wav_response_only_picks_peaks_and_says_so(tmp_path, hits):
     result = extract_peaks(paths)
     assert any("no force channel" in n for n in result.notes)
     assert set(result.table["quality"]) == {"response_only"}
-    assert result.table["damping_ratio"].isna().all()
-    found = result.table["frequency_hz"].to_numpy()
-    for f in MODES.frequencies_hz:  # peak picking alone: within 0.1 % (jitter 3e-4, lines 1 Hz)
-        assert np.min(np.abs(found / f - 1)) < 1e-3
+    np.testing.assert_allclose(result.table["frequency_hz"], MODES.frequencies_hz, rtol=1e-3)
+    np.testing.assert_allclose(result.table["damping_ratio"], MODES.damping_ratios, rtol=0.1)
+
+
+def test_noisy_one_channel_wav_of_a_real_like_plate_gives_its_modes_only(tmp_path):
+    """The campaign's one-channel WAV gave 91 "modes" with exit 0; a real-like plate
+    (36 modes in 60-1900 Hz, damping 0.3-1.1 %) hit once at 40 dB SNR with mains hum
+    gave 114 by peak picking.  The pole route finds only true modes (each within 0.5 % of
+    one: the weakest, flagged weak, sit up to 0.4 % off at this noise, the median within
+    0.03 %), as many as the two-channel file of the same hit does."""
+    from identify.recordings.tap_quirks import real_like_plate, with_hum, with_snr
+
+    plate = real_like_plate()
+    hit = Session(plate, n_hits=1, seed=1, options=TapOptions(pulse_ms=0.35, noise_rel=3e-5)).hits()[0]
+    hit = with_hum(with_snr(hit, 40, np.random.default_rng(5)))
+    write_wav(hit, tmp_path / "mono.wav", force_channel=False)
+    write_wav(hit, tmp_path / "stereo.wav")
+    mono = extract_peaks([tmp_path / "mono.wav"]).table["frequency_hz"].to_numpy()
+    stereo = extract_peaks([tmp_path / "stereo.wav"]).table["frequency_hz"].to_numpy()
+    nearest = np.min(np.abs(mono[:, None] / plate.frequencies_hz[None, :] - 1), axis=1)
+    assert np.all(nearest < 5e-3), mono[nearest >= 5e-3]
+    assert np.median(nearest) < 3e-4
+    assert abs(len(mono) - len(stereo)) <= 2 and len(mono) >= 20
 
 
 def test_uff_frf_record_is_used_as_averaged(tmp_path, hits):
