@@ -3,6 +3,7 @@ turns a user's error into one line and an exit status, ``--version`` and the arg
 every command has."""
 from __future__ import annotations
 
+import os
 import sys
 
 from fem.errors import LayerIdError
@@ -14,13 +15,20 @@ def run_cli(build_parser, argv=None) -> int:
     become one line on stderr and exit status 2."""
     try:
         args = build_parser().parse_args(argv)
-        return args.run(args) or 0
+        code = args.run(args) or 0
+        sys.stdout.flush()  # here, where a closed pipe is caught, not at the interpreter's exit
+        return code
     except LayerIdError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # The reader went away (``| head``): the rest of the output has nowhere to go.
+        # Point stdout at /dev/null so the interpreter's final flush cannot fail again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
 
 
 def add_version(parser) -> None:

@@ -276,6 +276,18 @@ def test_commands_run_with_one_blas_thread(monkeypatch):
     assert seen and set(seen) == {1}
 
 
+@pytest.mark.parametrize("command", [["predict", "--modes", "30"], ["predict"]])
+def test_output_into_a_closed_pipe_is_not_a_traceback(command):
+    """``identify-layers peaks rec.wav | head -4`` ended in a BrokenPipeError traceback
+    (a long output fails in a print, a short one at the interpreter's final flush)."""
+    child = subprocess.Popen([sys.executable, "-m", "identify.cli", *command], cwd=ROOT, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE)
+    child.stdout.close()  # the reader is gone before the command writes
+    err = child.stderr.read().decode()
+    assert child.wait(timeout=120) in (0, 1), err
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+
+
 def test_a_huge_poisson_ratio_is_one_line():
     """Found by the property test: nu12 = 1.34e154 overflowed squaring it in the
     positive-definiteness check (OverflowError instead of the spec error)."""

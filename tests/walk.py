@@ -127,6 +127,10 @@ def strict_json(text: str):
     return json.loads(text, parse_constant=_reject_constant)
 
 
+#: 'nan' or 'inf' printed as a word (not inside 'information' or 'infinite').
+NON_FINITE_WORD = re.compile(r"(?<![\w.])-?(nan|inf)(?!\w)", re.IGNORECASE)
+
+
 @dataclass(frozen=True)
 class Run:
     code: int
@@ -158,6 +162,8 @@ def check_clean_end(result: Run, argv: list, report: Path | None = None, json_ou
         assert len(errors) == 1 and result.err.rstrip().endswith(errors[0]), (where, result.err[-2000:])
     elif json_out:
         strict_json(result.out)
+    else:  # the text a user reads: a missing value is '-' or blank, with its reason beside it
+        assert not NON_FINITE_WORD.search(result.out), (where, NON_FINITE_WORD.search(result.out), result.out[-3000:])
     if report is not None:
         check_report(report, where)
 
@@ -173,6 +179,8 @@ def check_report(folder: Path, where: str = "") -> None:
             strict_json(path.read_text())
         if path.suffix == ".csv":
             assert not finite_csv_problems(path), (where, path.name, finite_csv_problems(path))
+        if path.suffix == ".txt":
+            assert not NON_FINITE_WORD.search(path.read_text()), (where, path)
         if path.suffix == ".html":
             text = path.read_text()
             assert not re.search(r">\s*-?(nan|inf|infinity)\s*<", text, re.IGNORECASE), (where, path)

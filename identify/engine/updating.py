@@ -225,7 +225,8 @@ def _overstated(statistics: FitStatistics) -> list[str]:
 
 
 def _listed(parameters, values, std, mask) -> str:
-    shown = [f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip()
+    shown = [(f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip() if np.isfinite(s)
+              else f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]} (undetermined)".replace("  ", " "))
              for p, v, s, m in zip(parameters, values, std, mask) if m]
     return ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
 

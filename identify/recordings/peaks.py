@@ -177,7 +177,8 @@ class PeakList:
             formats = {"frequency_hz": "{:.3f}", "std_hz": "{:.3f}", "damping_%": "{:.3f}", "damping_std_%": "{:.4f}",
                        "coherence": "{:.4f}",
                        "prominence_db": "{:.1f}", "snr": "{:.0f}", "peak_hz": "{:.2f}"}
-            lines.append(shown.to_string(index=False, formatters={k: _blank_if_missing(v) for k, v in formats.items()}))
+            # pandas prints a missing value as na_rep before any formatter sees it.
+            lines.append(shown.to_string(index=False, na_rep="-", formatters={k: v.format for k, v in formats.items()}))
         else:
             lines.append("no peaks found")
         if self.rejected:
@@ -192,11 +193,6 @@ class PeakList:
 
     def plot(self, directory: str | Path) -> list[Path]:
         return plot_peaks(self, directory)
-
-
-def _blank_if_missing(form: str):
-    """A formatter printing a missing (NaN) value blank: its flag or a note says why."""
-    return lambda v: form.format(v) if np.isfinite(v) else ""
 
 
 # --- local pole-residue fit ------------------------------------------------------------
