@@ -43,7 +43,7 @@ from fem.solver.attachments import PointMass, point_operators
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING
 from fem.solver.mode_shapes import deflection_operator
-from fem.model import one_blas_thread
+from fem.solver.threads import one_blas_thread
 from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved

@@ -3,10 +3,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import cached_property, lru_cache, wraps
+from functools import cached_property, lru_cache
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
 from .solver.assembly import UnitMatrices, unit_matrices
 from .solver.attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
@@ -21,6 +20,7 @@ from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
 from .solver.mesh import PlateMesh
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
+from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
 from .solver.sensitivity import (
     ModalEnergies,
@@ -54,25 +54,6 @@ DIVISIONS_RANGE = (2, 64)
 #: Plate theories: "single_layer" (Kirchhoff, or FSDT with ``transverse_shear``) or
 #: "layerwise" (one shear strain per group of layers, ``fem.laminates.layerwise``).
 THEORIES = ("single_layer", "layerwise")
-
-
-@lru_cache(maxsize=1)
-def _blas() -> ThreadpoolController:
-    """The BLAS libraries loaded (inspected once, after scipy's are in memory)."""
-    return ThreadpoolController()
-
-
-def one_blas_thread(function):
-    """``function`` run with BLAS on one thread.  The systems here are small (a few
-    thousand DOFs): BLAS threads only add overhead, and where cores are busy their
-    spinning made the assembly, the solve and the sensitivities 3-40x slower.  Limited
-    where the work happens, whatever the caller's environment."""
-    @wraps(function)
-    def limited(*args, **kwargs):
-        with _blas().limit(limits=1, user_api="blas"):
-            return function(*args, **kwargs)
-
-    return limited
 
 
 @dataclass(frozen=True)

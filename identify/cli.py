@@ -70,13 +70,14 @@ def run_predict(args) -> int:
 
 def run_peaks(args) -> int:
     """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
-    from fem.spec import load_spec
-
     from .recordings.peaks import extract_peaks
-    from .predict import predict
 
     guide = None
     if args.spec is not None:
+        from fem.spec import load_spec
+
+        from .predict import predict
+
         model = load_spec(args.spec)
         if args.configuration not in [c.name for c in model.specimen.configurations]:
             model.specimen.configuration(args.configuration)  # the one-line error naming the known ones

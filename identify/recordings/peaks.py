@@ -75,7 +75,7 @@ from scipy.special import gammaln
 
 from fem.errors import MeasurementError
 from fem.io import write_text
-from fem.model import one_blas_thread
+from fem.solver.threads import one_blas_thread
 from fem.plotting import new_figure, save_figure
 
 from . import frf as frf_module
