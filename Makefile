@@ -32,10 +32,12 @@ docs: $(STAMP)
 	$(BIN)/pip install --quiet -e '.[docs]'
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
-# The blind diagnosis study on the development half (HALF=heldout or both for the others).
+# The blind diagnosis study on the development half (HALF=heldout or both for the others),
+# JOBS cases at once (one process each).
 HALF ?= dev
+JOBS ?= 2
 blind: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m studies.blind_diagnosis --half $(HALF)
+	MPLBACKEND=Agg $(BIN)/python -m studies.blind_diagnosis --half $(HALF) --jobs $(JOBS)
 
 clean:
 	rm -rf $(VENV) build site *.egg-info

@@ -23,7 +23,7 @@ Per case (everything seeded by the case's number):
 Reported per half: the confusion table (true effects against selected), the RMS after the
 selection against the floor, each layer property's error in std, the time per case.
 
-    python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR]
+    python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR] [--jobs N]
 """
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ import re
 import time
 import tomllib
 import traceback
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -329,10 +330,17 @@ def main(argv=None) -> int:
     parser.add_argument("--case", action="append", help="run only these cases")
     parser.add_argument("--out", type=Path, default=Path("reports") / "blind_diagnosis")
     parser.add_argument("--verbose", action="store_true", help="print the diagnosis's progress")
+    parser.add_argument("--jobs", type=int, default=1, help="cases run at once, one process each (default 1)")
     args = parser.parse_args(argv)
     names = args.case or case_names(args.half)
     outcomes = []
-    for name in names:
+    if args.jobs > 1:
+        # One process a case; each solve runs on one BLAS thread (fem.solver.threads).
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            for o in pool.map(run_case, names):
+                print(json.dumps(o.row()), flush=True)
+                outcomes.append(o)
+    for name in names if args.jobs <= 1 else ():
         say = (lambda text, name=name: print(f"  {name}: {text}", flush=True)) if args.verbose else None
         o = run_case(name, progress=say)
         print(json.dumps(o.row()), flush=True)
