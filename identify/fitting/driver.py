@@ -261,8 +261,8 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     best = None
     for f13, f23 in starts:
         try:
-            trial = model.with_values({p: (f13 if p.kind == "G13" else f23) * specimen.materials[p.target].G12
-                                       for p in defaulted}) if (f13, f23) != (1.0, 1.0) else model
+            trial = model.with_values(_shear_values(specimen, defaulted, f13, f23)) if (f13, f23) != (1.0, 1.0) \
+                else model
             sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
         except LayerIdError:
             continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
@@ -339,6 +339,16 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
                        tuple(notes), reasons)
 
 
+def _shear_values(specimen: Specimen, shear, f13: float, f23: float) -> dict[Parameter, float]:
+    """G13 = f13 G12 and G23 = f23 G12 [Pa] for the shear moduli ``shear`` (a tied one with
+    its followers), each of its own material."""
+    values = {}
+    for p in shear:
+        for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
+            values[Parameter(q.kind, q.target)] = (f13 if q.kind == "G13" else f23) * specimen.materials[q.target].G12
+    return values
+
+
 def _shear_targets(parameters) -> list[Parameter]:
     return [p for p in parameters if p.kind in SHEAR_MODULI]
 
@@ -360,12 +370,7 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
     specimen = ready.model.specimen
     tried = [(result, "the screened start")]
     for f13, f23 in SHEAR_STARTS + (CONTINUATION_START,):
-        values = {}
-        for p in shear:
-            for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
-                values[Parameter(q.kind, q.target)] = (f13 if q.kind == "G13" else f23) * \
-                    specimen.materials[q.target].G12
-        trial = fit_layers(ready.model.with_values(values), measurements, base + list(new), options,
+        trial = fit_layers(ready.model.with_values(_shear_values(specimen, shear, f13, f23)), measurements, base + list(new), options,
                            effect_of=effect_of, like=state, explain=False, settle=settle,
                            pairings=ready.pairings or state.pairings)
         tried.append((trial, f"G13 = {f13:g} G12, G23 = {f23:g} G12"))
