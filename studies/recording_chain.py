@@ -81,6 +81,8 @@ VARIANTS = (
             lambda h, rng, i: clipped(h, "force") if i == 0 else h),
     Variant("noisy", "response noise floor 30 dB under its first 0.1 s (lab range 5-40 dB)",
             lambda h, rng, i: with_snr(h, 30.0, rng)),
+    Variant("very_noisy", "noise floor 20 dB under the response: close pairs merge into one peak each",
+            lambda h, rng, i: with_snr(h, 20.0, rng)),
     Variant("all_clipped", "every hit's response clipped: nothing usable", lambda h, rng, i: clipped(h, "response"),
             honest=False),
     Variant("sensor_not_in_spec", "the 3 g accelerometer left out of the spec: a misfit to diagnose",

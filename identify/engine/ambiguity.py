@@ -47,7 +47,7 @@ TWIN_CHI2 = 4.0
 #: linearisation's own error exceeds the scatter, and the prediction would drop the twin.)
 SCREEN_ITERATIONS = 4
 SCREEN_CHI2 = 100.0
-MAX_REFITS = 4
+MAX_REFITS = 8
 MAX_REFIT_ITERATIONS = 30
 #: Rounds of the search over pairings (each from the best found so far).
 SETTLE_ROUNDS = 4

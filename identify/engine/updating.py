@@ -19,7 +19,7 @@ from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
 from fem import validation
 
-from .ambiguity import settle_pairings
+from .ambiguity import lone_close_modes, settle_pairings
 from .repair import quick_repair
 from ..measurements import Measurements
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
@@ -187,6 +187,9 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             progress(history[-1])
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
+    if settle:
+        uncertainty, merged = uncertainty.with_merged_peaks(objective, current, lone_close_modes(objective, current))
+        warnings += merged
     vague = undetermined(objective.space, current.values, uncertainty.std)
     status, message = _status(stop, uncertainty, statistics, options, vague.all())
     if vague.any() and not vague.all():
