@@ -1,5 +1,7 @@
 """Recordings: the tap simulator is exact, the writers and readers round-trip CSV, WAV and
 UFF58, and every bad input is a one-line MeasurementError naming the file and the fix."""
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -285,3 +287,42 @@ def test_band_is_validated(hits):
         extract_peaks(hits, band_hz=(500, 100))
     with pytest.raises(MeasurementError, match=r"band_hz = 'wide' must be two frequencies"):
         extract_peaks(hits, band_hz="wide")
+
+
+def _as_binary_58(ascii_path, out_path, single: bool) -> None:
+    """UFF 58 -> 58b as commercial front ends write it (the format's own description in
+    pyuff's dataset_58): per record an ID line '58b' with byte order 1 (little endian),
+    floating format 2 (IEEE), 11 ASCII header lines and the byte count, then the values as
+    binary floats (single precision: ordinate data type 2) and the closing -1."""
+    import struct
+
+    lines = Path(ascii_path).read_text().splitlines()
+    out, i = b"", 0
+    while i < len(lines):
+        header, j, values = lines[i + 2:i + 13], i + 13, []
+        while lines[j].strip() != "-1":
+            values += [float(lines[j][20 * k:20 * (k + 1)]) for k in range(len(lines[j]) // 20)]
+            j += 1
+        header[6] = f"{2 if single else 4:10d}" + header[6][10:]
+        data = struct.pack(f"<{len(values)}{'f' if single else 'd'}", *values)
+        out += (f"{-1:6d}\n{58:6d}b{1:6d}{2:6d}{11:12d}{len(data):12d}{0:6d}{0:6d}{0:12d}{0:12d}\n"
+                + "\n".join(header) + "\n").encode() + data + f"\n{-1:6d}\n".encode()
+        i = j + 1
+    Path(out_path).write_bytes(out)
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_binary_uff58_gives_the_ascii_files_peaks(tmp_path, hits, single):
+    """Binary 58b (double, and single precision as many front ends write) reads like the
+    ASCII file: the same peaks to 1e-12 relative in double, 1e-6 in single
+    (float32 carries 7 digits of each sample)."""
+    ascii_paths, binary_paths = [], []
+    for hit in hits:
+        ascii_paths.append(tmp_path / f"{hit.source}.uff")
+        binary_paths.append(tmp_path / f"{hit.source}_b.uff")
+        write_uff(ascii_paths[-1], hit=hit)
+        _as_binary_58(ascii_paths[-1], binary_paths[-1], single)
+    expected = extract_peaks(ascii_paths).table["frequency_hz"].to_numpy()
+    got = extract_peaks(binary_paths).table["frequency_hz"].to_numpy()
+    assert len(got) == len(MODES.frequencies_hz)
+    np.testing.assert_allclose(got, expected, rtol=1e-6 if single else 1e-12)
