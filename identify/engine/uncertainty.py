@@ -103,7 +103,8 @@ class Uncertainty:
             local = int(np.flatnonzero(objective.rows[name] == row)[0])
             mine = int(evaluation.pairings[name].indices[local])
             spacing = abs(f[other] - f[mine])
-            extra[row] = spacing**2 / 12 / objective.sigma[row] ** 2  # in weighted-residual units
+            # In weighted-residual units; a peak with a free close mode on each side: the wider.
+            extra[row] = max(extra[row], spacing**2 / 12 / objective.sigma[row] ** 2)
             notes.append(f"{name} {table['frequency_hz'].iloc[row]:.2f} Hz: one peak where model modes {mine + 1} and "
                          f"{other + 1} lie {100 * spacing / f[mine]:.2g} % apart (two modes merged, or one at a "
                          f"node): it may lie anywhere between them, a further scatter of {spacing / 12**0.5:.3g} Hz "

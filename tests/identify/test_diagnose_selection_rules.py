@@ -56,3 +56,28 @@ def test_a_candidate_singular_at_its_solution_is_not_selectable(sensor_point_mas
     assert "singular at its solution" in _signs([c], None)
     ok = Candidate("thickness", "", replace(added, precheck=well), 100.0, 100.0)
     assert not ok.singular
+
+
+def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
+    """What a refinement explained beyond what it refines, when last refitted, against what
+    the best candidate explains now: below 1/PRUNE_FACTOR of it, the refinement is held
+    back with a note; above, it is refitted."""
+    from types import SimpleNamespace
+
+    from identify.diagnosis.diagnose import _held_back, _margins
+
+    def fitted(kind, sum_squares, selectable=True):
+        return SimpleNamespace(kind=kind, selectable=selectable,
+                               fit=SimpleNamespace(statistics=SimpleNamespace(sum_squares=sum_squares)))
+
+    round1 = [fitted("transverse_shear", 1000.0), fitted("thick_plate", 1100.0), fitted("layerwise", 644.0)]
+    margins = _margins(["layerwise"], round1, 1)
+    assert margins == {"layerwise": (1, 356.0, "transverse_shear")}
+    state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0))
+    point_mass = [fitted("point_mass", 1000.0 - 2062.0 / 2 - 1000.0 / 2)]  # explains 1531 > 2 x 356
+    held = _held_back(["layerwise"], margins, state, point_mass)
+    assert "layerwise not refitted again: in round 1 it explained a chi^2 of 356 beyond transverse_shear" in held[
+        "layerwise"]
+    assert _held_back(["layerwise"], margins, state, [fitted("point_mass", 400.0)]) == {}  # 600 < 712: refit
+    assert _held_back(["layerwise"], {}, state, point_mass) == {}  # never refitted: no margin known
+    assert _held_back(["layerwise"], margins, state, [fitted("point_mass", -5000.0, selectable=False)]) == {}
