@@ -100,6 +100,7 @@ def run_peaks(args) -> int:
 
 def run_fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
+    from .engine.ambiguity import MAX_REFITS, ambiguous_pair_count
     from .fitting.driver import fit
     from .reporting.report import write_report
 
@@ -111,6 +112,11 @@ def run_fit(args) -> int:
     else:
         _say(f"identifying {len(model.specimen.material_parameters())} parameters from {len(measurements)} "
              "frequencies")
+    pairs = ambiguous_pair_count(measurements.table)
+    if pairs > MAX_REFITS:
+        _say(f"{pairs} pairs of unlabelled modes lie within 3 % of each other: after the fit converges, checking "
+             f"their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode list); a 'label' "
+             "column for close modes makes it unnecessary")
     result = fit(model, measurements, args.effect or (), progress=_progress)
     if args.report:
         _say(f"report written to {write_report(result, args.report)}/")

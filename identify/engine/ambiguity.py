@@ -53,6 +53,16 @@ MAX_REFIT_ITERATIONS = 30
 SETTLE_ROUNDS = 4
 
 
+def ambiguous_pair_count(table) -> int:
+    """Adjacent unlabelled measured modes of a configuration closer than ``NEAR_MODES``:
+    the pairs the search after the fit may refit (from the measurement table alone)."""
+    count = 0
+    for _, group in table.groupby("configuration", sort=False):
+        f, label = group["frequency_hz"].to_numpy(), group["label"].to_numpy()
+        count += int(np.sum((f[1:] / f[:-1] - 1 < NEAR_MODES) & (label[1:] == "") & (label[:-1] == "")))
+    return count
+
+
 def close_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Rows of adjacent measured modes closer than ``CLOSE_MODES`` with no labels."""
     table = objective.measurements.table
@@ -362,4 +372,4 @@ def settle_pairings(objective: Objective, current: Evaluation, history: list,
     return state, what, notes, [(o[0].values, o[2]) for o in others]
 
 
-__all__ = ["CLOSE_MODES", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped", "beneficial_swaps"]
+__all__ = ["CLOSE_MODES", "ambiguous_pair_count", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped", "beneficial_swaps"]

@@ -206,3 +206,19 @@ def test_many_alternative_pairings_refit_at_most_the_cap(start, paper_model, mon
     assert any("judged by a linearised step only" in w for w in result.warnings), result.warnings
     assert not any("judged by a linearised step only" in w for w in uncapped.warnings)
     np.testing.assert_allclose(result.values, uncapped.values, rtol=5e-3)
+
+
+def test_ambiguous_pair_count_reads_the_table_alone():
+    """The up-front warning of ``fit`` on a long mode list counts adjacent unlabelled modes
+    within 3 % per configuration; a labelled mode breaks its pairs."""
+    import pandas as pd
+
+    from identify.engine.ambiguity import ambiguous_pair_count
+
+    table = pd.DataFrame({
+        "configuration": ["a"] * 4 + ["b"] * 3,
+        "frequency_hz": [100.0, 101.0, 110.0, 111.0, 100.0, 102.9, 103.5],
+        "label": ["", "", "", "(2,1)", "", "", ""],
+    })
+    # a: 100/101 (1 %) counts, 101/110 (9 %) does not, 110/111 has a label; b: 2.9 % and 0.6 % count.
+    assert ambiguous_pair_count(table) == 3
