@@ -96,7 +96,8 @@ class UnitMatrices:
         shapes, without assembling every inertia term (the layerwise element has ~100).
         Its structural zeros are dropped (a copy: the pattern's index arrays are shared):
         the translational inertia couples only u-u, v-v and w-w, and the shape
-        comparisons' products cost 3x less without the rest of the pattern."""
+        comparisons' products take 2.6x less time without the rest of the pattern (63
+        modes of the paper's plate: 1.7 M stored entries to 0.57 M, 26 ms to 10 ms)."""
         mass = self.matrix(self._pattern[2] @ self.element_mass[0].ravel()).copy()
         mass.eliminate_zeros()
         return mass
