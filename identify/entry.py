@@ -12,7 +12,9 @@ def _run(module: str) -> int:
     (mode shapes of a few thousand DOFs by ~60 modes), and where the other core is busy a
     second BLAS thread waits for it: a shape-comparison (MAC) product took 270 ms instead
     of 35 ms on this 2-core machine with one core loaded.  The solves limit themselves as
-    well (``fem.solver.threads.one_blas_thread``), for callers of the API."""
+    well (``fem.solver.threads.one_blas_thread``), for callers of the API.  Not through
+    its cached controller: here only numpy's BLAS is loaded yet, and caching that view
+    would leave scipy's (loaded with the solver) unlimited in every solve."""
     try:
         main = import_module(module).main
         from threadpoolctl import threadpool_limits
