@@ -340,11 +340,12 @@ def main(argv=None) -> int:
             for o in pool.map(run_case, names):
                 print(json.dumps(o.row()), flush=True)
                 outcomes.append(o)
-    for name in names if args.jobs <= 1 else ():
-        say = (lambda text, name=name: print(f"  {name}: {text}", flush=True)) if args.verbose else None
-        o = run_case(name, progress=say)
-        print(json.dumps(o.row()), flush=True)
-        outcomes.append(o)
+    else:
+        for name in names:
+            say = (lambda text, name=name: print(f"  {name}: {text}", flush=True)) if args.verbose else None
+            o = run_case(name, progress=say)
+            print(json.dumps(o.row()), flush=True)
+            outcomes.append(o)
     args.out.mkdir(parents=True, exist_ok=True)
     texts = []
     for half in ("dev", "heldout"):

@@ -53,42 +53,38 @@ MAX_REFIT_ITERATIONS = 30
 SETTLE_ROUNDS = 4
 
 
+def _adjacent_unlabelled(table) -> list[tuple[int, int, float, bool]]:
+    """(row, next row, relative gap, consecutive ranks) of every two adjacent measured
+    modes of a configuration that both have no label (labels are "" when not given)."""
+    out = []
+    configuration = table["configuration"].to_numpy()
+    f, label, mode = (table[c].to_numpy() for c in ("frequency_hz", "label", "mode"))
+    for name in dict.fromkeys(configuration):
+        rows = np.flatnonzero(configuration == name)
+        out += [(int(a), int(b), f[b] / f[a] - 1, bool(mode[b] == mode[a] + 1))
+                for a, b in zip(rows[:-1], rows[1:]) if label[a] == "" and label[b] == ""]
+    return out
+
+
 def ambiguous_pair_count(table) -> int:
     """Adjacent unlabelled measured modes of a configuration closer than ``NEAR_MODES``:
     the pairs the search after the fit may refit (from the measurement table alone)."""
-    count = 0
-    for _, group in table.groupby("configuration", sort=False):
-        f, label = group["frequency_hz"].to_numpy(), group["label"].to_numpy()
-        count += int(np.sum((f[1:] / f[:-1] - 1 < NEAR_MODES) & (label[1:] == "") & (label[:-1] == "")))
-    return count
+    return sum(gap < NEAR_MODES for _, _, gap, _ in _adjacent_unlabelled(table))
 
 
 def close_pairs(objective: Objective) -> list[tuple[int, int]]:
-    """Rows of adjacent measured modes closer than ``CLOSE_MODES`` with no labels."""
-    table = objective.measurements.table
-    pairs = []
-    for rows in objective.rows.values():
-        for a, b in zip(rows[:-1], rows[1:]):
-            ta, tb = table.iloc[a], table.iloc[b]
-            if tb["mode"] == ta["mode"] + 1 and not ta["label"] and not tb["label"] \
-                    and tb["frequency_hz"] / ta["frequency_hz"] - 1 < CLOSE_MODES:
-                pairs.append((int(a), int(b)))
-    return pairs
+    """Rows of adjacent measured modes (consecutive ranks) closer than ``CLOSE_MODES`` with
+    no labels."""
+    return [(a, b) for a, b, gap, consecutive in _adjacent_unlabelled(objective.measurements.table)
+            if consecutive and gap < CLOSE_MODES]
 
 
 def near_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Adjacent unlabelled measured modes from ``CLOSE_MODES`` to ``NEAR_MODES`` apart: a
     start model off by a few per cent can have them the other way round (a CFRP plate's
     pair 1.2 % apart was), and the fit may then settle on a twin."""
-    table = objective.measurements.table
-    pairs = []
-    for rows in objective.rows.values():
-        for a, b in zip(rows[:-1], rows[1:]):
-            ta, tb = table.iloc[a], table.iloc[b]
-            gap = tb["frequency_hz"] / ta["frequency_hz"] - 1
-            if not ta["label"] and not tb["label"] and CLOSE_MODES <= gap < NEAR_MODES:
-                pairs.append((int(a), int(b)))
-    return pairs
+    return [(a, b) for a, b, gap, _ in _adjacent_unlabelled(objective.measurements.table)
+            if CLOSE_MODES <= gap < NEAR_MODES]
 
 
 def describe_pairs(objective: Objective, pairs) -> str:
@@ -372,4 +368,5 @@ def settle_pairings(objective: Objective, current: Evaluation, history: list,
     return state, what, notes, [(o[0].values, o[2]) for o in others]
 
 
-__all__ = ["CLOSE_MODES", "ambiguous_pair_count", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped", "beneficial_swaps"]
+__all__ = ["CLOSE_MODES", "ambiguous_pair_count", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped",
+           "beneficial_swaps"]

@@ -217,6 +217,7 @@ def test_ambiguous_pair_count_reads_the_table_alone():
 
     table = pd.DataFrame({
         "configuration": ["a"] * 4 + ["b"] * 3,
+        "mode": [1, 2, 3, 4, 1, 2, 3],  # a measurement table always has its ranks
         "frequency_hz": [100.0, 101.0, 110.0, 111.0, 100.0, 102.9, 103.5],
         "label": ["", "", "", "(2,1)", "", "", ""],
     })
