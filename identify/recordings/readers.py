@@ -91,20 +91,20 @@ FORMAT_SAMPLE = 2000
 STEP_JITTER = 1e-3
 
 
-def printed_quantum(text: pd.Series) -> np.ndarray:
-    """The resolution of each number of a printed column (a unit of its last digit):
-    the finer of the column's fixed decimals (``%.6f``: 1e-6) and its significant
+def printed_quantum(text: pd.Series, value: np.ndarray) -> np.ndarray:
+    """The resolution of each number ``value`` of a printed column (a unit of its last
+    digit): the finer of the column's fixed decimals (``%.6f``: 1e-6) and its significant
     digits at that value (``%.7g``: 1e-6 at 1.5, 1e-11 at 2.08e-05).  Printers drop
     trailing zeros ("0", "1.5"), so the column's most digits count for every value.  A
-    column is written with one format: its digits are read off ``FORMAT_SAMPLE`` evenly
-    spaced values (parsing every text value of a 2-s, 48-kHz record cost 1.5 s)."""
-    sample = text.iloc[np.unique(np.linspace(0, len(text) - 1, min(len(text), FORMAT_SAMPLE)).astype(int))]
-    parts = sample.astype(str).str.strip().str.extract(r"^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$")
+    column is written with one format: its digits are read off ``text``, the column's
+    first ``FORMAT_SAMPLE`` printed values (parsing every text value of a 2-s, 48-kHz
+    record cost 1.5 s)."""
+    parts = text.astype(str).str.strip().str.extract(r"^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$")
     whole, decimals = parts[0].fillna(""), parts[1].fillna("")
     exponent = pd.to_numeric(parts[2], errors="coerce").fillna(0).to_numpy()
     places = (decimals.str.len().to_numpy() - exponent).max()
     digits = (whole + decimals).str.lstrip("0").str.len().max()
-    value = np.abs(pd.to_numeric(text, errors="coerce").to_numpy(dtype=float))
+    value = np.abs(value)
     with np.errstate(divide="ignore"):
         significant = np.where(value > 0, 10.0 ** (np.floor(np.log10(value)) - max(digits, 1) + 1), 0.0)
     return np.maximum(10.0 ** -places, significant)
@@ -165,7 +165,7 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
     and one response column (acceleration, velocity, displacement or response)."""
     source = Path(path).name
     try:
-        frame = pd.read_csv(path, dtype={"time_s": str})
+        frame = pd.read_csv(path)
     except pd.errors.EmptyDataError:
         raise _fail(source, "the file is empty; export the hit's time series with a header line") from None
     except (OSError, UnicodeDecodeError, pd.errors.ParserError) as exc:
@@ -187,7 +187,8 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
                     "keep one sensor per file")
     if frame.empty:
         raise _fail(source, "no rows: the file has a header but no samples")
-    numeric = frame.apply(pd.to_numeric, errors="coerce")
+    # Numbers are parsed once, by the C parser; only a column it left as text is looked at.
+    numeric = frame.apply(lambda c: c if pd.api.types.is_numeric_dtype(c) else pd.to_numeric(c, errors="coerce"))
     for column in frame.columns:
         text = frame[column][numeric[column].isna() & frame[column].notna()]
         if len(text):
@@ -196,7 +197,7 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
     if "time_s" in frame.columns:
         time = _check_samples(source, "time_s", numeric["time_s"], first_line=2)
         rate = _rate_from_time(source, time, None if sample_rate is None else _check_rate(source, sample_rate),
-                               printed_quantum(frame["time_s"]))
+                               printed_quantum(_printed_time(path), time))
     elif sample_rate is None:
         raise _fail(source, "no time_s column and no sample rate; add a time_s column or give the sample rate "
                     "(--sample-rate HZ)")
@@ -205,6 +206,11 @@ def read_csv(path: str | Path, sample_rate: float | None = None) -> Hit:
     force = _check_samples(source, "force", numeric["force"], first_line=2)
     response = _check_samples(source, responses[0], numeric[responses[0]], first_line=2)
     return Hit(source, rate, response, force, responses[0])
+
+
+def _printed_time(path) -> pd.Series:
+    """The first ``FORMAT_SAMPLE`` values of a CSV's time_s column as printed."""
+    return pd.read_csv(path, usecols=lambda c: str(c).strip() == "time_s", dtype=str, nrows=FORMAT_SAMPLE).iloc[:, 0]
 
 
 def read_wav(path: str | Path, sample_rate: float | None = None) -> Hit:
