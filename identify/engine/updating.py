@@ -27,7 +27,7 @@ from .parameters import UNITS, display
 from .result import FitResult, FitStatus, Iteration
 from .statistics import CHI2_TEST_LEVEL, FitStatistics
 from .stopping import (ADMISSIBLE_HALVINGS, BOUND_TOLERANCE, DAMPING_FACTOR, EXACT_RMS, FIRST_DAMPING, FLAT_STEP,
-                       STALL_ITERATIONS, STALLED, STEP_PER_STD, TINY_STEP, UNDAMPED, UNDETERMINED_Z, Stop)
+                       ROUNDOFF_COST, STALL_ITERATIONS, STALLED, STEP_PER_STD, TINY_STEP, UNDAMPED, UNDETERMINED_Z, Stop)
 from .uncertainty import Uncertainty
 
 
@@ -110,7 +110,8 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
                 break
             damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
         if accepted is None:
-            return current, Stop.NO_DESCENT, warnings
+            at_minimum = reducible <= ROUNDOFF_COST * objective.cost(current)
+            return current, Stop.GAUSS_NEWTON_SMALL if at_minimum else Stop.NO_DESCENT, warnings
         previous_cost = objective.cost(current)
         current, dz, used = accepted
         r = objective.residual(current)
