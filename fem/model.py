@@ -18,7 +18,7 @@ from .laminates.laminate import Laminate
 from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
 from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
-from .solver.mesh import PlateMesh
+from .solver.mesh import EDGE_SIZE_PER_THICKNESS, PlateMesh
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
 from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
@@ -37,6 +37,8 @@ from .validation import whole
 #: 5 modes -> 11 divisions, 0.006 %; 15 modes -> 18 divisions, 0.010 %).
 DIVISIONS_PER_ROOT_MODE = 4.5
 MIN_DIVISIONS = 8
+#: Edge element sizes of graded meshes are this [m] times a power of two.
+EDGE_QUANTUM = 1e-4
 #: Inertia terms (I0, I1, I2) kept by the classical (Kirchhoff) baseline: translational
 #: inertia only, as in the paper's eqs. 6-8; the rotary_inertia effect adds I1 and I2.
 KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
@@ -70,6 +72,10 @@ class ModelOptions:
     theory: str = "single_layer"
     layer_groups: str = "auto"  # shear groups of the layerwise theory: "auto", "blocks" or "layers"
     core_stretch: bool = True  # layerwise: a soft core's transverse normal strain (E3 = E2 unless given)
+    # Size [m] of the edge elements of a shear-deformable theory's graded mesh; None: from
+    # the specimen (``edge_size_for``).  A SpecimenModel pins it when it is made, so the
+    # mesh stays put while a fit or a derivative moves the layer thicknesses.
+    edge_size: float | None = None
 
     def __post_init__(self):
         whole(self.modes, "ModelOptions.modes", 1, MAX_SOLVED_MODES, "of elastic modes ", OptionsError)
@@ -81,12 +87,31 @@ class ModelOptions:
         if self.layer_groups not in GROUPINGS:
             raise ModelError(f"layer_groups = {self.layer_groups!r} is unknown; use one of {', '.join(GROUPINGS)}")
 
+    @property
+    def shear_deformable(self) -> bool:
+        """Whether the plate theory has transverse shear strains (FSDT or layerwise)."""
+        return self.transverse_shear or self.theory == "layerwise"
+
+    def divisions_for(self, specimen: Specimen) -> int:
+        """Elements along the longer side: ``divisions``, or the default rule."""
+        if self.divisions is not None:
+            return self.divisions
+        aspect = max(specimen.length, specimen.width) / min(specimen.length, specimen.width)
+        return max(MIN_DIVISIONS, math.ceil(DIVISIONS_PER_ROOT_MODE * math.sqrt(self.modes * aspect)))
+
     def mesh(self, specimen: Specimen) -> PlateMesh:
-        divisions = self.divisions
-        if divisions is None:
-            aspect = max(specimen.length, specimen.width) / min(specimen.length, specimen.width)
-            divisions = max(MIN_DIVISIONS, math.ceil(DIVISIONS_PER_ROOT_MODE * math.sqrt(self.modes * aspect)))
-        return PlateMesh.with_element_size(specimen.length, specimen.width, divisions)
+        """The mesh of every configuration: ``divisions_for`` equal elements, graded
+        towards the free edges for a shear-deformable theory (``edge_size``)."""
+        edge = (self.edge_size or edge_size_for(specimen)) if self.shear_deformable else None
+        return PlateMesh.with_element_size(specimen.length, specimen.width, self.divisions_for(specimen), edge)
+
+
+def edge_size_for(specimen: Specimen) -> float:
+    """Edge element size [m] of a graded mesh: ``EDGE_SIZE_PER_THICKNESS`` x the thinnest
+    configuration's thickness, rounded down to 0.1 mm x a power of two, so that nearby
+    stacks (a derivative's step, a refit's thickness) share one mesh."""
+    thinnest = EDGE_SIZE_PER_THICKNESS * min(specimen.laminate(c).thickness for c in specimen.configurations)
+    return EDGE_QUANTUM * 2.0 ** math.floor(math.log2(max(thinnest, EDGE_QUANTUM) / EDGE_QUANTUM))
 
 
 @dataclass(frozen=True)
@@ -215,6 +240,10 @@ class SpecimenModel:
     materials: tuple[Material, ...] = ()
     source: str = "<spec>"
     input_std: tuple[InputStd, ...] = ()  # known inputs' standard uncertainties, for the budget
+
+    def __post_init__(self):
+        if self.options.edge_size is None:
+            object.__setattr__(self, "options", replace(self.options, edge_size=edge_size_for(self.specimen)))
 
     @cached_property
     def mesh(self) -> PlateMesh:

@@ -37,7 +37,8 @@ class Prediction:
         else:
             theory = ("first-order shear deformation" if options.transverse_shear else "Kirchhoff") + " plate" + (
                 " with rotary inertia" if options.rotary_inertia else "")
-        lines = [f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} elements)"]
+        lines = [f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} elements"
+                 f"{', graded towards the edges' if mesh.x_nodes else ''})"]
         if model.effects:
             lines.append(f"with the spec's effects: {', '.join(model.effects)}")
         lines += [f"note: {n}" for n in model.notes]

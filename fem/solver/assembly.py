@@ -1,8 +1,9 @@
 """Unit stiffness and mass matrices of a mesh, assembled once.
 
-Every element of a structured mesh is the same rectangle, so one set of element
-unit matrices serves them all.  Assembly maps the n x n local entries onto one
-global CSR pattern through a sparse aggregation matrix; a global matrix for any
+Elements of a structured mesh come in few sizes (one on an equal mesh, a few more
+where it is graded towards the edges), so one set of element unit matrices per size
+serves them all.  Assembly maps each element's n x n local entries of its size's
+matrices onto one global CSR pattern through a sparse aggregation matrix; a global matrix for any
 laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
 cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
 element matrices (``combined_data``).
@@ -29,8 +30,9 @@ class UnitMatrices:
     element_type: type = HermitePlate
 
     @cached_property
-    def element(self) -> HermitePlate:
-        return self.element_type(*self.mesh.element_size)
+    def elements(self) -> list[HermitePlate]:
+        """One element per distinct element size of the mesh (``PlateMesh.size_groups``)."""
+        return [self.element_type(hx, hy) for hx, hy in self.mesh.size_groups[0]]
 
     @property
     def dofs_per_node(self) -> int:
@@ -49,31 +51,33 @@ class UnitMatrices:
 
     @cached_property
     def element_stiffness(self) -> np.ndarray:
-        """(n_c, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
-        then any the element adds, e.g. transverse shear)."""
-        return self.element.unit_stiffness(VOIGT_PAIRS)
+        """(n_c, G, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
+        then any the element adds, e.g. transverse shear) of the G element sizes."""
+        return np.stack([e.unit_stiffness(VOIGT_PAIRS) for e in self.elements], axis=1)
 
     @cached_property
     def element_mass(self) -> np.ndarray:
-        """(3, n_local, n_local) element unit mass matrices (I0, I1, I2)."""
-        return self.element.unit_mass()
+        """(3, G, n_local, n_local) element unit mass matrices (I0, I1, I2) of the G sizes."""
+        return np.stack([e.unit_mass() for e in self.elements], axis=1)
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
         """CSR indices/indptr of the global pattern and the aggregation matrix
-        (nnz x n_local^2) summing local entries into global ones."""
+        (nnz x G n_local^2) summing each element's local entries, those of its size's
+        matrices, into global ones."""
         dofs = self.element_dofs
         n_local = dofs.shape[1]
         rows = np.repeat(dofs, n_local, axis=1).ravel()
         cols = np.tile(dofs, (1, n_local)).ravel()
-        local = np.tile(np.arange(n_local * n_local), len(dofs))
+        group = self.mesh.size_groups[1]
+        local = (group[:, None] * n_local * n_local + np.arange(n_local * n_local)).ravel()
         # Number the distinct (row, col) pairs in CSR order.
         key = rows.astype(np.int64) * self.n_dofs + cols
         unique, slot = np.unique(key, return_inverse=True)
         g_rows, g_cols = np.divmod(unique, self.n_dofs)
         indptr = np.searchsorted(g_rows, np.arange(self.n_dofs + 1))
         aggregate = sp.csr_matrix(
-            (np.ones(slot.size), (slot, local)), shape=(unique.size, n_local * n_local)
+            (np.ones(slot.size), (slot, local)), shape=(unique.size, len(self.elements) * n_local * n_local)
         )
         return g_cols.astype(np.int32), indptr.astype(np.int32), aggregate
 
@@ -144,16 +148,21 @@ class UnitMatrices:
         out[flat] = data[upper]
         return out.reshape(self.bandwidth + 1, self.n_dofs)
 
-    def element_quadratic_forms(self, modes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
-        """phi_i^T K_c phi_i summed over elements, for every unit matrix c and mode i.
+    def element_quadratic_forms(self, modes: np.ndarray, *matrix_sets: np.ndarray) -> list[np.ndarray]:
+        """phi_i^T K_c phi_i summed over elements, for every unit matrix c of each set and
+        every mode i.
 
-        modes: (n_dofs, m); matrices: (n_c, n_local, n_local) element matrices.  Returns
-        (n_c, m).  Works per element, so it costs O(n_elements * n_local^2 * m), not a
-        sparse product per c.
+        modes: (n_dofs, m); each set: (n_c, G, n_local, n_local) element matrices of the G
+        element sizes.  Returns one (n_c, m) array per set.  Works per element, so it costs
+        O(n_elements * n_local^2 * m) for the modes' second moments, shared by the sets,
+        and O(n_c * G * n_local^2 * m) per set, not a sparse product per c.
         """
         local = modes[self.element_dofs]  # (ne, n_local, m)
-        second_moment = np.einsum("eam,ebm->mab", local, local).reshape(modes.shape[1], -1)
-        return matrices.reshape(len(matrices), -1) @ second_moment.T
+        group = self.mesh.size_groups[1]
+        per_size = [local] if len(self.elements) == 1 else [local[group == g] for g in range(len(self.elements))]
+        second_moment = np.stack([np.einsum("eam,ebm->mab", x, x) for x in per_size], axis=1)
+        second_moment = second_moment.reshape(modes.shape[1], -1).T
+        return [matrices.reshape(len(matrices), -1) @ second_moment for matrices in matrix_sets]
 
     @cached_property
     def rigid_body_modes(self) -> np.ndarray:

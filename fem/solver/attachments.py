@@ -62,8 +62,8 @@ def point_operators(units: UnitMatrices, x: float, y: float) -> tuple[np.ndarray
     """Global DOFs of the element holding (x, y) and the rows that evaluate each field and
     its x-, y-derivatives there: {"u": (n_local,), "u_x": ..., "w_y": ...}."""
     mesh = units.mesh
-    element, s, t = mesh.locate(x, y)
-    hx, hy = mesh.element_size
+    ex, ey, s, t, hx, hy = (float(v) for v in mesh.cells(x, y))
+    element = int(ey) * mesh.nx + int(ex)
     vx, dx, _ = (a[:, 0] for a in _hermite_1d(np.array([s]), hx))
     vy, dy, _ = (a[:, 0] for a in _hermite_1d(np.array([t]), hy))
     corners = units.element_type.CORNERS

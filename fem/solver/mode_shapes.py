@@ -75,13 +75,11 @@ def deflection_operator(units: UnitMatrices, x: np.ndarray, y: np.ndarray) -> sp
     DOFs (Hermite interpolation in the element holding each point)."""
     x, y = np.atleast_1d(np.asarray(x, dtype=float)), np.atleast_1d(np.asarray(y, dtype=float))
     mesh = units.mesh
-    hx, hy = mesh.element_size
     names = units.element_type.NODE_DOFS
     w_first, per_node = names.index("w"), len(names)
-    ex = np.clip((x / hx).astype(int), 0, mesh.nx - 1)
-    ey = np.clip((y / hy).astype(int), 0, mesh.ny - 1)
-    vx = _hermite_1d(x / hx - ex, hx)[0]  # (4, points)
-    vy = _hermite_1d(y / hy - ey, hy)[0]
+    ex, ey, s, t, hx, hy = mesh.cells(x, y)
+    vx = _hermite_1d(s, hx)[0]  # (4, points)
+    vy = _hermite_1d(t, hy)[0]
     rows, cols, data = [], [], []
     for i, j in units.element_type.CORNERS:
         node = (ey + j) * (mesh.nx + 1) + ex + i

@@ -27,10 +27,7 @@ class ModalEnergies:
 
     @classmethod
     def of(cls, units: UnitMatrices, modes: Modes) -> "ModalEnergies":
-        both = np.concatenate([units.element_stiffness, units.element_mass])
-        q = units.element_quadratic_forms(modes.shapes, both)
-        n_c = len(units.element_stiffness)
-        return cls(q[:n_c], q[n_c:])
+        return cls(*units.element_quadratic_forms(modes.shapes, units.element_stiffness, units.element_mass))
 
 
 def eigenvalue_derivatives(

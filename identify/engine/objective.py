@@ -41,8 +41,8 @@ def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes:
     rule for the highest measured rank) and ``extra_modes`` more modes, so a mode may be
     followed when it moves past the last measured one."""
     highest = int(measurements.table["mode"].max())
-    mesh = model.with_options(modes=highest).mesh
-    return model.with_options(modes=highest + extra_modes, divisions=max(mesh.nx, mesh.ny))
+    divisions = replace(model.options, modes=highest).divisions_for(model.specimen)
+    return model.with_options(modes=highest + extra_modes, divisions=divisions)
 
 
 class Objective:

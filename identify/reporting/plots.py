@@ -119,11 +119,18 @@ def plot_mode_shapes(result, path: Path) -> Path:
                 continue
             mode = int(group["mode"].iloc[k])
             shape = w[:, mode - 1].reshape(grid)
-            ax.imshow(shape, origin="lower", cmap="RdBu", aspect="equal", interpolation="bilinear")
-            ax.contour(shape, levels=[0], colors="k", linewidths=0.8)
+            _draw_shape(ax, units.mesh, shape)
             ax.set_title(f"{name if k == 0 else ''}\nmode {mode} {group['label'].iloc[k]}\n"
                          f"{group['model_hz'].iloc[k]:.1f} Hz", fontsize=7)
     return save_figure(fig, path, dpi=100)
+
+
+def _draw_shape(ax, mesh, shape: np.ndarray) -> None:
+    """A mode's deflection on the mesh nodes (ny + 1, nx + 1), at the nodes' positions (a
+    graded mesh's edge rows are narrow), with its nodal lines in black."""
+    ax.pcolormesh(mesh.x, mesh.y, shape, cmap="RdBu", shading="gouraud")
+    ax.contour(mesh.x, mesh.y, shape, levels=[0], colors="k", linewidths=0.8)
+    ax.set_aspect("equal")
 
 
 def plot_comparison(comparison, model: SpecimenModel, path: Path) -> Path:
@@ -149,8 +156,7 @@ def plot_comparison(comparison, model: SpecimenModel, path: Path) -> Path:
                 ax_bar.axis("off")
                 continue
             shape = solution.modes.shapes[:, indices[k]].reshape(units.mesh.n_nodes, -1)[:, w_index].reshape(grid)
-            ax_shape.imshow(shape, origin="lower", cmap="RdBu", aspect="equal")
-            ax_shape.contour(shape, levels=[0], colors="k", linewidths=0.8)
+            _draw_shape(ax_shape, units.mesh, shape)
             ax_shape.set_title(f"{name}\nmode {rows['mode'].iloc[k]}" if k == 0 else f"mode {rows['mode'].iloc[k]}",
                                fontsize=8)
             err = 100 * rows["rel_error"].iloc[k]

@@ -79,12 +79,16 @@ def single_material(eta, **options):
 def test_one_material_one_eta_every_mode(options):
     """Every modulus with one eta scales K by (1 + i eta): each complex eigenvalue is
     lambda (1 + i eta) exactly, and the first-order weights sum to 1 (Euler's theorem
-    for stiffnesses homogeneous of degree 1 in the moduli).  Solver precision: ARPACK
-    at tol 1e-10 on the eigenvalue, so 1e-9 relative on eta."""
+    for stiffnesses homogeneous of degree 1 in the moduli).  Solver precision: ARPACK's
+    tol 1e-10 bounds the Ritz residual, which gave eta to 1e-9 on equal elements and to
+    1.5e-7 on the shear theory's edge-graded mesh (elements from 1.6 mm up, a wider
+    spread of element stiffnesses; a tol of 1e-12 does not change it), so 1e-6 for the
+    complex solve; the first-order weights (modal energies of the real modes) sum to 1
+    within 1.2e-9 there, so 1e-8.  A wrong sign or a term without eta errs by 1e-2."""
     model = single_material(0.3).with_options(modes=8, **options)
     for c in ("original", "brass_top"):
-        assert complex_loss_factors(model, c) == pytest.approx(np.full(8, 0.3), rel=1e-9)
-        assert first_order_loss_factors(model)[c] == pytest.approx(np.full(8, 0.3), rel=1e-9)
+        assert complex_loss_factors(model, c) == pytest.approx(np.full(8, 0.3), rel=1e-6)
+        assert first_order_loss_factors(model)[c] == pytest.approx(np.full(8, 0.3), rel=1e-8)
 
 
 def contrast(scale):
