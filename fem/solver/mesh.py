@@ -10,12 +10,12 @@ from ..errors import ModelError
 
 #: Edge grading: the elements at a free edge start at ``EDGE_SIZE_PER_THICKNESS`` x the
 #: plate's thickness and grow by ``EDGE_GROWTH`` towards the interior until they reach
-#: about the interior size.  Why: a shear-deformable (Reissner-Mindlin or layerwise) plate has a boundary
-#: layer about one thickness wide along a free edge, where the twisting moment falls to
-#: zero; equal elements much wider than the plate is thick cannot follow it, and its
-#: twisting modes then converge slowly (a 4.5 mm hybrid plate: 0.12 % high at the default
-#: 16 divisions against 32, and the 3-D solid model agrees with the fine mesh).
-#: tests/fem/test_mesh_grading.py has the convergence study.
+#: about the interior size.  Why: a shear-deformable (Reissner-Mindlin or layerwise)
+#: plate has a boundary layer about one thickness wide along a free edge, where the
+#: twisting moment falls to zero; equal elements much wider than the plate is thick
+#: cannot follow it, and its twisting modes then converge slowly (a 4.5 mm hybrid plate:
+#: 0.12 % high at the default 16 divisions against 32, and the 3-D solid model agrees
+#: with the fine mesh).  tests/fem/test_mesh_grading.py has the convergence study.
 EDGE_SIZE_PER_THICKNESS = 1.0
 #: Growth factor of the edge elements, and the fraction of the interior element size they
 #: stay below.  Growth 3 keeps the default mesh within 0.01 % (coated plate with shear
@@ -34,8 +34,8 @@ EDGE_LEVELS = 2
 def _spacing(length: float, divisions: int, edge_size: float | None) -> np.ndarray:
     """Node positions [m] along one side: ``divisions`` equal elements, or with
     ``edge_size`` [m] graded elements at both ends (sizes edge_size, 3 edge_size, at most
-    ``EDGE_LEVELS`` of them, below ``EDGE_GROWTH_LIMIT`` of the interior size) and equal ones between, about as
-    wide as ``length / divisions``."""
+    ``EDGE_LEVELS`` of them, below ``EDGE_GROWTH_LIMIT`` of the interior size) and equal
+    ones between, about as wide as ``length / divisions``."""
     interior = length / divisions
     edge = []
     size = edge_size
