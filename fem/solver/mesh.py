@@ -136,8 +136,3 @@ class PlateMesh:
         ey = np.clip(np.searchsorted(self.y, y, side="right") - 1, 0, self.ny - 1)
         hx, hy = np.diff(self.x)[ex], np.diff(self.y)[ey]
         return ex, ey, (x - self.x[ex]) / hx, (y - self.y[ey]) / hy, hx, hy
-
-    def locate(self, x: float, y: float) -> tuple[int, float, float]:
-        """Element containing (x, y) [m] and the local coordinates (s, t) in [0, 1]."""
-        ex, ey, s, t, _, _ = self.cells(x, y)
-        return int(ey * self.nx + ex), float(s), float(t)
