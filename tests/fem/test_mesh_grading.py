@@ -109,3 +109,29 @@ def test_graded_mesh_follows_the_3d_solid_on_twisting_modes():
     for label in ("(1,1)", "(1,2)", "(2,2)"):
         hz, rank = solid[label]
         assert abs(f[rank - 1] / hz - 1) < 3e-4, label
+
+
+def test_twisted_strip_follows_saint_venant_edge_correction():
+    """A closed form for the edge layer: the first torsion mode of a free 300 x 30 x 3 mm
+    aluminium strip, f = sqrt(G J / (rho I_p)) / 2L with Saint-Venant's torsion constant
+    J = b h^3 / 3 (1 - 0.630 h / b) (the 6.3 % edge term is the free-edge boundary layer)
+    and I_p = b h (b^2 + h^2) / 12.  FSDT on the graded mesh is within 0.3 % of it
+    (measured +0.24 %, and +0.23 % on a twice finer graded mesh: the strip's free ends,
+    b / L = 0.1, are not in the closed form); on 4 equal elements across the width it was
+    +0.48 %; Kirchhoff, which has no edge layer, is more than 3 % above it."""
+    from fem.laminates.laminate import Laminate, Layer
+    from fem.laminates.material import Material
+    E, nu, rho, length, b, h = 70e9, 0.3, 2700.0, 0.3, 0.03, 0.003
+    shear_modulus = E / (2 * (1 + nu))
+    strip = Laminate((Layer(Material("aluminium", E, E, shear_modulus, nu, rho), h),))
+    torsion_constant = b * h**3 / 3 * (1 - 0.630 * h / b)
+    closed = np.sqrt(shear_modulus * torsion_constant / (rho * b * h * (b**2 + h**2) / 12)) / (2 * length)
+    graded = PlateMesh.with_element_size(length, b, 40, edge_size=0.0016)
+
+    def torsion_hz(mesh, **theory):
+        solution = solve_laminate(strip, mesh, 6, **theory)
+        return solution.frequencies_hz[solution.labels.index("(1,1)")]
+
+    fsdt = torsion_hz(graded, transverse_shear=True, rotary_inertia=True)
+    assert abs(fsdt / closed - 1) < 3e-3
+    assert torsion_hz(PlateMesh.with_element_size(length, b, 40)) / closed - 1 > 0.03
