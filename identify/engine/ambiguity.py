@@ -15,7 +15,7 @@ materials together changes no frequency; the answer is oriented like the start v
 from __future__ import annotations
 
 import itertools
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -172,11 +172,22 @@ def same_or_mirror(objective: Objective, a: Evaluation, b: Evaluation, tolerance
     return close(a.values, b.values) or (mirror_symmetric(objective) and close(mirrored(objective, a.values), b.values))
 
 
-def lone_close_modes(objective: Objective, e: Evaluation) -> list[tuple[int, int]]:
-    """(row, model mode index): a measured unlabelled mode paired with a model mode whose
-    neighbour, closer than ``CLOSE_MODES``, is paired with nothing: one peak where two
-    modes lie (a pair merged in the spectrum, or one of them at a node of the sensor),
-    which frequencies alone cannot assign."""
+class LoneMode(NamedTuple):
+    """A measured row paired with model mode ``mode`` (index) while its close neighbour
+    ``neighbour`` is paired with nothing; both model frequencies [Hz]."""
+
+    row: int
+    neighbour: int
+    mode: int
+    mode_hz: float
+    neighbour_hz: float
+
+
+def lone_close_modes(objective: Objective, e: Evaluation) -> list[LoneMode]:
+    """Measured unlabelled modes paired with a model mode whose neighbour, closer than
+    ``CLOSE_MODES``, is paired with nothing: one peak where two modes lie (a pair merged
+    in the spectrum, or one of them at a node of the sensor), which frequencies alone
+    cannot assign."""
     table = objective.measurements.table
     model = objective.solved.with_specimen(e.model.specimen)
     out = []
@@ -188,7 +199,7 @@ def lone_close_modes(objective: Objective, e: Evaluation) -> list[tuple[int, int
                 continue
             for other in (j - 1, j + 1):
                 if 0 <= other < len(f) and other not in used and abs(f[other] / f[j] - 1) < CLOSE_MODES:
-                    out.append((int(row), int(other)))
+                    out.append(LoneMode(int(row), int(other), int(j), float(f[j]), float(f[other])))
     return out
 
 
@@ -243,7 +254,7 @@ def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) ->
     """The re-paired states to try from ``current`` (see ``settle_pairings``)."""
     pairs = close_pairs(objective)
     lone = lone_close_modes(objective, current)
-    items = [("swap", rows) for rows in pairs] + [("move", move) for move in lone]
+    items = [("swap", rows) for rows in pairs] + [("move", (m.row, m.neighbour)) for m in lone]
     out = []
     if len(items) <= MAX_EXHAUSTIVE_PAIRS:
         combos = [c for k in range(1, len(items) + 1) for c in itertools.combinations(items, k)]

@@ -83,7 +83,7 @@ class Uncertainty:
 
     def with_merged_peaks(self, objective, evaluation, lone) -> tuple["Uncertainty", list[str]]:
         """The uncertainty widened for measured peaks that may be two modes merged: each
-        ``lone`` (row, model mode index) is a peak paired with one model mode while the
+        ``lone`` (``ambiguity.LoneMode``) is a peak paired with one model mode while the
         close neighbour beside it has no peak.  The peak then lies anywhere between the
         two (a blend weighted by their residues, or the one mode with the other at a node),
         so its frequency carries a further error uniform over their spacing, variance
@@ -96,17 +96,13 @@ class Uncertainty:
         table = objective.measurements.table
         extra = np.zeros(len(table))
         notes = []
-        model = objective.solved.with_specimen(evaluation.model.specimen)
-        for row, other in lone:
+        for row, other, mine, mine_hz, other_hz in lone:
             name = table["configuration"].iloc[row]
-            f = model.solve(name).frequencies_hz
-            local = int(np.flatnonzero(objective.rows[name] == row)[0])
-            mine = int(evaluation.pairings[name].indices[local])
-            spacing = abs(f[other] - f[mine])
+            spacing = abs(other_hz - mine_hz)
             # In weighted-residual units; a peak with a free close mode on each side: the wider.
             extra[row] = max(extra[row], spacing**2 / 12 / objective.sigma[row] ** 2)
             notes.append(f"{name} {table['frequency_hz'].iloc[row]:.2f} Hz: one peak where model modes {mine + 1} and "
-                         f"{other + 1} lie {100 * spacing / f[mine]:.2g} % apart (two modes merged, or one at a "
+                         f"{other + 1} lie {100 * spacing / mine_hz:.2g} % apart (two modes merged, or one at a "
                          f"node): it may lie anywhere between them, a further scatter of {spacing / 12**0.5:.3g} Hz "
                          "(spacing / sqrt 12) is in the parameters' std; a label or a second sensor position would "
                          "tell")
