@@ -100,7 +100,7 @@ def run_peaks(args) -> int:
 
 def run_fit(args) -> int:
     """Identify the layer properties from measured frequencies of every configuration."""
-    from .engine.ambiguity import MAX_REFITS, ambiguous_pair_count
+    from .engine.ambiguity import MAX_REFITS, NEAR_MODES, ambiguous_pair_count
     from .fitting.driver import fit
     from .reporting.report import write_report
 
@@ -114,9 +114,9 @@ def run_fit(args) -> int:
              "frequencies")
     pairs = ambiguous_pair_count(measurements.table)
     if pairs > MAX_REFITS:
-        _say(f"{pairs} pairs of unlabelled modes lie within 3 % of each other: after the fit converges, checking "
-             f"their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode list); a 'label' "
-             "column for close modes makes it unnecessary")
+        _say(f"{pairs} pairs of unlabelled modes lie within {100 * NEAR_MODES:g} % of each other: after the fit "
+             f"converges, checking their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode "
+             "list); a 'label' column for close modes makes it unnecessary")
     result = fit(model, measurements, args.effect or (), progress=_progress)
     if args.report:
         _say(f"report written to {write_report(result, args.report)}/")
