@@ -18,7 +18,7 @@ from .laminates.laminate import Laminate
 from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
 from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
-from .solver.mesh import EDGE_SIZE_PER_THICKNESS, PlateMesh
+from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
 from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
@@ -37,8 +37,6 @@ from .validation import whole
 #: 5 modes -> 11 divisions, 0.006 %; 15 modes -> 18 divisions, 0.010 %).
 DIVISIONS_PER_ROOT_MODE = 4.5
 MIN_DIVISIONS = 8
-#: Edge element sizes of graded meshes are this [m] times a power of two.
-EDGE_QUANTUM = 1e-4
 #: Inertia terms (I0, I1, I2) kept by the classical (Kirchhoff) baseline: translational
 #: inertia only, as in the paper's eqs. 6-8; the rotary_inertia effect adds I1 and I2.
 KIRCHHOFF_INERTIA = (1.0, 0.0, 0.0)
@@ -107,11 +105,9 @@ class ModelOptions:
 
 
 def edge_size_for(specimen: Specimen) -> float:
-    """Edge element size [m] of a graded mesh: ``EDGE_SIZE_PER_THICKNESS`` x the thinnest
-    configuration's thickness, rounded down to 0.1 mm x a power of two, so that nearby
-    stacks (a derivative's step, a refit's thickness) share one mesh."""
-    thinnest = EDGE_SIZE_PER_THICKNESS * min(specimen.laminate(c).thickness for c in specimen.configurations)
-    return EDGE_QUANTUM * 2.0 ** math.floor(math.log2(max(thinnest, EDGE_QUANTUM) / EDGE_QUANTUM))
+    """Edge element size [m] of a graded mesh for the thinnest configuration
+    (``fem.solver.mesh.edge_size``)."""
+    return edge_size(min(specimen.laminate(c).thickness for c in specimen.configurations))
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,7 @@
 """Structured rectangular meshes of a plate."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -29,6 +30,16 @@ EDGE_GROWTH_LIMIT = 0.6
 #: changes the default meshes by nothing a test can see (the coated plate with shear:
 #: 0.0021 % against 0.0025 % from converged).
 EDGE_LEVELS = 2
+#: Edge element sizes are this [m] times a power of two.
+EDGE_QUANTUM = 1e-4
+
+
+def edge_size(thickness: float) -> float:
+    """Edge element size [m] for a plate ``thickness`` [m] thick: ``EDGE_SIZE_PER_THICKNESS``
+    x the thickness, rounded down to ``EDGE_QUANTUM`` x a power of two, so that nearby
+    stacks (a derivative's step, a refit's thickness) share one mesh."""
+    size = max(EDGE_SIZE_PER_THICKNESS * thickness, EDGE_QUANTUM)
+    return EDGE_QUANTUM * 2.0 ** math.floor(math.log2(size / EDGE_QUANTUM))
 
 
 def _spacing(length: float, divisions: int, edge_size: float | None) -> np.ndarray:
