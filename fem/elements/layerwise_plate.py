@@ -41,7 +41,7 @@ from functools import cache
 
 import numpy as np
 
-from .hermite_plate import HermitePlate
+from .hermite_plate import HermitePlate, gram
 
 
 def basis_pairs(n: int) -> list[tuple[int, int]]:
@@ -49,10 +49,6 @@ def basis_pairs(n: int) -> list[tuple[int, int]]:
     (0, 1), (1, 1) first (A, B, D; I0, I1, I2), then the others row by row."""
     head = [(0, 0), (0, 1), (1, 1)][: 1 if n == 1 else 3]
     return head + [(a, b) for a in range(n) for b in range(a, n) if (a, b) not in head]
-
-
-def _gram(weights: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    return np.einsum("q,qa,qb->ab", weights, first, second)
 
 
 class LayerwisePlate(HermitePlate):
@@ -124,9 +120,9 @@ class LayerwisePlate(HermitePlate):
         plus its transpose when the two operators differ (a cross term of the energy)."""
         out = []
         for i, j in pairs:
-            k = _gram(self.weights, first[:, i], second[:, j])
+            k = gram(self.weights, first[:, i], second[:, j])
             if i != j:
-                k = k + _gram(self.weights, first[:, j], second[:, i])
+                k = k + gram(self.weights, first[:, j], second[:, i])
             out.append(k + k.T if symmetrise else k)
         return out
 
@@ -138,12 +134,12 @@ class LayerwisePlate(HermitePlate):
             out += self._coupling(strains[a], strains[b], pairs, a != b)
         for k in range(self.GROUPS):
             gamma = self.shear_strain_operator(k)
-            k45 = _gram(self.weights, gamma[:, 0], gamma[:, 1])
-            out += [_gram(self.weights, gamma[:, 0], gamma[:, 0]), _gram(self.weights, gamma[:, 1], gamma[:, 1]),
+            k45 = gram(self.weights, gamma[:, 0], gamma[:, 1])
+            out += [gram(self.weights, gamma[:, 0], gamma[:, 0]), gram(self.weights, gamma[:, 1], gamma[:, 1]),
                     k45 + k45.T]
         for s in range(self.STRETCH):
             e = self._field("N", f"e{s + 1}")
-            out.append(_gram(self.weights, e, e))
+            out.append(gram(self.weights, e, e))
         return np.array(out)
 
     def unit_mass(self) -> np.ndarray:
@@ -155,12 +151,12 @@ class LayerwisePlate(HermitePlate):
         out = []
         for a, b in basis_pairs(len(displacements)):
             (ax, ay), (bx, by) = displacements[a], displacements[b]
-            m = _gram(w, ax, bx) + _gram(w, ay, by)
+            m = gram(w, ax, bx) + gram(w, ay, by)
             out.append(m if a == b else m + m.T)
         transverse = [self._field("N", "w")] + [self._field("N", f"e{s + 1}") for s in range(self.STRETCH)]
-        out[0] = out[0] + _gram(w, transverse[0], transverse[0])
+        out[0] = out[0] + gram(w, transverse[0], transverse[0])
         for a, b in basis_pairs(len(transverse))[1:]:
-            m = _gram(w, transverse[a], transverse[b])
+            m = gram(w, transverse[a], transverse[b])
             out.append(m if a == b else m + m.T)
         return np.array(out)
 

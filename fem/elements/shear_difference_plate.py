@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hermite_plate import HermitePlate
+from .hermite_plate import HermitePlate, gram
 
 
 class ShearDifferencePlate(HermitePlate):
@@ -48,10 +48,10 @@ class ShearDifferencePlate(HermitePlate):
     def unit_stiffness(self, pairs) -> np.ndarray:
         """(21, 80, 80): the 18 CLT unit matrices, then A44, A55, A45."""
         gamma = self.shear_strain_operator()
-        gram = lambda a, b: np.einsum("q,qa,qb->ab", self.weights, a, b)  # noqa: E731
-        k44 = gram(gamma[:, 0], gamma[:, 0])
-        k55 = gram(gamma[:, 1], gamma[:, 1])
-        k45 = gram(gamma[:, 0], gamma[:, 1])
+        w = self.weights
+        k44 = gram(w, gamma[:, 0], gamma[:, 0])
+        k55 = gram(w, gamma[:, 1], gamma[:, 1])
+        k45 = gram(w, gamma[:, 0], gamma[:, 1])
         return np.concatenate([super().unit_stiffness(pairs), [k44, k55, k45 + k45.T]])
 
     def rotations(self) -> tuple[np.ndarray, np.ndarray]:

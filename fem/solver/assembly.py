@@ -53,12 +53,22 @@ class UnitMatrices:
     def element_stiffness(self) -> np.ndarray:
         """(n_c, G, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
         then any the element adds, e.g. transverse shear) of the G element sizes."""
-        return np.stack([e.unit_stiffness(VOIGT_PAIRS) for e in self.elements], axis=1)
+        return self._per_size(lambda e: e.unit_stiffness(VOIGT_PAIRS))
 
     @cached_property
     def element_mass(self) -> np.ndarray:
         """(3, G, n_local, n_local) element unit mass matrices (I0, I1, I2) of the G sizes."""
-        return np.stack([e.unit_mass() for e in self.elements], axis=1)
+        return self._per_size(lambda e: e.unit_mass())
+
+    def _per_size(self, matrices) -> np.ndarray:
+        """matrices(element) (n_c, n, n) of every element size, stacked on axis 1 in place
+        (a graded layerwise mesh holds ~400 MB of them: no second copy)."""
+        first = matrices(self.elements[0])
+        out = np.empty((first.shape[0], len(self.elements)) + first.shape[1:])
+        out[:, 0] = first
+        for g, element in enumerate(self.elements[1:], start=1):
+            out[:, g] = matrices(element)
+        return out
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
@@ -159,8 +169,11 @@ class UnitMatrices:
         """
         local = modes[self.element_dofs]  # (ne, n_local, m)
         group = self.mesh.size_groups[1]
-        per_size = [local] if len(self.elements) == 1 else [local[group == g] for g in range(len(self.elements))]
-        second_moment = np.stack([np.einsum("eam,ebm->mab", x, x) for x in per_size], axis=1)
+        second_moment = np.empty((modes.shape[1], len(self.elements)) + local.shape[1:2] * 2)
+        for g in range(len(self.elements)):
+            # sum_e x_e x_e^T per mode as one batched BLAS product (m, a, e) @ (m, e, b)
+            x = np.ascontiguousarray((local if len(self.elements) == 1 else local[group == g]).transpose(2, 1, 0))
+            np.matmul(x, x.transpose(0, 2, 1), out=second_moment[:, g])
         second_moment = second_moment.reshape(modes.shape[1], -1).T
         return [matrices.reshape(len(matrices), -1) @ second_moment for matrices in matrix_sets]
 
