@@ -23,10 +23,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import fft, signal
+from scipy import fft
 
 from fem.errors import MeasurementError
 
+from .maxima import find_peaks
 from .readers import Hit, MeasuredFRF
 
 PULSE_LEVEL = 0.05
@@ -53,6 +54,8 @@ MAINS_DRIFT_HZ = 0.2
 HUM_DB = 15.0
 #: Hum is steady: its amplitude over the tail's second half within these factors of the first's.
 HUM_STEADY = (0.7, 1.4)
+#: A harmonic's neighbourhood in the tail's spectrum: 9 lines either side, 3 lines clear of it.
+NEIGHBOURHOOD = np.r_[-12:-3, 4:13]
 
 
 @dataclass(frozen=True)
@@ -142,7 +145,7 @@ def _double_hit(f: np.ndarray, start: int, end: int, fs: float) -> str | None:
         side = "after" if second > start else "before"
         return (f"double hit: a second force pulse of {np.abs(f[outside]).max() / peak:.0%} of the first, "
                 f"{abs(second - start) / fs * 1e3:.1f} ms {side} it")
-    maxima = signal.find_peaks(np.abs(f[start:end]), prominence=DOUBLE_HIT_LEVEL * peak)[0]
+    maxima = find_peaks(np.abs(f[start:end]), DOUBLE_HIT_LEVEL * peak)[0]
     if len(maxima) > 1:
         return (f"double hit: the force pulse has {len(maxima)} maxima, {(maxima[1] - maxima[0]) / fs * 1e3:.2f} ms "
                 "apart (a rebound within the pulse)")
@@ -189,7 +192,7 @@ def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
     fs, y = hit.sample_rate, hit.response
     tail = y[len(y) // 2:] - np.median(y[len(y) // 2:])
     n = len(tail)
-    spectrum = np.abs(fft.rfft(tail * signal.windows.hann(n)))
+    spectrum = np.abs(fft.rfft(tail * np.hanning(n)))
     f = fft.rfftfreq(n, 1 / fs)
     step = f[1]
     found = None
@@ -199,8 +202,8 @@ def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
         k, lines = k[(lines >= 12) & (lines + 12 < len(f))], lines[(lines >= 12) & (lines + 12 < len(f))]
         if not len(lines):
             continue
-        level = np.array([spectrum[i - 1:i + 2].max() for i in lines])
-        around = np.array([np.median(np.r_[spectrum[i - 12:i - 3], spectrum[i + 4:i + 13]]) for i in lines])
+        level = spectrum[lines[:, None] + np.arange(-1, 2)].max(axis=1)
+        around = np.median(spectrum[lines[:, None] + NEIGHBOURHOOD], axis=1)
         standing = (level >= 10 ** (HUM_DB / 20) * around) & (level > 0)
         if standing[:3].sum() >= 1 and (found is None or standing.sum() > found[1].sum()):
             found = (mains, standing, k)
@@ -275,11 +278,11 @@ def _notch(force_spectrum: np.ndarray, frequency_hz: np.ndarray, lines: np.ndarr
     level = level[:np.argmax(np.append(level < level[0] - FORCE_DROP_DB, True))]
     if len(level) < 3:
         return None
-    dips, props = signal.find_peaks(-level, prominence=NOTCH_DB)
+    dips, depth = find_peaks(-level, NOTCH_DB)
     if not dips.size:
         return None
-    i = int(np.argmax(props["prominences"]))
-    return float(props["prominences"][i]), float(frequency_hz[lines][dips[i]])
+    i = int(np.argmax(depth))
+    return float(depth[i]), float(frequency_hz[lines][dips[i]])
 
 
 def default_band(hits: list[Hit]) -> tuple[float, float]:

@@ -13,8 +13,9 @@ on H1 (variable projection: complex residues, the neighbouring modes' poles with
 residues so a strong neighbour's skirt does not bias it, and a linear residual term;
 the poles by ``scipy.optimize.least_squares``; overlapping candidates are fitted
 together), kept when its modal peak stands ``SNR_MIN`` times above the fit's residual,
-and cross-checked against peak picking (``scipy.signal.find_peaks`` on |H1| in dB,
-Gaussian interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
+and cross-checked against peak picking (local maxima of |H1| in dB with their prominence,
+as ``scipy.signal.find_peaks`` defines them, :mod:`identify.recordings.maxima`; Gaussian
+interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
 (e.g. a square plate's pair 0.01 % apart) make one column and are reported as one peak:
 one sensor cannot tell them apart.  ``frequency_hz`` is the undamped natural frequency
 |p| / 2 pi of the pole p (what an FE model predicts), ``damping_ratio`` -Re p / |p|.
@@ -70,7 +71,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import optimize, signal
+from scipy import optimize
 from scipy.special import gammaln
 
 from fem.errors import MeasurementError
@@ -80,6 +81,7 @@ from fem.plotting import new_figure, save_figure
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window
+from .maxima import find_peaks, local_maxima, prominences
 from .readers import Hit, MeasuredFRF, check_together, read_recordings
 
 #: Stability between successive orders: relative change of frequency and of damping.
@@ -401,9 +403,9 @@ def picked_peaks(frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndar
     """Local maxima of 20 log10 |H| in ``lines`` with at least ``prominence_db``:
     frequency by Gaussian interpolation (a parabola through the three dB values)."""
     level = 20 * np.log10(np.abs(magnitude[lines]) + 1e-300)
-    i, props = signal.find_peaks(level, prominence=prominence_db)
+    i, prom = find_peaks(level, prominence_db)
     keep = (i > 0) & (i < len(level) - 1)
-    i, prom = i[keep], props["prominences"][keep]
+    i, prom = i[keep], prom[keep]
     a, b, c = level[i - 1], level[i], level[i + 1]
     with np.errstate(invalid="ignore", divide="ignore"):
         shift = np.where(a - 2 * b + c < 0, 0.5 * (a - c) / (a - 2 * b + c), 0.0)
@@ -412,14 +414,17 @@ def picked_peaks(frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndar
                          "line": lines[i]})
 
 
-def _prominence_at(frf: AveragedFRF, lines: np.ndarray, f: float, half_bw: float) -> float:
-    """Prominence [dB] of the local maximum of |H1| within half_bw of f (0: none)."""
+def _prominences_at(frf: AveragedFRF, lines: np.ndarray, f: np.ndarray, half_bw: np.ndarray) -> np.ndarray:
+    """Prominence [dB] of the most prominent local maximum of |H1| within half_bw[j] of
+    each f[j] (0: none)."""
     level = 20 * np.log10(np.abs(frf.h1[lines]) + 1e-300)
-    maxima = signal.find_peaks(level)[0]
-    near = maxima[np.abs(frf.frequency_hz[lines][maxima] - f) <= half_bw]
-    if not near.size:
-        return 0.0
-    return float(signal.peak_prominences(level, near)[0].max())
+    maxima = local_maxima(level)
+    at, prominent = frf.frequency_hz[lines][maxima], prominences(level, maxima)
+    out = np.zeros(len(f))
+    for j in range(len(f)):
+        near = np.abs(at - f[j]) <= half_bw[j]
+        out[j] = prominent[near].max() if near.any() else 0.0
+    return out
 
 
 # --- the entry point -------------------------------------------------------------------
@@ -654,7 +659,7 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
             i = int(np.flatnonzero(near)[np.argmin(np.abs(picked["frequency_hz"].to_numpy()[near] - f[j]))])
             peak_hz[j] = picked["frequency_hz"].iloc[i]
             used.add(i)
-    prominence = np.array([_prominence_at(frf, lines, pole[j].imag / (2 * np.pi), half_bw[j]) for j in range(len(f))])
+    prominence = _prominences_at(frf, lines, pole.imag / (2 * np.pi), half_bw)
     sep = np.diff(f)
     close = np.zeros(len(f), dtype=bool)
     close[:-1] |= sep < 4 * half_bw[:-1]
