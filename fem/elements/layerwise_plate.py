@@ -41,7 +41,7 @@ from functools import cache
 
 import numpy as np
 
-from .hermite_plate import HermitePlate, gram
+from .hermite_plate import EnergyQuadrature, HermitePlate, MatrixQuadrature
 
 
 def basis_pairs(n: int) -> list[tuple[int, int]]:
@@ -115,48 +115,39 @@ class LayerwisePlate(HermitePlate):
         out += [(-self._field("Nx", f"e{s + 1}"), -self._field("Ny", f"e{s + 1}")) for s in range(self.STRETCH)]
         return out
 
-    def _coupling(self, first: np.ndarray, second: np.ndarray, pairs, symmetrise: bool) -> list[np.ndarray]:
-        """int first^T E_ij second dA for each Voigt pair (E_ij the symmetric unit matrix),
-        plus its transpose when the two operators differ (a cross term of the energy)."""
-        out = []
-        for i, j in pairs:
-            k = gram(self.weights, first[:, i], second[:, j])
-            if i != j:
-                k = k + gram(self.weights, first[:, j], second[:, i])
-            out.append(k + k.T if symmetrise else k)
-        return out
-
-    def unit_stiffness(self, pairs) -> np.ndarray:
-        """Unit stiffness matrices (n_c, N, N) in ``fem.laminates.layerwise.stiffness_names`` order."""
-        strains = self.in_plane_strains()
+    def unit_stiffness(self, pairs, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+        """Unit stiffness matrices (n_c, N, N) in ``fem.laminates.layerwise.stiffness_names``
+        order (their quadratic forms (n_c, k) with an ``EnergyQuadrature``)."""
+        integral = quadrature or MatrixQuadrature(self.weights)
+        strains = [integral.operator(e) for e in self.in_plane_strains()]
         out = []
         for a, b in basis_pairs(len(strains)):
-            out += self._coupling(strains[a], strains[b], pairs, a != b)
+            out += self._coupling(integral, strains[a], strains[b], pairs, a != b)
         for k in range(self.GROUPS):
-            gamma = self.shear_strain_operator(k)
-            k45 = gram(self.weights, gamma[:, 0], gamma[:, 1])
-            out += [gram(self.weights, gamma[:, 0], gamma[:, 0]), gram(self.weights, gamma[:, 1], gamma[:, 1]),
-                    k45 + k45.T]
+            gamma = integral.operator(self.shear_strain_operator(k))
+            k45 = integral(gamma[:, 0], gamma[:, 1])
+            out += [integral(gamma[:, 0], gamma[:, 0]), integral(gamma[:, 1], gamma[:, 1]), k45 + k45.T]
         for s in range(self.STRETCH):
-            e = self._field("N", f"e{s + 1}")
-            out.append(gram(self.weights, e, e))
+            e = integral.operator(self._field("N", f"e{s + 1}"))
+            out.append(integral(e, e))
         return np.array(out)
 
-    def unit_mass(self) -> np.ndarray:
+    def unit_mass(self, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
         """Unit mass matrices (n_i, N, N) in ``fem.laminates.layerwise.inertia_names`` order: the
         in-plane pairs (the first, I0, also carries w^2), then the transverse pairs of
-        [w, e_s] beyond (w, w)."""
-        w = self.weights
-        displacements = self.in_plane_displacements()
+        [w, e_s] beyond (w, w) (their quadratic forms (n_i, k) with an ``EnergyQuadrature``)."""
+        integral = quadrature or MatrixQuadrature(self.weights)
+        displacements = [tuple(map(integral.operator, d)) for d in self.in_plane_displacements()]
         out = []
         for a, b in basis_pairs(len(displacements)):
             (ax, ay), (bx, by) = displacements[a], displacements[b]
-            m = gram(w, ax, bx) + gram(w, ay, by)
+            m = integral(ax, bx) + integral(ay, by)
             out.append(m if a == b else m + m.T)
         transverse = [self._field("N", "w")] + [self._field("N", f"e{s + 1}") for s in range(self.STRETCH)]
-        out[0] = out[0] + gram(w, transverse[0], transverse[0])
+        transverse = [integral.operator(t) for t in transverse]
+        out[0] = out[0] + integral(transverse[0], transverse[0])
         for a, b in basis_pairs(len(transverse))[1:]:
-            m = gram(w, transverse[a], transverse[b])
+            m = integral(transverse[a], transverse[b])
             out.append(m if a == b else m + m.T)
         return np.array(out)
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hermite_plate import HermitePlate, gram
+from .hermite_plate import EnergyQuadrature, HermitePlate, MatrixQuadrature
 
 
 class ShearDifferencePlate(HermitePlate):
@@ -45,14 +45,14 @@ class ShearDifferencePlate(HermitePlate):
         """[gamma_yz, gamma_xz] at the quadrature points (nq, 2, 80) (Voigt 4, 5)."""
         return np.stack([self._field("N", "gy"), self._field("N", "gx")], axis=1)
 
-    def unit_stiffness(self, pairs) -> np.ndarray:
-        """(21, 80, 80): the 18 CLT unit matrices, then A44, A55, A45."""
-        gamma = self.shear_strain_operator()
-        w = self.weights
-        k44 = gram(w, gamma[:, 0], gamma[:, 0])
-        k55 = gram(w, gamma[:, 1], gamma[:, 1])
-        k45 = gram(w, gamma[:, 0], gamma[:, 1])
-        return np.concatenate([super().unit_stiffness(pairs), [k44, k55, k45 + k45.T]])
+    def unit_stiffness(self, pairs, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+        """(21, 80, 80): the 18 CLT unit matrices, then A44, A55, A45 (their quadratic
+        forms (21, k) with an ``EnergyQuadrature``)."""
+        integral = quadrature or MatrixQuadrature(self.weights)
+        gamma = integral.operator(self.shear_strain_operator())
+        k45 = integral(gamma[:, 0], gamma[:, 1])
+        shear = [integral(gamma[:, 0], gamma[:, 0]), integral(gamma[:, 1], gamma[:, 1]), k45 + k45.T]
+        return np.concatenate([super().unit_stiffness(pairs, integral), shear])
 
     def rotations(self) -> tuple[np.ndarray, np.ndarray]:
         """Section rotations (beta_x, beta_y) = -grad w + (g_x, g_y), each (nq, 80)."""

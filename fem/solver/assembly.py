@@ -17,6 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..elements import HermitePlate
+from ..elements.hermite_plate import EnergyQuadrature
 from ..laminates.laminate import VOIGT_PAIRS
 from .mesh import PlateMesh
 
@@ -158,24 +159,26 @@ class UnitMatrices:
         out[flat] = data[upper]
         return out.reshape(self.bandwidth + 1, self.n_dofs)
 
-    def element_quadratic_forms(self, modes: np.ndarray, *matrix_sets: np.ndarray) -> list[np.ndarray]:
-        """phi_i^T K_c phi_i summed over elements, for every unit matrix c of each set and
-        every mode i.
+    def quadratic_forms(self, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """phi_i^T K_c phi_i and phi_i^T M_j phi_i for every unit stiffness matrix c, unit
+        mass matrix j and mode i: (n_c, m) and (n_inertia, m).
 
-        modes: (n_dofs, m); each set: (n_c, G, n_local, n_local) element matrices of the G
-        element sizes.  Returns one (n_c, m) array per set.  Works per element, so it costs
-        O(n_elements * n_local^2 * m) for the modes' second moments, shared by the sets,
-        and O(n_c * G * n_local^2 * m) per set, not a sparse product per c.
+        modes: (n_dofs, m).  Integrated element by element from the modes' strains and
+        displacements at the quadrature points (``EnergyQuadrature``), one element size at a
+        time, so it costs O(n_elements * n_local * m) per operator and never reads the
+        element matrices (a graded layerwise mesh's are ~400 MB).
         """
         local = modes[self.element_dofs]  # (ne, n_local, m)
         group = self.mesh.size_groups[1]
-        second_moment = np.empty((modes.shape[1], len(self.elements)) + local.shape[1:2] * 2)
-        for g in range(len(self.elements)):
-            # sum_e x_e x_e^T per mode as one batched BLAS product (m, a, e) @ (m, e, b)
-            x = np.ascontiguousarray((local if len(self.elements) == 1 else local[group == g]).transpose(2, 1, 0))
-            np.matmul(x, x.transpose(0, 2, 1), out=second_moment[:, g])
-        second_moment = second_moment.reshape(modes.shape[1], -1).T
-        return [matrices.reshape(len(matrices), -1) @ second_moment for matrices in matrix_sets]
+        stiffness, inertia = 0.0, 0.0
+        for g, element in enumerate(self.elements):
+            x = local if len(self.elements) == 1 else local[group == g]
+            # columns element-major: (n_local, ne_g * m)
+            integral = EnergyQuadrature(element.weights, x.transpose(1, 0, 2).reshape(x.shape[1], -1))
+            shape = (-1, len(x), modes.shape[1])
+            stiffness = stiffness + element.unit_stiffness(VOIGT_PAIRS, integral).reshape(shape).sum(axis=1)
+            inertia = inertia + element.unit_mass(integral).reshape(shape).sum(axis=1)
+        return stiffness, inertia
 
     @cached_property
     def rigid_body_modes(self) -> np.ndarray:

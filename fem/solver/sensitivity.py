@@ -27,7 +27,7 @@ class ModalEnergies:
 
     @classmethod
     def of(cls, units: UnitMatrices, modes: Modes) -> "ModalEnergies":
-        return cls(*units.element_quadratic_forms(modes.shapes, units.element_stiffness, units.element_mass))
+        return cls(*units.quadratic_forms(modes.shapes))
 
 
 def eigenvalue_derivatives(
