@@ -132,15 +132,16 @@ def test_first_order_error_shrinks_as_eta_squared(configuration):
 
 def test_close_modes_keep_their_sum():
     """Degenerate pairs (the square plate of isotropic layers) are mixed by non-uniform
-    damping: mode by mode the first-order estimate is off by up to 60 % (the real basis of
-    the pair is arbitrary), but the pair's sum of Im(lambda) is a trace, invariant to the
-    basis, and agrees to O(eta^2) like an isolated mode's (0.4 %, against 1 % at eta = 0.4)."""
+    damping: mode by mode the first-order estimate depends on the real basis the eigen-
+    solver happens to return for the pair (the same pair came out 12 % off with the
+    generalised shift-invert Lanczos and 1.4 % off with the standard-form one), but the
+    pair's sum of Im(lambda) is a trace, invariant to the basis, and agrees to O(eta^2)
+    like an isolated mode's (0.4 %, against 1 % at eta = 0.4)."""
     model = contrast(0.1).with_options(modes=10)
     lam = model.solve("original").modes.eigenvalues
     exact, first = complex_loss_factors(model, "original"), first_order_loss_factors(model)["original"]
     for pair in ([3, 4], [5, 6]):
         assert lam[pair[1]] / lam[pair[0]] - 1 < 1e-10
-        assert abs(exact[pair[0]] / first[pair[0]] - 1) > 0.1, "mixed: mode by mode they differ"
         assert exact[pair] @ lam[pair] == pytest.approx(first[pair] @ lam[pair], rel=4e-3)
 
 
