@@ -71,7 +71,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import optimize
+from scipy import linalg, optimize
 from scipy.special import gammaln
 
 from fem.errors import MeasurementError
@@ -209,33 +209,45 @@ class LocalFit:
     ok: bool
 
 
-def _basis(s: np.ndarray, pole: np.ndarray, centre: float) -> np.ndarray:
-    """Real-stacked basis (rows: real parts, then imaginary parts) of
-    sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc) with real coefficients
-    (Re A_r for every pole, then Im A_r, then the residual terms)."""
-    a = 1 / (s[:, None] - pole)
-    b = 1 / (s[:, None] - pole.conj())
-    x = (s.imag - centre)[:, None] / centre
-    m = np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x])
+def _fractions(s: np.ndarray, pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """1/(s - p) and 1/(s - conj p) on the lines ``s`` for each pole (lines x poles)."""
+    return 1 / (s[:, None] - pole), 1 / (s[:, None] - pole.conj())
+
+
+def _real_stacked(*columns: np.ndarray) -> np.ndarray:
+    """Complex columns side by side, real parts stacked over imaginary parts."""
+    m = np.hstack(columns)
     return np.vstack([m.real, m.imag])
 
 
 class _Projection:
-    """Variable projection of the local model (Golub & Pereyra 1973): for the poles
-    p(x) the linear coefficients c(x) = A(x)^+ h are projected out, the residual is
-    r(x) = A c - h and its exact Jacobian
+    """Variable projection of the local model (Golub & Pereyra 1973)
 
-        dr/dx_k = (I - Q Q^T) (dA/dx_k) c - Q R^-T (dA/dx_k)^T r
+        sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc)
 
-    (A = Q R).  Only the two columns of the pole moved by x_k depend on it, so each
-    Jacobian costs one small QR and a few matrix-vector products.  Pole r is
-    p_r = -d_r exp(x_2r+1) + i (Im seed_r + d_r x_2r), d_r = |Re seed_r|."""
+    with real coefficients (Re A_r, Im A_r, c0, c1 complex), real-stacked (rows: real
+    parts, then imaginary parts).  The columns that do not move, those of the fixed
+    neighbours and of the residual terms, are projected out once (Q0 of their QR):
+    for the free poles p(x) the free columns B(x) = (I - Q0 Q0^T) A_free(x) and the data
+    (I - Q0 Q0^T) h give the same residual as the whole basis, r(x) = B c - h, with
+    c(x) = B^+ h the free residues, and its exact Jacobian
+
+        dr/dx_k = (I - Q0 Q0^T - Q Q^T) (dA/dx_k) c - Q R^-T (dA/dx_k)^T r
+
+    (B = Q R).  Only the two columns of the pole moved by x_k depend on it, so each
+    evaluation costs one QR of 2 columns a free pole and a few matrix products.  Pole r
+    is p_r = -d_r exp(x_2r+1) + i (Im seed_r + d_r x_2r), d_r = |Re seed_r|."""
 
     def __init__(self, frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray):
         self.s = 2j * np.pi * frequency_hz
-        self.centre = float(self.s.imag.mean())
-        self.h = np.concatenate([h.real, h.imag])
-        self.seed, self.fixed = seed, fixed
+        centre = float(self.s.imag.mean())
+        x = ((self.s.imag - centre) / centre)[:, None]
+        a, b = _fractions(self.s, fixed)
+        self.q0 = linalg.qr(_real_stacked(a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x),
+                            mode="economic", check_finite=False)[0]
+        data = np.concatenate([h.real, h.imag])
+        self.h = data - self.q0 @ (self.q0.T @ data)
+        self.seed = seed
         self.scale = np.abs(seed.real)
         self._at = None
 
@@ -245,36 +257,41 @@ class _Projection:
     def _state(self, x: np.ndarray):
         if self._at is None or not np.array_equal(self._at[0], x):
             p = self.pole(x)
-            a = _basis(self.s, np.concatenate([p, self.fixed]), self.centre)
-            q, r = np.linalg.qr(a)
-            c = np.linalg.lstsq(r, q.T @ self.h, rcond=None)[0]
-            self._at = (x.copy(), p, a, q, r, c, a @ c - self.h)
+            a, b = _fractions(self.s, p)
+            free = _real_stacked(a + b, 1j * (a - b))
+            free -= self.q0 @ (self.q0.T @ free)
+            q, r = linalg.qr(free, mode="economic", check_finite=False)
+            c = linalg.solve_triangular(r, q.T @ self.h, check_finite=False)
+            self._at = (x.copy(), p, a, b, q, r, c, free @ c - self.h)
         return self._at[1:]
 
     def residual(self, x: np.ndarray) -> np.ndarray:
         return self._state(x)[-1]
 
+    def residues(self, x: np.ndarray) -> np.ndarray:
+        """The free poles' complex residues A_r at x."""
+        c = self._state(x)[-2]
+        return c[:len(self.seed)] + 1j * c[len(self.seed):]
+
     def jacobian(self, x: np.ndarray) -> np.ndarray:
-        p, _, q, rmat, c, res = self._state(x)
-        m, n = len(p), len(p) + len(self.fixed)
-        a = 1 / (self.s[:, None] - p)
-        b = 1 / (self.s[:, None] - p.conj())
+        p, a, b, q, rmat, c, res = self._state(x)
+        m = len(p)
         plus, minus = a**2 + b**2, a**2 - b**2
-        # d(column)/dx for the frequency (x0) and decay (x1) parameters of each free pole
-        d_re = {0: 1j * self.scale * minus, 1: p.real * plus}
-        d_im = {0: -self.scale * plus, 1: 1j * p.real * minus}
-        jac = np.empty((len(res), 2 * m))
-        for k in (0, 1):
-            dc = d_re[k] * c[:m] + d_im[k] * c[n:n + m]  # (dA/dx) c, one column per pole
-            stacked = np.vstack([dc.real, dc.imag])
-            first = stacked - q @ (q.T @ stacked)
-            v = np.zeros((rmat.shape[0], m))
-            cols = np.arange(m)
-            v[cols, cols] = np.concatenate([d_re[k].real, d_re[k].imag]).T @ res
-            v[n + cols, cols] = np.concatenate([d_im[k].real, d_im[k].imag]).T @ res
-            second = q @ np.linalg.lstsq(rmat.T, v, rcond=None)[0]
-            jac[:, k::2] = first - second
-        return jac
+        # d(column)/dx for the frequency (x_2r) and decay (x_2r+1) parameters of each free
+        # pole: of its Re A column (d_re) and of its Im A column (d_im)
+        d_re = np.empty((len(self.s), 2 * m), dtype=complex)
+        d_im = np.empty_like(d_re)
+        d_re[:, 0::2], d_re[:, 1::2] = 1j * self.scale * minus, p.real * plus
+        d_im[:, 0::2], d_im[:, 1::2] = -self.scale * plus, 1j * p.real * minus
+        pole_of = np.repeat(np.arange(m), 2)
+        moved = d_re * c[pole_of] + d_im * c[m + pole_of]  # (dA/dx_k) c, one column per parameter
+        moved = np.vstack([moved.real, moved.imag])
+        first = moved - self.q0 @ (self.q0.T @ moved) - q @ (q.T @ moved)
+        v = np.zeros((2 * m, 2 * m))
+        k = np.arange(2 * m)
+        v[pole_of, k] = np.vstack([d_re.real, d_re.imag]).T @ res
+        v[m + pole_of, k] = np.vstack([d_im.real, d_im.imag]).T @ res
+        return first - q @ linalg.solve_triangular(rmat, v, trans="T", check_finite=False)
 
 
 def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None) -> LocalFit:
@@ -291,12 +308,11 @@ def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: 
         warnings.simplefilter("ignore", RuntimeWarning)
         result = optimize.least_squares(problem.residual, np.zeros(2 * len(seed)), jac=problem.jacobian,
                                         method="lm", x_scale=1.0)
-    p, _, _, _, c, r = problem._state(result.x)
-    m, n = len(seed), len(seed) + len(fixed)
-    residue = np.abs(c[:m] + 1j * c[n:n + m])
+    p, r = problem.pole(result.x), problem.residual(result.x)
     rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
     inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
-    return LocalFit(p, residue / np.abs(p.real) / rms, bool(result.success and np.all(np.isfinite(p)) and inside.all()))
+    return LocalFit(p, np.abs(problem.residues(result.x)) / np.abs(p.real) / rms,
+                    bool(result.success and np.all(np.isfinite(p)) and inside.all()))
 
 
 def _half_window(frf: AveragedFRF, pole: np.ndarray) -> np.ndarray:
