@@ -136,28 +136,44 @@ class UnitMatrices:
         return self.matrix(inertia @ self.mass_data)
 
     @cached_property
+    def band_order(self) -> np.ndarray:
+        """The DOF order of the banded factor: nodes numbered across the mesh's shorter side,
+        so the semi-bandwidth is about dofs_per_node (nodes across + 1); the global
+        numbering runs along x whatever the plate's shape.  ``rank`` is its inverse."""
+        nodes = np.arange(self.mesh.n_nodes).reshape(self.mesh.ny + 1, self.mesh.nx + 1)
+        across = nodes.T.ravel() if self.mesh.ny < self.mesh.nx else nodes.ravel()
+        return (across[:, None] * self.dofs_per_node + np.arange(self.dofs_per_node)).ravel()
+
+    @cached_property
+    def rank(self) -> np.ndarray:
+        """Position of each global DOF in ``band_order``."""
+        return np.argsort(self.band_order)
+
+    @cached_property
     def bandwidth(self) -> int:
-        """Upper semi-bandwidth of the global pattern (row-by-row node numbering keeps it
-        at about dofs_per_node (nx + 2))."""
+        """Upper semi-bandwidth of the global pattern in ``band_order``."""
         indices, indptr, _ = self._pattern
         rows = np.repeat(np.arange(self.n_dofs), np.diff(indptr))
-        return int(np.max(indices - rows))
+        return int(np.max(self.rank[indices] - self.rank[rows]))
 
     @cached_property
     def _banded_slots(self) -> tuple[np.ndarray, np.ndarray]:
-        """Positions of the upper-triangle CSR entries in LAPACK upper banded storage."""
+        """Positions of the upper-triangle CSR entries (in ``band_order``) in LAPACK upper
+        banded storage, Fortran-ordered."""
         indices, indptr, _ = self._pattern
-        rows = np.repeat(np.arange(self.n_dofs), np.diff(indptr))
-        upper = np.flatnonzero(indices >= rows)
-        flat = (self.bandwidth + rows[upper] - indices[upper]) * self.n_dofs + indices[upper]
+        rows = self.rank[np.repeat(np.arange(self.n_dofs), np.diff(indptr))]
+        cols = self.rank[indices]
+        upper = np.flatnonzero(cols >= rows)
+        flat = cols[upper] * (self.bandwidth + 1) + self.bandwidth + rows[upper] - cols[upper]
         return upper, flat
 
     def banded(self, data: np.ndarray) -> np.ndarray:
-        """Upper banded storage (bandwidth + 1, n_dofs) of a symmetric matrix given by CSR data."""
+        """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
+        of a symmetric matrix given by CSR data, its DOFs in ``band_order``."""
         upper, flat = self._banded_slots
         out = np.zeros((self.bandwidth + 1) * self.n_dofs)
         out[flat] = data[upper]
-        return out.reshape(self.bandwidth + 1, self.n_dofs)
+        return out.reshape(self.n_dofs, self.bandwidth + 1).T
 
     def quadratic_forms(self, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """phi_i^T K_c phi_i and phi_i^T M_j phi_i for every unit stiffness matrix c, unit

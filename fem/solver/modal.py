@@ -125,14 +125,16 @@ def solve_modes(
     # (the generalised shift-invert mode takes three M products).  A zero-energy field r
     # is an eigenvector of C (M r = -(K - sigma M) r / sigma), so projecting out the
     # orthonormal basis of U r = U^-T (K - sigma M) r deflates the rigid-body modes.
-    rigid_basis, _ = np.linalg.qr(_columns(_transposed_solve, factor, units.matrix(shifted) @ rigid))
+    # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
+    order, rank = units.band_order, units.rank
+    rigid_basis, _ = np.linalg.qr(_columns(_transposed_solve, factor, (units.matrix(shifted) @ rigid)[order]))
 
     def deflate(x: np.ndarray) -> np.ndarray:
         return x - rigid_basis @ (rigid_basis.T @ x)
 
     transformed_mass = spla.LinearOperator(
         (n_dofs, n_dofs), dtype=float,
-        matvec=lambda x: deflate(_transposed_solve(factor, mass @ _solve(reversed_factor, deflate(x)))),
+        matvec=lambda x: deflate(_transposed_solve(factor, (mass @ _solve(reversed_factor, deflate(x))[rank])[order])),
     )
     start = deflate(np.random.default_rng(0).standard_normal(n_dofs))
     try:
@@ -141,7 +143,7 @@ def solve_modes(
         _, psi = spla.eigsh(transformed_mass, k=k, which="LA", v0=start, tol=1e-8)
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
-    phi = _columns(_solve, reversed_factor, psi)
+    phi = _columns(_solve, reversed_factor, psi)[rank]
     phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
     lam = np.einsum("ij,ij->j", phi, stiffness @ phi)
     order = np.argsort(lam)
