@@ -34,7 +34,7 @@ SEPARATED = [1, 2, 3, 7, 8, 10]
 
 def timed_from_files() -> tuple[float, float]:
     """Wall time of extract_peaks on 5 CSV hits: first call in this process (imports
-    sdypy-EMA, about 0.5-0.8 s) and the best of three after."""
+    included) and the best of three after."""
     hits = Session(PLATE, n_hits=5, seed=0, double_hits=(2,), cut_short={4: 0.4}).hits()
     with tempfile.TemporaryDirectory() as folder:
         paths = [Path(folder) / f"{h.source}.csv" for h in hits]

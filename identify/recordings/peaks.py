@@ -3,16 +3,22 @@
 The pipeline: recordings -> hits (:mod:`identify.recordings.readers`) -> averaged FRF H1 with
 coherence (:mod:`identify.recordings.frf`) -> poles -> a peak list.
 
-Poles.  The LSCF estimator of sdypy-EMA (least-squares complex frequency domain) is run
-on H1 for model orders 2, 4, ..., 2 x ``max_order``: the stabilisation diagram.  A pole
-is *stable* when the previous order has one within ``FREQ_TOL`` in frequency and
-``DAMP_TOL`` in damping; stable poles closer than a quarter of their half-power
-half-bandwidth are one column, and a column stable in at least ``STABLE_FRACTION`` of
-the orders is a mode candidate.  Each candidate is refined by a local pole-residue fit
-on H1 (variable projection: complex residues, the neighbouring modes' poles with free
-residues so a strong neighbour's skirt does not bias it, and a linear residual term;
-the poles by ``scipy.optimize.least_squares``; overlapping candidates are fitted
-together), kept when its modal peak stands ``SNR_MIN`` times above the fit's residual,
+Poles.  The band is cut into sub-bands of a few modes each (:func:`sub_bands`), and the
+LSCF estimator (least-squares complex frequency domain, :mod:`identify.recordings.lscf`)
+is run on H1 over each for orders (degree / 2) 1, 2, ..., up to about twice its modes:
+the stabilisation diagram.  (sdypy-EMA's LSCF, the same estimator on the whole band, was
+used before: its import took 0.6 s, pyplot included, and its full-band orders up to 100
+spent 0.4 s in the roots of their polynomials, together three quarters of ``peaks`` on a
+38-mode plate; ``tests/identify/test_lscf.py`` checks the two agree.)  A pole is
+*stable* when the previous order of its sub-band has one within ``FREQ_TOL`` in
+frequency and ``DAMP_TOL`` in damping; stable poles closer than a quarter of their
+half-power half-bandwidth are one column, and a column stable in at least
+``STABLE_FRACTION`` of its sub-band's orders is a mode candidate.  Each candidate is
+refined by a local pole-residue fit on H1 (variable projection: complex residues, the
+neighbouring modes' poles with free residues so a strong neighbour's skirt does not bias
+it, and a linear residual term; the poles by Gauss-Newton steps with the exact
+Jacobian, or ``scipy.optimize.least_squares`` where those do not converge; overlapping
+candidates are fitted together), kept when its modal peak stands ``SNR_MIN`` times above the fit's residual,
 and cross-checked against peak picking (local maxima of |H1| in dB with their prominence,
 as ``scipy.signal.find_peaks`` defines them, :mod:`identify.recordings.maxima`; Gaussian
 interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
@@ -21,7 +27,7 @@ one sensor cannot tell them apart.  ``frequency_hz`` is the undamped natural fre
 |p| / 2 pi of the pole p (what an FE model predicts), ``damping_ratio`` -Re p / |p|.
 
 Scatter.  The same local fit, seeded with the H1 poles, estimates every mode on each
-hit's FRF H_k = Y_k / X_k.  ``std_hz`` is the standard error of ``frequency_hz``:
+hit's FRF H_k = Y_k / X_k (all hits at once, :func:`refined_per_record`).  ``std_hz`` is the standard error of ``frequency_hz``:
 
     std_hz = s / c4(n) * sqrt(sum_k w_k^2)
 
@@ -71,7 +77,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import linalg, optimize
 from scipy.special import gammaln
 
 from fem.errors import MeasurementError
@@ -81,14 +86,29 @@ from fem.plotting import new_figure, save_figure
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window
+from .lscf import lscf_poles
 from .maxima import find_peaks, local_maxima, prominences
 from .readers import Hit, MeasuredFRF, check_together, read_recordings
 
 #: Stability between successive orders: relative change of frequency and of damping.
 FREQ_TOL = 2e-3
 DAMP_TOL = 0.10
-#: A column must be stable in this fraction of the orders.
+#: A column must be stable in this fraction of the orders of its sub-band.
 STABLE_FRACTION = 0.3
+#: Sub-bands (:func:`sub_bands`): peaks picked on |H1| per sub-band, the share of its width
+#: fitted beyond each side, and its highest order (degree / 2): 2 x the picked peaks on the
+#: fitted lines + EXTRA_ORDERS, within MIN_ORDER..MAX_ORDER.
+PEAKS_PER_SUB_BAND = 8
+MIN_SUB_BAND_LINES = 800
+SUB_BAND_OVERLAP = 0.25
+EXTRA_ORDERS = 10
+MIN_ORDER = 12
+MAX_ORDER = 40
+#: At most one order per this many lines: noise peaks inflate the count of picked peaks,
+#: and a model with more freedom than that fits the noise (at 20 dB SNR a mode's pole
+#: then wanders by 20 % in damping from order to order and is never stable); the
+#: full-band estimator used before had 28.
+LINES_PER_ORDER = 28
 #: Damping ratios above this are not plate modes (nor computational poles we keep).
 MAX_DAMPING = 0.1
 #: Modal peak |A| / |Re p| over the local fit's RMS residual per line: kept at SNR_MIN,
@@ -102,9 +122,24 @@ PICK_DB = 0.3
 COHERENCE_MIN = 0.9
 #: Prominence of a peak below the band named in the notes (a suspension mode stands tall).
 SUSPENSION_DB = 6.0
+#: Local fits (:func:`_gauss_newton`): at most NEWTON_STEPS Gauss-Newton steps, converged
+#: once the largest is below NEWTON_STEP in units of the pole's decay, so of its half-power
+#: half-bandwidth (the steps shrink 10-100 times each, so the error left is a small part of
+#: that, far below a hit-to-hit scatter of 2-10 % of it; std_hz and damping_std agree with
+#: Levenberg-Marquardt's to 1e-4 of themselves, ``tests/identify/test_peaks.py``).
+NEWTON_STEPS = 10
+NEWTON_STEP = 1e-5
+#: A hit's pole is converged once the step is below this fraction of its distance from the
+#: H1 pole: a weak mode's hits scatter by half a half-bandwidth, where the steps shrink
+#: only 2-3 times each, and an error of 1 % of that scatter is nothing to its standard
+#: deviation (known to 35 % from 5 hits).
+PER_HIT_RELATIVE = 1e-2
 #: Half-width of a local fit's window, in half-power half-bandwidths (zeta f).
 FIT_HALF_WIDTHS = 4.0
 GUIDE_REL = 0.03
+#: A guided mode's hits may scatter by this fraction of its half-power bandwidth (a weak
+#: real mode in 3e-3 noise: 0.2-0.4; noise fitted as a mode near a node: 1.5).
+GUIDED_SCATTER = 0.75
 #: Spurious peaks named in the notes (the most prominent).
 NOTED_PEAKS = 8
 CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
@@ -113,14 +148,27 @@ FLAG_ORDER = ("response_only", "suspension", "low_coherence", "weak", "close", "
 
 @dataclass(frozen=True, eq=False)
 class Stabilisation:
-    """The stabilisation diagram: every LSCF pole in the band with its model order,
-    frequency [Hz] and damping ratio (window-corrected), and whether it is stable."""
+    """The stabilisation diagram: every LSCF pole in the band with its model order
+    (denominator degree), frequency [Hz] and damping ratio (window-corrected), and whether
+    it is stable."""
 
     order: np.ndarray
     frequency_hz: np.ndarray
     damping_ratio: np.ndarray
     stable: np.ndarray
     pole: np.ndarray  # as identified on the (windowed) FRF [rad/s]
+    sub_band: np.ndarray  # the sub-band each pole was found in (index into ``orders``)
+    orders: np.ndarray  # how many orders each sub-band was fitted at (degrees 2, 4, ...)
+
+
+@dataclass(frozen=True)
+class SubBand:
+    """A piece of the band: the poles in ``core_hz`` [Hz] are kept from an LSCF fit on
+    ``fitted_hz`` (the core and some of its neighbours') of degrees 2 .. 2 x ``order``."""
+
+    core_hz: tuple[float, float]
+    fitted_hz: tuple[float, float]
+    order: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -209,15 +257,25 @@ class LocalFit:
     ok: bool
 
 
-def _fractions(s: np.ndarray, pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """1/(s - p) and 1/(s - conj p) on the lines ``s`` for each pole (lines x poles)."""
-    return 1 / (s[:, None] - pole), 1 / (s[:, None] - pole.conj())
+def _stacked(m: np.ndarray) -> np.ndarray:
+    """Complex (..., lines, columns) as real (..., 2 lines, columns): real parts over
+    imaginary parts."""
+    return np.concatenate([m.real, m.imag], axis=-2)
 
 
-def _real_stacked(*columns: np.ndarray) -> np.ndarray:
-    """Complex columns side by side, real parts stacked over imaginary parts."""
-    m = np.hstack(columns)
-    return np.vstack([m.real, m.imag])
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.solve`` over a batch (records, n, n), NaN for a record whose matrix
+    is singular (two free poles met, or one ran off) instead of an error for all."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        out = np.full(np.broadcast_shapes(a.shape[:-1], b.shape[:-2] + (a.shape[-1],)) + b.shape[-1:], np.nan)
+        for j in range(len(a)):
+            try:
+                out[j] = np.linalg.solve(a[j], b[j])
+            except np.linalg.LinAlgError:
+                pass
+        return out
 
 
 class _Projection:
@@ -226,72 +284,116 @@ class _Projection:
         sum_r A_r/(s - p_r) + conj(A_r)/(s - conj p_r) + c0 + c1 (w - wc)
 
     with real coefficients (Re A_r, Im A_r, c0, c1 complex), real-stacked (rows: real
-    parts, then imaginary parts).  The columns that do not move, those of the fixed
-    neighbours and of the residual terms, are projected out once (Q0 of their QR):
-    for the free poles p(x) the free columns B(x) = (I - Q0 Q0^T) A_free(x) and the data
-    (I - Q0 Q0^T) h give the same residual as the whole basis, r(x) = B c - h, with
-    c(x) = B^+ h the free residues, and its exact Jacobian
+    parts, then imaginary parts), for a batch of records at once (H1 alone, or every hit's
+    FRF: the same lines and neighbours, each record its own poles and residues).  The
+    columns that do not move, those of the fixed neighbours and of the residual terms,
+    are projected out once (Q0 of their QR): for the free poles p(x) the free columns
+    B(x) = (I - Q0 Q0^T) A_free(x) and the data (I - Q0 Q0^T) h give the same residual
+    as the whole basis, r(x) = B c - h, with c(x) = B^+ h the free residues, and its
+    exact Jacobian
 
         dr/dx_k = (I - Q0 Q0^T - Q Q^T) (dA/dx_k) c - Q R^-T (dA/dx_k)^T r
 
     (B = Q R).  Only the two columns of the pole moved by x_k depend on it, so each
-    evaluation costs one QR of 2 columns a free pole and a few matrix products.  Pole r
-    is p_r = -d_r exp(x_2r+1) + i (Im seed_r + d_r x_2r), d_r = |Re seed_r|."""
+    evaluation costs one QR of 2 columns a free pole and a few matrix products, batched
+    over the records.  Pole r of record j is p_jr = -d_r exp(x_j,2r+1) + i (Im seed_r +
+    d_r x_j,2r), d_r = |Re seed_r|."""
 
     def __init__(self, frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray):
         self.s = 2j * np.pi * frequency_hz
         centre = float(self.s.imag.mean())
         x = ((self.s.imag - centre) / centre)[:, None]
-        a, b = _fractions(self.s, fixed)
-        self.q0 = linalg.qr(_real_stacked(a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x),
-                            mode="economic", check_finite=False)[0]
-        data = np.concatenate([h.real, h.imag])
-        self.h = data - self.q0 @ (self.q0.T @ data)
+        a, b = 1 / (self.s[:, None] - fixed), 1 / (self.s[:, None] - fixed.conj())
+        self.q0 = np.linalg.qr(_stacked(np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x),
+                                                   x, 1j * x])))[0]
+        data = _stacked(np.atleast_2d(h).T).T  # (records, 2 lines)
+        self.h = data - (data @ self.q0) @ self.q0.T
         self.seed = seed
         self.scale = np.abs(seed.real)
         self._at = None
 
+    @property
+    def records(self) -> int:
+        return len(self.h)
+
     def pole(self, x: np.ndarray) -> np.ndarray:
-        return -self.scale * np.exp(x[1::2]) + 1j * (self.seed.imag + self.scale * x[0::2])
+        """(records, poles) [rad/s] at the parameters x (records, 2 poles)."""
+        return -self.scale * np.exp(x[:, 1::2]) + 1j * (self.seed.imag + self.scale * x[:, 0::2])
 
     def _state(self, x: np.ndarray):
         if self._at is None or not np.array_equal(self._at[0], x):
             p = self.pole(x)
-            a, b = _fractions(self.s, p)
-            free = _real_stacked(a + b, 1j * (a - b))
+            a = 1 / (self.s[:, None] - p[:, None, :])  # (records, lines, poles)
+            b = 1 / (self.s[:, None] - p.conj()[:, None, :])
+            free = _stacked(np.concatenate([a + b, 1j * (a - b)], axis=-1))
             free -= self.q0 @ (self.q0.T @ free)
-            q, r = linalg.qr(free, mode="economic", check_finite=False)
-            c = linalg.solve_triangular(r, q.T @ self.h, check_finite=False)
-            self._at = (x.copy(), p, a, b, q, r, c, free @ c - self.h)
+            q, r = np.linalg.qr(free)
+            c = _solve(r, np.einsum("jlk,jl->jk", q, self.h)[..., None])[..., 0]
+            self._at = (x.copy(), p, a, b, q, r, c, np.einsum("jlk,jk->jl", free, c) - self.h)
         return self._at[1:]
 
     def residual(self, x: np.ndarray) -> np.ndarray:
+        """(records, 2 lines)."""
         return self._state(x)[-1]
 
     def residues(self, x: np.ndarray) -> np.ndarray:
-        """The free poles' complex residues A_r at x."""
+        """The free poles' complex residues A_r at x, (records, poles)."""
         c = self._state(x)[-2]
-        return c[:len(self.seed)] + 1j * c[len(self.seed):]
+        m = len(self.seed)
+        return c[:, :m] + 1j * c[:, m:]
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """(records, 2 lines, 2 poles): each record's residual by its own parameters."""
         p, a, b, q, rmat, c, res = self._state(x)
-        m = len(p)
+        m = p.shape[1]
         plus, minus = a**2 + b**2, a**2 - b**2
         # d(column)/dx for the frequency (x_2r) and decay (x_2r+1) parameters of each free
         # pole: of its Re A column (d_re) and of its Im A column (d_im)
-        d_re = np.empty((len(self.s), 2 * m), dtype=complex)
+        d_re = np.empty((self.records, len(self.s), 2 * m), dtype=complex)
         d_im = np.empty_like(d_re)
-        d_re[:, 0::2], d_re[:, 1::2] = 1j * self.scale * minus, p.real * plus
-        d_im[:, 0::2], d_im[:, 1::2] = -self.scale * plus, 1j * p.real * minus
+        d_re[..., 0::2], d_re[..., 1::2] = 1j * self.scale * minus, p.real[:, None, :] * plus
+        d_im[..., 0::2], d_im[..., 1::2] = -self.scale * plus, 1j * p.real[:, None, :] * minus
         pole_of = np.repeat(np.arange(m), 2)
-        moved = d_re * c[pole_of] + d_im * c[m + pole_of]  # (dA/dx_k) c, one column per parameter
-        moved = np.vstack([moved.real, moved.imag])
-        first = moved - self.q0 @ (self.q0.T @ moved) - q @ (q.T @ moved)
-        v = np.zeros((2 * m, 2 * m))
+        moved = _stacked(d_re * c[:, None, pole_of] + d_im * c[:, None, m + pole_of])  # (dA/dx_k) c
+        first = moved - self.q0 @ (self.q0.T @ moved) - q @ (q.transpose(0, 2, 1) @ moved)
+        v = np.zeros((self.records, 2 * m, 2 * m))
         k = np.arange(2 * m)
-        v[pole_of, k] = np.vstack([d_re.real, d_re.imag]).T @ res
-        v[m + pole_of, k] = np.vstack([d_im.real, d_im.imag]).T @ res
-        return first - q @ linalg.solve_triangular(rmat, v, trans="T", check_finite=False)
+        v[:, pole_of, k] = np.einsum("jlk,jl->jk", _stacked(d_re), res)
+        v[:, m + pole_of, k] = np.einsum("jlk,jl->jk", _stacked(d_im), res)
+        return first - q @ _solve(rmat.transpose(0, 2, 1), v)
+
+
+def _gauss_newton(problem: _Projection, relative: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Newton steps of ``problem`` from its seeds, every record at once: the
+    parameters (records, 2 poles) and whether each record converged (its largest step
+    below ``NEWTON_STEP``, or below ``relative`` x its largest parameter, within
+    ``NEWTON_STEPS``; its residual below the start's)."""
+    x = np.zeros((problem.records, 2 * len(problem.seed)))
+    start = np.sum(problem.residual(x) ** 2, axis=1)
+    done = np.zeros(problem.records, dtype=bool)
+    with np.errstate(all="ignore"):
+        for _ in range(NEWTON_STEPS):
+            q, r = np.linalg.qr(problem.jacobian(x))
+            step = -_solve(r, np.einsum("jlk,jl->jk", q, problem.residual(x))[..., None])[..., 0]
+            step[done] = 0.0
+            x = x + step
+            done |= np.max(np.abs(step), axis=1) < np.maximum(NEWTON_STEP, relative * np.max(np.abs(x), axis=1))
+            if done.all():
+                break
+        done &= np.all(np.isfinite(problem.pole(x)), axis=1) & (np.sum(problem.residual(x) ** 2, axis=1) <= start)
+    return x, done
+
+
+def _least_squares(problem: _Projection) -> tuple[np.ndarray, bool]:
+    """The parameters (1, 2 poles) of a one-record ``problem`` by
+    ``scipy.optimize.least_squares`` (Levenberg-Marquardt), and whether it converged."""
+    from scipy import optimize  # here: most fits converge without it (0.2 s of imports)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        result = optimize.least_squares(lambda y: problem.residual(y[None])[0], np.zeros(2 * len(problem.seed)),
+                                        jac=lambda y: problem.jacobian(y[None])[0], method="lm", x_scale=1.0)
+    return result.x[None], bool(result.success)
 
 
 def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None) -> LocalFit:
@@ -300,19 +402,38 @@ def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: 
     Model: sum of conjugate pole pairs with complex residues, the neighbouring modes'
     ``fixed`` poles (residues fitted) and c0 + c1 (w - wc); the linear parameters are
     projected out (:class:`_Projection`), the poles (frequency shift and log decay, in
-    units of each seed's decay) go to ``least_squares`` with the exact Jacobian.  snr:
-    each mode's peak |A_r| / |Re p_r| over the RMS residual per line."""
+    units of each seed's decay) are found by Gauss-Newton steps with the exact Jacobian
+    (:func:`_gauss_newton`) or, where those do not converge (a seed far from its pole),
+    by Levenberg-Marquardt (:func:`_least_squares`).  snr: each mode's peak
+    |A_r| / |Re p_r| over the RMS residual per line."""
     fixed = np.array([], dtype=complex) if fixed is None else fixed
     problem = _Projection(frequency_hz, h, seed, fixed)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        result = optimize.least_squares(problem.residual, np.zeros(2 * len(seed)), jac=problem.jacobian,
-                                        method="lm", x_scale=1.0)
-    p, r = problem.pole(result.x), problem.residual(result.x)
+    x, done = _gauss_newton(problem)
+    success = bool(done[0])
+    if not success:
+        x, success = _least_squares(problem)
+    p, r = problem.pole(x)[0], problem.residual(x)[0]
     rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
     inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
-    return LocalFit(p, np.abs(problem.residues(result.x)) / np.abs(p.real) / rms,
-                    bool(result.success and np.all(np.isfinite(p)) and inside.all()))
+    return LocalFit(p, np.abs(problem.residues(x)[0]) / np.abs(p.real) / rms,
+                    success and bool(np.all(np.isfinite(p)) and inside.all()))
+
+
+def refined_per_record(frequency_hz: np.ndarray, h: np.ndarray, pole: np.ndarray,
+                       fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The poles ``pole`` [rad/s] (fitted on H1) refitted on each record of ``h``
+    (records, lines), all records at once (:func:`_gauss_newton`; a hit's pole lies within
+    a few % of a half-power bandwidth of H1's, the hit-to-hit scatter): (records, poles)
+    and whether each record converged (each pole is judged by the caller: a weak
+    neighbour that runs off must not take a strong mode's estimate with it); a record
+    whose steps do not converge is refitted by Levenberg-Marquardt alone."""
+    problem = _Projection(frequency_hz, h, pole, fixed)
+    x, done = _gauss_newton(problem, PER_HIT_RELATIVE)
+    for j in np.flatnonzero(~done):
+        x[j], done[j] = (v[0] if isinstance(v, np.ndarray) else v
+                         for v in _least_squares(_Projection(frequency_hz, h[j], pole, fixed)))
+    with np.errstate(all="ignore"):
+        return problem.pole(x), done
 
 
 def _half_window(frf: AveragedFRF, pole: np.ndarray) -> np.ndarray:
@@ -343,17 +464,18 @@ def _neighbourhoods(frf: AveragedFRF, seeds: np.ndarray) -> list[tuple[np.ndarra
     return out
 
 
-def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray,
-             cache: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Local fits of every seed with its neighbourhood (:func:`_neighbourhoods`) on
-    ``h``: poles, SNR, success per seed.  ``cache`` (a dict kept by the caller for one
-    ``h``) skips fits already made with the same free and fixed poles."""
+def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray, cache: dict | None = None,
+             only=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Local fits of every seed (or of the seeds at the indices ``only``) with its
+    neighbourhood (:func:`_neighbourhoods`) on ``h``: poles, SNR, success per seed (NaN,
+    0, False where not fitted).  ``cache`` (a dict kept by the caller for one ``h``) skips
+    fits already made with the same free and fixed poles."""
     pole = np.full(len(seeds), np.nan + 0j)
     snr = np.zeros(len(seeds))
     ok = np.zeros(len(seeds), dtype=bool)
     cache = {} if cache is None else cache
     for i, (joint, fixed, lines) in enumerate(_neighbourhoods(frf, seeds)):
-        if len(lines) < 2 * (len(joint) + len(fixed)) + 4:
+        if (only is not None and i not in only) or len(lines) < 2 * (len(joint) + len(fixed)) + 4:
             continue
         key = (seeds[joint].tobytes(), seeds[fixed].tobytes())
         if key not in cache:
@@ -366,50 +488,123 @@ def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray,
 
 # --- stabilisation diagram ---------------------------------------------------------------
 
-def stabilisation(frf: AveragedFRF, band_hz, max_order: int) -> Stabilisation:
-    """LSCF poles (sdypy-EMA) of H1 in the band for orders 2..2 max_order, with stability."""
-    from sdypy.EMA import Model
+def sub_bands(frf: AveragedFRF, band_hz, picked: pd.DataFrame, max_order: int | None = None) -> list[SubBand]:
+    """The band cut into equally wide sub-bands (a plate's modal density is constant) of
+    about ``PEAKS_PER_SUB_BAND`` peaks of at least ``WEAK_DB`` picked on |H1| (stand-ins
+    for its modes) each and at least ``MIN_SUB_BAND_LINES`` lines, each cut moved half-way
+    between the two such peaks either side of it (two cuts between the same peaks are one).  Each is fitted
+    on its core widened by ``SUB_BAND_OVERLAP`` of its width either side (beyond the band
+    too, where the FRF has lines), so that a mode near a cut or the band's edge is
+    modelled with its neighbours and away from where the ends of the fitted lines meet on
+    the circle (:data:`identify.recordings.lscf.ARC`), up to the order (degree /
+    2) 2 x the peaks on the fitted lines + ``EXTRA_ORDERS`` (over-modelling: noise and the
+    residual terms of the modes outside take computational poles), at least ``MIN_ORDER``,
+    at most ``max_order`` (default ``MAX_ORDER``) and one per ``LINES_PER_ORDER`` fitted
+    lines."""
+    lo, hi = band_hz
+    f = picked["frequency_hz"].to_numpy()
+    f = np.sort(f[(f > lo) & (f < hi) & (picked["prominence_db"].to_numpy() >= WEAK_DB)])
+    count = int(np.clip(round(len(f) / PEAKS_PER_SUB_BAND), 1, max(1, len(frf.lines(band_hz)) // MIN_SUB_BAND_LINES)))
+    cuts = np.unique([lo, *(_between_peaks(lo + k * (hi - lo) / count, f) for k in range(1, count)), hi])
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        margin = SUB_BAND_OVERLAP * (b - a)
+        fitted = (max(frf.frequency_hz[1], a - margin), min(frf.frequency_hz[-1], b + margin))
+        peaks = int(np.sum((f >= fitted[0]) & (f <= fitted[1])))
+        highest = min(max_order or MAX_ORDER, len(frf.lines(fitted)) // LINES_PER_ORDER)
+        out.append(SubBand((a, b), fitted, int(np.clip(2 * peaks + EXTRA_ORDERS, MIN_ORDER, highest))))
+    return out
 
-    lines = np.flatnonzero(frf.frequency_hz <= band_hz[1])
-    lines = np.append(lines, lines[-1] + 1) if lines[-1] + 1 < len(frf.frequency_hz) else lines
-    freq = frf.frequency_hz[lines]
-    model = Model(frf=frf.h1[lines], freq=freq, lower=band_hz[0], upper=freq[-1], pol_order_high=max_order)
-    model.get_poles("lscf", show_progress=False)
-    orders, poles = [], []
-    for i, p in enumerate(model.all_poles):
-        p = np.asarray(p)
-        f, zeta = correct_for_window(p, frf.decay_rate)
-        keep = (p.imag > 0) & (p.real < 0) & (f >= band_hz[0]) & (f <= band_hz[1]) & (zeta > 0) & (zeta < MAX_DAMPING)
-        orders.append(np.full(keep.sum(), 2 * (i + 1)))
-        poles.append(p[keep])
-    order, pole = np.concatenate(orders), np.concatenate(poles)
+
+def _between_peaks(cut: float, peaks_hz: np.ndarray) -> float:
+    """``cut`` [Hz] moved half-way between the sorted ``peaks_hz`` either side of it."""
+    i = int(np.searchsorted(peaks_hz, cut))
+    return 0.5 * (peaks_hz[i - 1] + peaks_hz[i]) if 0 < i < len(peaks_hz) else cut
+
+
+def stabilisation(frf: AveragedFRF, bands: list[SubBand]) -> Stabilisation:
+    """LSCF poles (:func:`identify.recordings.lscf.lscf_poles`) of H1 on each sub-band for
+    degrees 2, 4, ..., 2 x its order, those in its core kept, with stability between
+    successive degrees."""
+    orders, poles, part = [], [], []
+    for k, sub in enumerate(bands):
+        lines = frf.lines(sub.fitted_hz)
+        degrees = list(range(2, 2 * sub.order + 1, 2))
+        for degree, p in zip(degrees, lscf_poles(frf.frequency_hz[lines], frf.h1[lines], sub.fitted_hz, degrees)):
+            f, zeta = correct_for_window(p, frf.decay_rate)
+            keep = ((p.imag > 0) & (p.real < 0) & (f >= sub.core_hz[0]) & (f < sub.core_hz[1]) & (zeta > 0)
+                    & (zeta < MAX_DAMPING))
+            orders.append(np.full(keep.sum(), degree))
+            poles.append(p[keep])
+            part.append(np.full(keep.sum(), k))
+    order, pole, band = np.concatenate(orders), np.concatenate(poles), np.concatenate(part)
     f, zeta = correct_for_window(pole, frf.decay_rate)
     wf, wz = np.abs(pole), -pole.real / np.abs(pole)
     stable = np.zeros(len(pole), dtype=bool)
-    for o in np.unique(order)[1:]:
-        now, before = order == o, order == o - 2
-        if before.any():
-            close_f = np.abs(wf[now][:, None] / wf[before] - 1) < FREQ_TOL
-            close_z = np.abs(wz[now][:, None] / wz[before] - 1) < DAMP_TOL
-            stable[now] = (close_f & close_z).any(axis=1)
-    return Stabilisation(order, f, zeta, stable, pole)
+    for k in np.unique(band):
+        for o in np.unique(order[band == k])[1:]:
+            now, before = (order == o) & (band == k), (order == o - 2) & (band == k)
+            if before.any():
+                close_f = np.abs(wf[now][:, None] / wf[before] - 1) < FREQ_TOL
+                close_z = np.abs(wz[now][:, None] / wz[before] - 1) < DAMP_TOL
+                stable[now] = (close_f & close_z).any(axis=1)
+    degrees = np.array([sub.order for sub in bands])
+    return Stabilisation(order, f, zeta, stable, pole, band, degrees)
 
 
-def _columns(diagram: Stabilisation, n_orders: int) -> np.ndarray:
-    """Seed poles [rad/s] of the stable columns (single linkage within a quarter of the
-    half-power half-bandwidth), each the median over its poles."""
-    p = diagram.pole[diagram.stable]
-    o = diagram.order[diagram.stable]
+def _columns(diagram: Stabilisation) -> np.ndarray:
+    """Seed poles [rad/s] of the stable columns, each the median over its poles, kept when
+    stable in at least ``STABLE_FRACTION`` of the orders of its sub-band (of the sub-bands
+    it spans, near a cut: the larger).  A column is a single linkage of stable poles
+    within a quarter of their half-power half-bandwidth, split in two (or more) where that
+    many poles of one order lie in it in at least ``STABLE_FRACTION`` of the orders: an
+    order gives one pole a mode, so those are close modes (a pair 0.2 % apart, each
+    wider than their spacing) that the linkage chained."""
+    keep = diagram.stable
+    p, o, b = diagram.pole[keep], diagram.order[keep], diagram.sub_band[keep]
     if not len(p):
         return np.array([], dtype=complex)
     idx = np.argsort(p.imag)
-    p, o = p[idx], o[idx]
+    p, o, b = p[idx], o[idx], b[idx]
     gap = np.diff(p.imag) > 0.25 * np.abs(p.real[1:])
     seeds = []
     for members in np.split(np.arange(len(p)), np.flatnonzero(gap) + 1):
-        if len(np.unique(o[members])) >= STABLE_FRACTION * n_orders:
-            seeds.append(np.median(p[members].real) + 1j * np.median(p[members].imag))
+        orders = diagram.orders[b[members]].max()
+        for column in _split(members, b, o, p, STABLE_FRACTION * orders):
+            if len(set(zip(b[column], o[column]))) >= STABLE_FRACTION * orders:
+                seeds.append(np.median(p[column].real) + 1j * np.median(p[column].imag))
     return np.array(seeds)
+
+
+def _split(members: np.ndarray, band: np.ndarray, order: np.ndarray, pole: np.ndarray,
+           enough: float) -> list[np.ndarray]:
+    """``members`` (indices, by frequency) as the columns of ``_columns``: one, or k where
+    at least ``enough`` (sub-band, order) pairs hold k poles each and the k medians stand
+    apart by more than the linkage's quarter of the narrower one's half-power
+    half-bandwidth (closer, they are one mode whose pole splits in some orders: noise);
+    the j-th pole of those orders is column j, every other pole joins the column whose
+    median is nearest."""
+    keys = list(zip(band[members], order[members]))
+    count: dict = {}
+    for key in keys:
+        count[key] = count.get(key, 0) + 1
+    k = max(count.values())
+    while k > 1 and sum(c == k for c in count.values()) < enough:
+        k -= 1
+    if k == 1:
+        return [members]
+    rank, seen = np.full(len(members), -1), {}
+    for i, key in enumerate(keys):
+        if count[key] == k:
+            rank[i] = seen.get(key, 0)
+            seen[key] = rank[i] + 1
+    centres = np.array([np.median(pole[members[rank == j]].imag) for j in range(k)])
+    decays = np.array([np.median(np.abs(pole[members[rank == j]].real)) for j in range(k)])
+    if np.any(np.diff(centres) <= 0.25 * np.minimum(decays[:-1], decays[1:])):
+        return [members]  # a mode whose pole splits in some orders (noise), not two modes
+    loose = rank < 0
+    rank[loose] = np.argmin(np.abs(pole[members[loose]].imag[:, None] - centres), axis=1)
+    return [members[rank == j] for j in range(k)]
 
 
 # --- peak picking --------------------------------------------------------------------------
@@ -498,8 +693,8 @@ def extract_peaks(recordings, configuration: str = "original", sample_rate: floa
     default: from 20 Hz (suspension modes below) to where the hammer's force spectrum has
     dropped 10 dB, or 0.8-1.2 x the ``guide_hz`` range when given.  guide_hz: predicted
     model frequencies [Hz] (optional): modes not found near them are looked for harder
-    (flag "guided").  max_order: highest LSCF order / 2 (default from the number of
-    peaks picked on |H1|).
+    (flag "guided").  max_order: the highest LSCF order (denominator degree / 2) of any
+    sub-band (default ``MAX_ORDER``; each sub-band's from the peaks picked on it).
     """
     given = recordings if isinstance(recordings, (list, tuple)) else [recordings]
     if given and all(isinstance(r, (Hit, MeasuredFRF)) for r in given):
@@ -519,11 +714,8 @@ def extract_peaks(recordings, configuration: str = "original", sample_rate: floa
                                "16: widen the band or record longer hits")
     picked = picked_peaks(frf.frequency_hz, frf.h1, lines, PICK_DB)
     _note_below_band(frf, band, notes)
-    if max_order is None:
-        max_order = int(np.clip(2 * len(picked) + 20, 20, 100))
-    max_order = int(min(max_order, len(frf.frequency_hz[frf.frequency_hz <= band[1]]) // 8))
-    diagram = stabilisation(frf, band, max_order)
-    seeds = _columns(diagram, max_order)
+    diagram = stabilisation(frf, sub_bands(frf, band, picked, max_order))
+    seeds = _columns(diagram)
     pole, snr, guided = _refine(frf, seeds, notes)
     if guide is not None:
         pole, snr, guided = _look_near_guides(frf, guide, picked, diagram, pole, snr, notes)
@@ -568,7 +760,8 @@ def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
 
 def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
     """For guide frequencies with no mode within GUIDE_REL: fit the best nearby picked
-    peak or pole, keep it at SNR >= SNR_GUIDED (flag "guided")."""
+    peak, or the diagram's most persistent pole nearby, with the modes found as its
+    neighbours; keep it at SNR >= SNR_GUIDED when the hits confirm it (flag "guided")."""
     f, _ = correct_for_window(pole, frf.decay_rate)
     guided = np.zeros(len(pole), dtype=bool)
     for g in guide:
@@ -581,14 +774,16 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
             decay = np.median(candidates.real) if len(candidates) else -2 * np.pi * fp * 0.005  # start: 0.5 % damping
             seed = decay + 2j * np.pi * fp
         else:
-            candidates = diagram.pole[np.abs(diagram.frequency_hz / g - 1) < GUIDE_REL]
-            if not len(candidates):
+            near_guide = np.abs(diagram.frequency_hz / g - 1) < GUIDE_REL
+            if not near_guide.any():
                 notes.append(f"nothing found near the guide frequency {g:.1f} Hz (node at the sensor?)")
                 continue
-            seed = np.median(candidates.real) + 1j * np.median(candidates.imag)
-        p, s, ok = _fit_all(frf, frf.h1, np.array([seed]))
+            seed = _persistent(diagram.pole[near_guide], diagram.frequency_hz[near_guide])
+        # fitted with the modes found as its neighbours: a weak mode on a strong one's skirt
+        p, s, ok = (x[-1:] for x in _fit_all(frf, frf.h1, np.append(pole, seed), only=(len(pole),)))
         fn, zeta = correct_for_window(p, frf.decay_rate)
-        if ok[0] and s[0] >= SNR_GUIDED and 0 < zeta[0] < MAX_DAMPING and abs(fn[0] / g - 1) < GUIDE_REL:
+        if (ok[0] and s[0] >= SNR_GUIDED and 0 < zeta[0] < MAX_DAMPING and abs(fn[0] / g - 1) < GUIDE_REL
+                and _on_the_hits(frf, np.append(pole, p))):
             pole, snr, guided = np.append(pole, p), np.append(snr, s), np.append(guided, True)
             notes.append(f"mode at {fn[0]:.2f} Hz found only by looking near the guide frequency {g:.1f} Hz")
         else:
@@ -596,18 +791,51 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
     return pole, snr, guided
 
 
-def _per_hit(frf: AveragedFRF, pole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _on_the_hits(frf: AveragedFRF, pole: np.ndarray) -> bool:
+    """Do the hits confirm the last of ``pole`` (with the others as its neighbours): found
+    on at least half of the hits' own FRFs (of two at least; always, with one), their
+    frequencies scattering by at most ``GUIDED_SCATTER`` of its half-power bandwidth?  A
+    guided fit on H1 alone can make a weak "mode" of noise near a node (SNR 4-5, 1-2 %
+    damping), which the hits then place anywhere in its window."""
+    if frf.n_hits < 2:
+        return True
+    per_hit = _per_hit(frf, pole, only=(len(pole) - 1,))[0][:, -1]
+    found = per_hit[np.isfinite(per_hit)]
+    half_bandwidth = abs(pole[-1].real) / (2 * np.pi)
+    return bool(len(found) >= max(2, math.ceil(frf.n_hits / 2))
+                and np.std(found, ddof=1) <= GUIDED_SCATTER * 2 * half_bandwidth)
+
+
+def _persistent(pole: np.ndarray, frequency_hz: np.ndarray) -> complex:
+    """The pole [rad/s] the diagram returns to most often: the median of the poles within
+    5 ``FREQ_TOL`` of the one with most such neighbours (a column too unsteady to be
+    stable, or a weak mode that is stable only in some orders)."""
+    close = np.abs(frequency_hz[:, None] / frequency_hz - 1) < 5 * FREQ_TOL
+    members = close[np.argmax(close.sum(axis=1))]
+    return complex(np.median(pole[members].real) + 1j * np.median(pole[members].imag))
+
+
+def _per_hit(frf: AveragedFRF, pole: np.ndarray, only=None) -> tuple[np.ndarray, np.ndarray]:
     """(hits, modes) frequency [Hz] and damping ratio [-] (window-corrected) of every mode
-    fitted on each hit's FRF (NaN: failed)."""
+    (or of those at the indices ``only``) fitted on each hit's FRF with the neighbourhood
+    it had on H1 (:func:`refined_per_record`; NaN: failed)."""
     out, damping = np.full((frf.n_hits, len(pole)), np.nan), np.full((frf.n_hits, len(pole)), np.nan)
     if frf.n_hits < 2:
         return out, damping
-    for k in range(frf.n_hits):
-        p, _, ok = _fit_all(frf, frf.per_hit[k], pole)
+    fits = {}
+    for i, (joint, fixed, lines) in enumerate(_neighbourhoods(frf, pole)):
+        if (only is not None and i not in only) or len(lines) < 2 * (len(joint) + len(fixed)) + 4:
+            continue
+        key = (joint.tobytes(), fixed.tobytes())
+        if key not in fits:  # seeds fitted together share their fit
+            fits[key] = refined_per_record(frf.frequency_hz[lines], frf.per_hit[:, lines], pole[joint], pole[fixed])
+        p, ok = fits[key]
+        p = p[:, int(np.flatnonzero(joint == i)[0])]
         f, zeta = correct_for_window(p, frf.decay_rate)
-        near = np.abs(p.imag - pole.imag) < FIT_HALF_WIDTHS * np.abs(pole.real)
-        good = ok & near & (zeta > 0) & (zeta < MAX_DAMPING)
-        out[k, good], damping[k, good] = f[good], zeta[good]
+        with np.errstate(invalid="ignore"):
+            good = ok & (np.abs(p.imag - pole[i].imag) < FIT_HALF_WIDTHS * abs(pole[i].real)) & (zeta > 0) \
+                & (zeta < MAX_DAMPING)
+        out[good, i], damping[good, i] = f[good], zeta[good]
     return out, damping
 
 

@@ -15,18 +15,25 @@ def _pole(f, zeta):
 
 
 def test_jacobian_matches_central_differences():
-    """Noisy FRF, poles off their optimum (so the residual term of the Jacobian counts):
-    agreement to 1e-6 of the largest entry (central differences with step 1e-6 are good
-    to about 1e-9 here)."""
+    """Two noisy records of one FRF at once (the per-hit fits' batch), poles off their
+    optimum (so the residual term of the Jacobian counts): each record's Jacobian block
+    agrees with central differences of its own residual to 1e-6 of the largest entry
+    (central differences with step 1e-6 are good to about 1e-9 here), and a record's
+    residual does not move with the other's parameters."""
     f = np.arange(90, 115, 0.25)
     rng = np.random.default_rng(0)
-    h = MODES.accelerance(f) + 1e-3 * (rng.standard_normal(len(f)) + 1j * rng.standard_normal(len(f)))
+    h = MODES.accelerance(f) + 1e-3 * (rng.standard_normal((2, len(f))) + 1j * rng.standard_normal((2, len(f))))
     problem = _Projection(f, h, _pole([100.3, 103.8], [0.011, 0.009]), _pole([120.0], [0.01]))
-    x = np.array([0.3, 0.1, -0.2, -0.05])
+    x = np.array([[0.3, 0.1, -0.2, -0.05], [-0.1, 0.2, 0.1, 0.05]])
     step = 1e-6
-    numeric = np.column_stack([(problem.residual(x + step * e) - problem.residual(x - step * e)) / (2 * step)
-                               for e in np.eye(4)])
-    assert np.abs(problem.jacobian(x) - numeric).max() < 1e-6 * np.abs(numeric).max()
+    jacobian = problem.jacobian(x)
+    for j in range(2):
+        moved = [(problem.residual(x + step * e) - problem.residual(x - step * e)) / (2 * step)
+                 for e in (np.eye(8)[k].reshape(2, 4) for k in range(8))]
+        numeric = np.column_stack([m[j] for m in moved[4 * j:4 * j + 4]])
+        assert np.abs(jacobian[j] - numeric).max() < 1e-6 * np.abs(numeric).max()
+        other = np.column_stack([m[j] for m in moved[4 * (1 - j):4 * (1 - j) + 4]])
+        assert np.abs(other).max() == 0.0
 
 
 def test_noise_free_poles_are_exact():
