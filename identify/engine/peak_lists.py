@@ -26,7 +26,7 @@ from fem.specimen import Parameter
 from .matching import Match, align, label_permits, match
 from ..measurements import Measurements
 from .peak_assignment import PeakAssignment, peak_table
-from .result import FitResult, Iteration
+from .result import FitResult, FitStatus, Iteration
 from .statistics import ASSUMED_SCATTER_REL
 from .objective import solving_model
 from .updating import FitOptions, update
@@ -166,8 +166,23 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
     result = update(result.model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
     history += _renumbered(result.history, history)
     assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
-    return replace(result, warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings, peaks=assignment,
-                   history=tuple(history))
+    return replace(_without_redundancy(result), warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings,
+                   peaks=assignment, history=tuple(history))
+
+
+def _without_redundancy(result: FitResult) -> FitResult:
+    """A peak list fit whose matched peaks are no more than its unknowns is not
+    identifiable, whatever its misfit: the fit chose which mode each peak is, and with
+    no frequency to spare every such choice fits exactly, so nothing tests it (a 20 dB
+    recording chain gave 12 peaks for 12 unknowns, "converged" with a modulus 7.6 std
+    off)."""
+    st = result.statistics
+    if result.status is not FitStatus.CONVERGED or st.dof > 0:
+        return result
+    return replace(result, status=FitStatus.NOT_IDENTIFIABLE, message=(
+        f"not identifiable: {st.n} matched peaks for {st.k} unknowns, so the peaks' pairing with the model's modes "
+        "is chosen by the fit and nothing is left to test it; measure more modes, give the mode numbers (a 'mode' "
+        "column), or identify fewer parameters"))
 
 
 def _model_error(result: FitResult) -> float:

@@ -104,3 +104,16 @@ def test_a_bound_holds_and_is_flagged(example_spec, paper_model):
     flags = result.uncertainty.flags[result.parameters.index(Parameter("nu12", "steel"))]
     assert any(f.startswith("at bound (nu12 = 0.25") for f in flags)
     assert any("outside its bounds" in w for w in result.warnings)
+
+
+def test_peak_list_without_a_spare_frequency_is_not_identifiable(capsys, tmp_path):
+    """A bare peak list of as many peaks as unknowns (12 of the bundled data's 15, mode
+    numbers dropped): the fit picks the pairing and every pairing fits exactly, so nothing
+    tests it: not identifiable, exit 1, never 'converged'.  With one peak more it is the
+    usual fit again (the test is not vacuous)."""
+    peaks = GOOD.drop(columns=[c for c in ("mode", "label") if c in GOOD.columns])
+    twelve = peaks.drop(index=[4, 9, 14])
+    code, out = fit_cli(capsys, tmp_path, twelve)
+    assert code == 1 and out["status"] == "not_identifiable" and not out["converged"], out["status"]
+    code, out = fit_cli(capsys, tmp_path, peaks.drop(index=[4, 9]))
+    assert code == 0 and out["status"] == "converged"
