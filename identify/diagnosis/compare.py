@@ -11,7 +11,7 @@ import pandas as pd
 from fem.model import SpecimenModel
 
 from ..reporting import html_report as h
-from ..fitting.driver import fit_layers
+from ..fitting.driver import fit_holding_bounds
 from ..measurements import Measurements
 from ..engine.objective import Objective, solving_model
 from ..fitting.patterns import PATTERN_SHARE, Pattern, residual_patterns
@@ -91,7 +91,7 @@ class Comparison:
 
 def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
     """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
-    fitted = fit_layers(model, measurements, explain=False) if refit else None
+    fitted = fit_holding_bounds(model, measurements) if refit else None
     if fitted is not None:
         now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
         pairings, jacobian = fitted.pairings, fitted.jacobian

@@ -45,8 +45,9 @@ from fem.numbers import finite_or_none
 from ..reporting import html_report as h
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
-from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, add_effect, continued, point_mass_hints,
-                      point_mass_starts, prepare_effect, with_determined_shear)
+from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, RESTARTED_FROM_SPEC, AddedEffect, add_effect,
+                              better_start, continued, point_mass_hints, point_mass_starts, prepare_effect, released, spec_start,
+                              with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -525,6 +526,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         say("the baseline fits at the noise level: no effect refitted")
         return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
     nominal = model.specimen
+    respec = spec_start(model, measurements, baseline)
     state, selected, steps, closed = baseline, [], [], set()
     margins: dict[str, tuple[int, float, str]] = {}  # refinement -> (round, chi^2 it explained beyond, of what)
     pool = None
@@ -548,6 +550,12 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if k not in REFINES])
+            restart = [k for k in trying if k in RESTARTED_FROM_SPEC] if state is baseline and respec else []
+            if restart:
+                # The thin-plate fit ran to its bounds: the shear candidates from the spec's values too.
+                again = {c.kind: c for c in run(restart, {k: respec for k in restart})}
+                candidates = [_candidate(state, better_start(c.added, again[c.kind].added)) if c.kind in again
+                              else c for c in candidates]
             refining = [k for k in trying if k in REFINES and _refine(k, kinds, names, candidates)]
             skipped = [k for k in trying if k in REFINES and k not in refining]
             held = _held_back(refining, margins, state, candidates)
@@ -618,7 +626,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                           "the physics every real plate has besides, with no parameter more, and the misfit falls"))
         selected.append(completion)
         state = completion.fit
-    final = _final(state, measurements, baseline, selected, say) if selected else None
+    final = _final(state, measurements, baseline, selected, nominal, say) if selected else None
     first = steps[0].candidates if steps else ()
     return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started)
 
@@ -663,11 +671,14 @@ def _completed(state: FitResult, selected, kinds, measurements: Measurements, no
     return candidate if candidate.gain > 0 else None
 
 
-def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, say) -> FitResult:
+def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, nominal, say) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
-    check; its status is its own (converged only when consistent with the scatter)."""
+    check, the layer properties the thin-plate fit held freed again where the data now
+    determine them (``released``); its status is its own (converged only when consistent
+    with the scatter)."""
     say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = with_causes(continued(state, measurements, FINAL_OPTIONS, settle=True))
+    result = continued(state, measurements, FINAL_OPTIONS, settle=True)
+    result = with_causes(released(result, measurements, baseline, nominal, FINAL_OPTIONS))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
                    effect_notes=notes, baseline=baseline)

@@ -16,7 +16,10 @@ limits (each judged on the estimate, not on its std):
 - specimen layer thicknesses more than ``MAX_THICKNESS_CHANGE`` off the spec (callipers
   do better), bond lines outside ``BOND_LINE_RANGE`` times their nominal thickness;
 - transverse shear moduli above ``MAX_SHEAR_RATIO`` x the material's G12 (isotropic: G13 =
-  G23 = G12; fibre plies and wood: G13 about G12, G23 below it) or below G12 /
+  G23 = G12; fibre plies and wood: G13 about G12, G23 below it; the fitted G12 of a thick
+  ply carries the model's error too, so the limit leaves room: at 1.5 a blind hybrid's
+  glass G23 at 1.55 x its fitted G12 made the right shear model "implausible" and left
+  nothing selected, while the runaway values it is there for are 10-300 x) or below G12 /
   ``MIN_SHEAR_FRACTION`` (wood's rolling shear G_RT is about G_LR / 10-20).
 """
 from __future__ import annotations
@@ -31,7 +34,7 @@ MAX_SUSPENSION_RATIO = 0.2
 MAX_TURN_DEG = 5.0
 MAX_THICKNESS_CHANGE = 0.1
 BOND_LINE_RANGE = (1 / 3, 3.0)
-MAX_SHEAR_RATIO = 1.5
+MAX_SHEAR_RATIO = 2.5
 MIN_SHEAR_FRACTION = 100.0
 
 
