@@ -2,6 +2,7 @@
 parameters are estimated together with the layer properties."""
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 from typing import Callable, Sequence
@@ -562,7 +563,8 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
 
 def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options):
     """The point mass from several starts: each ranked by the misfit one linearised
-    Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``), the best
+    Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``; a bare peak
+    list, which has no mode numbers to linearise with, keeps the scan's order), the best
     ``POINT_MASS_CONTINUED`` at distinct positions fitted to convergence (rivals need
     finished fits).  Returns (the best fit, notes on rivals that fit about as well)."""
     starts = tuple(hints) if hints else point_mass_starts(state.model, ())
@@ -572,8 +574,8 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
             try:
                 left = Sensitivities.at_start(on.model, measurements, base + list(on.free),
                                               state.pairings).predicted_sum_squares(base + list(on.free))
-            except LayerIdError:
-                continue
+            except LayerIdError:  # a bare peak list has no mode numbers to linearise with: scan order
+                left = math.inf
             ranked.append((left, on))
     ranked.sort(key=lambda t: t[0])
     chosen = []
@@ -582,8 +584,6 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
             chosen.append(on)
         if len(chosen) == POINT_MASS_CONTINUED:
             break
-    if not chosen:
-        raise LayerIdError("no point-mass start could be evaluated")
     if progress:
         progress(f"point_mass: {len(ranked)} starts ranked, {len(chosen)} fitted")
     trials = [(fit_layers(on.model, measurements, base + list(on.free), options, effect_of=effect_of, like=state,
