@@ -208,6 +208,7 @@ class Outcome:
     seconds: float = math.nan
     oracle_seconds: float = math.nan
     error: str = ""
+    report: str = ""  # the diagnosis's own report: every round's candidates and reasons
 
     @property
     def contains_truth(self) -> bool:
@@ -265,6 +266,7 @@ def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | 
         started = time.perf_counter()
         result = identify.diagnose(start, data, progress=progress)
         out.seconds = time.perf_counter() - started
+        out.report = result.report()
         if with_oracle:
             started = time.perf_counter()
             o = oracle(case, data)
@@ -324,6 +326,14 @@ def report(outcomes: list[Outcome], title: str) -> str:
     return "\n".join(lines)
 
 
+def _keep(o: Outcome, out: Path) -> None:
+    """Print a finished case's row and write its diagnosis report to OUT/cases/CASE.txt
+    (as each case ends: a run stopped half way keeps what it did)."""
+    print(json.dumps(o.row()), flush=True)
+    (out / "cases").mkdir(parents=True, exist_ok=True)
+    write_text(out / "cases" / f"{o.case}.txt", (o.report or o.error) + "\n")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m studies.blind_diagnosis", description=__doc__.split("\n\n")[0])
     parser.add_argument("--half", choices=("dev", "heldout", "both"), default="dev")
@@ -338,15 +348,14 @@ def main(argv=None) -> int:
         # One process a case; each solve runs on one BLAS thread (fem.solver.threads).
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
             for o in pool.map(run_case, names):
-                print(json.dumps(o.row()), flush=True)
+                _keep(o, args.out)
                 outcomes.append(o)
     else:
         for name in names:
             say = (lambda text, name=name: print(f"  {name}: {text}", flush=True)) if args.verbose else None
             o = run_case(name, progress=say)
-            print(json.dumps(o.row()), flush=True)
+            _keep(o, args.out)
             outcomes.append(o)
-    args.out.mkdir(parents=True, exist_ok=True)
     texts = []
     for half in ("dev", "heldout"):
         part = [o for o in outcomes if o.half == half]

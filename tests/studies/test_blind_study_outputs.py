@@ -1,0 +1,21 @@
+"""The blind study's outputs (without running a diagnosis: ``run_case`` is replaced by a
+recorded outcome): each case's diagnosis report is kept as the case ends, the rows and the
+summary are strict JSON."""
+import json
+
+from studies import blind_diagnosis as study
+
+
+def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, monkeypatch):
+    def recorded(name, progress=None):
+        return study.Outcome(name, "hybrid", "dev", 5e-4, true_effects=("shear",), selected=("layerwise",),
+                             rms_baseline=0.01, rms_after=2e-4, floor=1.9e-4, max_z=1.2, z={"cfrp_ud.E1": 1.2},
+                             seconds=12.0, oracle_seconds=3.0, report=f"== diagnosis of {name} ==")
+
+    monkeypatch.setattr(study, "run_case", recorded)
+    assert study.main(["--case", "blind04_hybrid", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "cases" / "blind04_hybrid.txt").read_text() == "== diagnosis of blind04_hybrid ==\n"
+    data = json.loads((tmp_path / "blind_dev.json").read_text(), parse_constant=lambda c: 1 / 0)
+    assert data["cases"][0]["selected"] == "layerwise"
+    assert data["summary"]["dev"]["cases"] == 1
+    assert data["summary"]["dev"]["contains_true_pct"] == 100.0
