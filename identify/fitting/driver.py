@@ -477,23 +477,29 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     """Freed shear moduli that ended implausible (at a bound, or beyond
     ``plausibility.MAX_SHEAR_RATIO`` x G12) are ones the data do not see (a thin skin's
     G13/G23 in a sandwich): they are held at their start values and the candidate refitted
-    without them, so that they cannot sink the candidate that holds the right physics."""
-    shear = _shear_targets(new)
-    if not shear:
-        return result, new, []
+    without them, so that they cannot sink the candidate that holds the right physics.
+    Repeated while the refit sends another material's moduli out (blind13, a hybrid:
+    with the carbon's held, the glass's ran to the 2000 GPa bound and every shear candidate
+    was implausible), at most once per material."""
     first_hz = float(state.measurements.table["frequency_hz"].min())
-    wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
-    if not wandered:
+    held: list[str] = []
+    for _ in nominal.materials:
+        shear = _shear_targets(new)
+        wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
+        if not wandered:
+            break
+        held += wandered
+        new = [p for p in new if not (p.kind in SHEAR_MODULI and p.target in wandered)]
+        specimen = result.model.specimen
+        for material in wandered:
+            specimen = with_shear_moduli(specimen, ready.model.specimen.materials[material])
+        result = fit_layers(result.model.with_specimen(specimen), measurements, base + new, options,
+                            effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
+    if not held:
         return result, new, []
-    kept = [p for p in new if not (p.kind in SHEAR_MODULI and p.target in wandered)]
-    specimen = result.model.specimen
-    for material in wandered:
-        specimen = with_shear_moduli(specimen, ready.model.specimen.materials[material])
-    refit = fit_layers(result.model.with_specimen(specimen), measurements, base + kept, options,
-                       effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
-    note = (f"G13, G23 of {', '.join(wandered)} ran out of the plausible range (the data do not see them): held at "
+    note = (f"G13, G23 of {', '.join(held)} ran out of the plausible range (the data do not see them): held at "
             f"their start values and refitted without them")
-    return refit, kept, [note]
+    return result, new, [note]
 
 
 def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
