@@ -234,8 +234,7 @@ def spec_start(model: SpecimenModel, measurements: Measurements, baseline: FitRe
     thin-plate fit of them) is degenerate: not converged, or a layer property at a bound.
     An effect that explains the misfit then starts better from the user's values than
     from what the thin plate did to them (``RESTARTED_FROM_SPEC``); None otherwise."""
-    flags = baseline.uncertainty.flags
-    if baseline.status is not FitStatus.NOT_CONVERGED and not any(f.startswith("at bound") for fl in flags for f in fl):
+    if baseline.status is not FitStatus.NOT_CONVERGED and not at_bounds(baseline):
         return None
     return fit_layers(model, measurements, list(baseline.parameters), FitOptions(max_iterations=0), explain=False,
                       settle=False)
@@ -586,7 +585,8 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
     ranked.sort(key=lambda t: t[0])
     chosen = []
     for _, on in ranked:
-        if all(_apart(on, other) for other in chosen):
+        position = [p for p in on.free if p.kind in ("x", "y")]
+        if all(_differs(on.model, other.model, position) for other in chosen):
             chosen.append(on)
         if len(chosen) == POINT_MASS_CONTINUED:
             break
@@ -606,19 +606,6 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
     return result, notes
 
 
-def _apart(a, b, tolerance: float = 0.05) -> bool:
-    """Two point-mass starts (``effect().free`` results) more than 5 % of the plate apart
-    in x or y (folded by symmetry)."""
-    specimen = a.model.specimen
-    span = max(specimen.length, specimen.width)
-    for p in a.free:
-        if p.kind in ("x", "y"):
-            half = (specimen.length if p.kind == "x" else specimen.width) / 2
-            if abs(abs(a.model.value(p) - half) - abs(b.model.value(p) - half)) > tolerance * span:
-                return True
-    return False
-
-
 def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
     """Point-mass starts on a 3 x 3 grid over the quarter of the plate that holds the
     residual scan's best point (mirrored quarters are equivalent by symmetry)."""
@@ -634,7 +621,7 @@ def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
     return tuple(out)
 
 
-def _differs(a: FitResult, b: FitResult, parameters, tolerance: float = 0.05) -> bool:
+def _differs(a: FitResult | SpecimenModel, b: FitResult | SpecimenModel, parameters, tolerance: float = 0.05) -> bool:
     """Effect parameters more than 5 % apart (positions: 5 % of the plate, folded by symmetry)."""
     span = max(a.specimen.length, a.specimen.width)
     for p in parameters:
