@@ -155,8 +155,13 @@ def report_folder(path: str | Path):
     and SIGTERM wait until both are done."""
     path = check_report_folder(path)
     _clear_leftovers(path)
-    tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))
+    tmp = None
     try:
+        # Made with interrupts held: a Ctrl-C between the folder's creation and its name
+        # being known here would leave it behind (the interrupt now comes after, inside
+        # the try, and the folder is removed).
+        with _interrupts_held():
+            tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))
         yield tmp
         written = sorted(_files(tmp))
         (tmp / REPORT_MARK).write_text(f"written by layer-id {tool_version()}; its files:\n"
@@ -172,7 +177,7 @@ def report_folder(path: str | Path):
             if old is not None:
                 shutil.rmtree(old, ignore_errors=True)
     finally:
-        if tmp.exists():
+        if tmp is not None and tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
 
 
