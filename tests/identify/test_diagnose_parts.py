@@ -3,6 +3,7 @@ shear-modulus scale and its derivative, the thick_plate effect, the plausibility
 the conditioning pre-check that keeps singular candidates from being iterated, and the
 short-circuit when the baseline is at the noise level."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import diagnose
 from identify import fit
 from identify.fitting.driver import add_effect, prepare_effect
-from identify.fitting.plausibility import MAX_MASS_SHARE, implausible, plate_mass
+from identify.fitting.plausibility import MAX_MASS_SHARE, SENSOR_MASS_MAX, implausible, plate_mass
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
@@ -74,8 +75,8 @@ def test_thick_plate_is_shear_and_rotary_inertia_with_free_shear_moduli():
 
 
 def test_plausibility_limits():
-    """Acceptance: a point mass of 8 % of the plate is flagged; a 2 % sensor is
-    not.  A suspension holding the plate at half its first frequency is flagged, one at
+    """Acceptance: a point mass of 8 % of the plate (11.9 g) is flagged; a 2 % sensor is
+    not; on a plate of a third the density an 8 g sensor (16 %) is not, 12 g is.  A suspension holding the plate at half its first frequency is flagged, one at
     1 % is not; an angle turned 12 degrees is flagged."""
     specimen = true_model().specimen
     plate = plate_mass(specimen)
@@ -91,6 +92,12 @@ def test_plausibility_limits():
     assert MAX_MASS_SHARE < 0.08
     assert reasons(heavy, mass) and "8 %" in reasons(heavy, mass)[0]
     assert reasons(light, mass) == ()
+    assert 0.08 * plate > SENSOR_MASS_MAX, "the heavy mass must exceed the absolute sensor limit too"
+    light_plate = specimen.with_materials([replace(layer.material, density=layer.material.density / 3)
+                                           for layer in specimen.layers])
+    assert plate_mass(light_plate) == pytest.approx(plate / 3)
+    assert implausible([mass], light_plate.with_attachments([PointMass(0.008, 0.1, 0.1)]), light_plate) == ()
+    assert "12 g" in implausible([mass], light_plate.with_attachments([PointMass(0.012, 0.1, 0.1)]), light_plate)[0]
 
     corners = ((0.02, 0.02), (0.13, 0.02), (0.02, 0.13), (0.13, 0.13))
     total = plate  # no point mass: the bounce frequency is sqrt(4 k / m) / 2 pi
