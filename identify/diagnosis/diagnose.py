@@ -43,6 +43,7 @@ from fem.solver.sensitivity import SINGULAR_ABOVE
 from fem.numbers import finite_or_none
 
 from ..reporting import html_report as h
+from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, RESTARTED_FROM_SPEC, AddedEffect, add_effect,
@@ -678,7 +679,7 @@ def _final(state: FitResult, measurements: Measurements, baseline: FitResult, se
     with the scatter)."""
     say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
     result = continued(state, measurements, FINAL_OPTIONS, settle=True)
-    result = with_causes(released(result, measurements, baseline, nominal, FINAL_OPTIONS))
+    result = with_causes(with_budget(released(result, measurements, baseline, nominal, FINAL_OPTIONS)))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
                    effect_notes=notes, baseline=baseline)

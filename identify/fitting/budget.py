@@ -98,9 +98,11 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
     return out
 
 
-def uncertainty_budget(result) -> Budget | None:
-    """The budget of a finished fit whose model states known inputs' std (None else)."""
-    inputs = result.model.input_std
+def uncertainty_budget(result, consider: tuple[InputStd, ...] = ()) -> Budget | None:
+    """The budget of a finished fit whose model states known inputs' std, or that holds
+    properties at uncertain values (``consider``: "consider" parameters, e.g. a layer
+    property held at a handbook value); None when there are none."""
+    inputs = tuple(result.model.input_std) + tuple(consider)
     if not inputs or not result.finished or not np.all(np.isfinite(result.uncertainty.std)):
         return None
     objective = Objective(result.model, result.measurements, result.parameters)
@@ -111,9 +113,11 @@ def uncertainty_budget(result) -> Budget | None:
     return Budget(result.parameters, inputs, result.uncertainty.std.copy(), sensitivity)
 
 
-def with_budget(result):
-    """The result with its budget, and its uncertainty widened by the inputs' part."""
-    budget = uncertainty_budget(result)
+def with_budget(result, consider: tuple[InputStd, ...] = ()):
+    """The result with its budget (the known inputs and the ``consider`` ones), and its
+    uncertainty widened by the inputs' part; as it is when it already has one (a held
+    property's scatter is added where it is held, before ``fit`` adds the known inputs)."""
+    budget = None if result.budget is not None else uncertainty_budget(result, consider)
     if budget is None:
         return result
     return replace(result, budget=budget, uncertainty=result.uncertainty.with_covariance(budget.covariance))

@@ -8,7 +8,8 @@ import pytest
 from fem.errors import SpecError
 from fem.spec import load_spec, parse_spec
 from fem.specimen import Parameter
-from identify.fitting.driver import fit, fit_layers
+from identify.fitting.budget import with_budget
+from identify.fitting.driver import HANDBOOK_STD_REL, fit, fit_layers, with_held_scatter
 from identify.measurements import Measurements
 from identify.recordings.synthetic import synthetic_measurements
 from tests.conftest import DATA
@@ -105,3 +106,29 @@ def test_std_of_an_identified_property_is_refused():
     data["specimen"]["mass_g_std"] = 0.1
     with pytest.raises(SpecError, match="mass_g_std is given without mass_g"):
         parse_spec(data)
+
+
+def test_a_held_property_carries_its_handbook_scatter(nominal, data):
+    """A layer property the diagnosis had to hold at the spec's value (here the coating's
+    G12, held at its true value so that the misfit is at the 0.001 % noise and does not
+    inflate the std) is a "consider" parameter: its handbook scatter
+    (``HANDBOOK_STD_REL``) enters the others' std through the budget, whose sensitivity
+    to it matches refits with it moved by +-1 % (3 %, as above), and a note names it."""
+    g12 = Parameter("G12", "coating")
+    free = [Parameter("E1", "coating"), Parameter("E2", "coating")]
+    start = nominal
+    held = fit_layers(start, data, free)
+    widened = with_held_scatter(held, [g12])
+    names = [u.name for u in widened.budget.inputs]
+    j = names.index("coating.G12")
+    assert widened.budget.inputs[j].std == pytest.approx(HANDBOOK_STD_REL * start.value(g12))
+    assert "aluminium.E1" in names, "the known inputs are in the same budget"
+    assert np.all(widened.uncertainty.std > 2 * held.uncertainty.std), "a 20 % G12 dominates E1 and E2's std"
+    assert held.converged
+    assert any("coating.G12 held at the spec's values" in w for w in widened.warnings)
+    moved = [fit_layers(start.with_values({g12: start.value(g12) * (1 + s * 0.01)}), data, free).values
+             for s in (1, -1)]
+    central = (moved[0] - moved[1]) / (2 * 0.01 * start.value(g12))
+    np.testing.assert_allclose(widened.budget.sensitivity[:, j], central, rtol=0.03)
+    assert with_held_scatter(held, []) is held
+    assert with_budget(widened) is widened, "a result with a budget is not widened twice"
