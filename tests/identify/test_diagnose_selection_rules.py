@@ -81,3 +81,51 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     assert _held_back(["layerwise"], margins, state, [fitted("point_mass", 400.0)]) == {}  # 600 < 712: refit
     assert _held_back(["layerwise"], {}, state, point_mass) == {}  # never refitted: no margin known
     assert _held_back(["layerwise"], margins, state, [fitted("point_mass", -5000.0, selectable=False)]) == {}
+
+
+def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
+    """Layerwise refines the shear candidates: tried when one of them paid, and also when
+    none paid but one explained some misfit and the misfit is still ``FAR_FROM_NOISE``
+    (the round would otherwise stop with the more complete theory untried); not when the
+    misfit is near the noise, when the shear candidates explained nothing, or when
+    another candidate pays (the round goes on without it)."""
+    from types import SimpleNamespace
+
+    from identify.diagnosis.diagnose import FAR_FROM_NOISE, MIN_GAIN, _refine
+
+    def tried(kind, scaled_gain, gain, selectable=True):
+        return SimpleNamespace(kind=kind, scaled_gain=scaled_gain, gain=gain, eligible=True, selectable=selectable)
+
+    kinds = ["transverse_shear", "thick_plate", "layerwise", "point_mass"]
+    far = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=30 * FAR_FROM_NOISE))
+    near = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=FAR_FROM_NOISE / 2))
+    stalled = [tried("transverse_shear", 8.4, 4564.6), tried("thick_plate", 3.0, 1953.7),
+               tried("point_mass", -2.2, 4846.4)]  # blind13's first round: nothing pays
+    assert _refine("layerwise", kinds, [], stalled, far)
+    assert not _refine("layerwise", kinds, [], stalled, near)
+    nothing = [tried("transverse_shear", -3.0, -50.0), tried("thick_plate", -4.0, -80.0)]
+    assert not _refine("layerwise", kinds, [], nothing, far)
+    paying_mass = stalled[:2] + [tried("point_mass", 2 * MIN_GAIN, 9000.0)]
+    assert not _refine("layerwise", kinds, [], paying_mass, far)
+    assert _refine("layerwise", kinds, [], [tried("transverse_shear", 2 * MIN_GAIN, 9000.0)], near)
+    assert _refine("layerwise", kinds, ["thick_plate"], nothing, near), "what it refines is selected already"
+
+
+def test_shear_candidates_restart_from_the_spec_when_the_thin_plate_distorted_it():
+    """``spec_start`` gives the spec's values as a start when the thin-plate fit is
+    degenerate, and only then: a converged fit near the spec's values is not; one that
+    moved a layer modulus more than ``DISTORTED`` times off the spec's value is (a spec
+    whose E1 is 4 x what the data say stands for the thin plate that distorted it)."""
+    from identify.fitting.driver import DISTORTED, fit_layers, spec_start
+
+    truth = true_model().with_options(modes=6)
+    data = synthetic_measurements(truth, modes=6, noise_rel=5e-4, seed=3, labels="close")
+    model = start_model().with_options(modes=6)
+    baseline = fit_layers(model, data)
+    assert baseline.converged
+    assert spec_start(model, data, baseline) is None
+    e1 = next(p for p in baseline.parameters if p.kind == "E1")
+    far = model.with_values({e1: (DISTORTED + 1) * baseline.value(e1)})
+    start = spec_start(far, data, baseline)
+    assert start is not None and start.value(e1) == pytest.approx(far.value(e1))
+    assert start.rms_rel_error > baseline.rms_rel_error
