@@ -575,16 +575,14 @@ def released(result: FitResult, measurements: Measurements, baseline: FitResult,
             return None
         return freed
 
-    freed = freeing(result, held)
-    now_free = list(held) if freed is not None else []
-    if freed is None and len(held) > 1:
-        freed = result
-        for p in held:
+    freed, now_free = freeing(result, held), list(held)
+    if freed is None:
+        freed, now_free = result, []
+        for p in held if len(held) > 1 else ():
             one = freeing(freed, [p])
             if one is not None:
                 freed, now_free = one, now_free + [p]
-        freed = freed if now_free else None
-    if freed is None:
+    if not now_free:
         return with_held_scatter(result, held)
     still = [p for p in held if p not in now_free]
     note = f"{', '.join(p.name for p in now_free)} freed again (held in the thin-plate fit): now determined"
