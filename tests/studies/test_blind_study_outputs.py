@@ -19,3 +19,14 @@ def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, mon
     assert data["cases"][0]["selected"] == "layerwise"
     assert data["summary"]["dev"]["cases"] == 1
     assert data["summary"]["dev"]["contains_true_pct"] == 100.0
+
+
+def test_an_effect_is_true_when_leaving_it_out_costs_the_misfit_or_a_property():
+    """blind24's figures: without the skins' 5.5 and 3.7 deg misalignment the oracle ends
+    1.28 x the floor (below 1.5) but its skins' G12 12 std off: true.  A property already
+    off in the oracle itself (4 std) does not make every effect true."""
+    floor = 4.39e-4
+    without = {"shear": (0.2, 1e3), "orientation": (5.61e-4, 12.1), "point_mass": (4.40e-4, 1.1)}
+    assert study.true_effects(without, floor, 1.12) == ("shear", "orientation")
+    assert study.true_effects({"orientation": (4.5e-4, 3.9)}, floor, 4.0) == ()
+    assert study.true_effects({"point_mass": (6.7e-4, 0.5)}, floor, 1.0) == ("point_mass",)
