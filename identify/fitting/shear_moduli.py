@@ -142,6 +142,7 @@ def reconsidered(result, nominal: Specimen, scatter: float):
         specimen = with_shear_moduli(specimen, nominal.materials[material])
     changed = [m for m in choice.scaled if not any(isinstance(p, Tied) for p in shear if p.target == m)]
     parameters = list(choice.parameters)
+    renamed, reached = {}, []
     for material in changed:
         # One scale at the spec's ratio G23 / G13 (given, or 1 by default), through the
         # geometric mean of the two values reached: the ratio reached is not determined.
@@ -151,13 +152,15 @@ def reconsidered(result, nominal: Specimen, scatter: float):
         n13, n23 = nominal.materials[material].transverse_shear_moduli
         ratio = n23 / n13
         lead = float(np.sqrt(g13 * g23 / ratio))
+        reached.append(f"{material}: G23 / G13 = {ratio:.3g}, the spec's (reached: {g23 / g13:.3g}, not determined)")
         parameters[k] = Tied(tied.kind, tied.target, tuple((f, ratio) for f, _ in tied.followers))
+        renamed[tied.name] = parameters[k].name
         specimen = specimen.with_values({Parameter("G13", material): lead, Parameter("G23", material): ratio * lead})
-    parts = [f"one scale for G13 and G23 of {', '.join(changed)}"] if changed else []
+    parts = [f"one scale for G13 and G23 of {', '.join(changed)} ({'; '.join(reached)})"] if changed else []
     if choice.kept:
         parts.append("G13, G23 of " + ", ".join(choice.kept) + " no longer free: "
                      + ", ".join(_values(specimen, m) for m in choice.kept))
-    stds = ", ".join(f"{name} {100 * std:.2g} %" for name, std in choice.predicted.items())
+    stds = ", ".join(f"{renamed.get(name, name)} {100 * std:.2g} %" for name, std in choice.predicted.items())
     note = (f"transverse shear moduli chosen again at the solution (the data no longer determine them as freed): "
             f"{'; '.join(parts)}" + (f" (std there: {stds})" if stds else ""))
     return others + parameters, result.model.with_specimen(specimen), note

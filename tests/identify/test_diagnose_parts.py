@@ -171,3 +171,31 @@ def test_fit_with_a_singular_effect_is_a_clear_error(sensor_baseline):
     model, data, _ = sensor_baseline
     with pytest.raises(LayerIdError, match="not identifiable.*fix one of the parameters"):
         fit(model, data, ["thickness"])
+
+
+def test_a_pair_tied_again_at_the_solution_is_named_with_the_ratio_it_keeps(thick_shear, monkeypatch):
+    """When the data no longer separate a freed G13, G23 pair, ``reconsidered`` ties them at
+    the spec's ratio (1 by default) through the geometric mean of the values reached; the
+    note must name that ratio, not the one reached (a blind hybrid's note said
+    'G23 = 4.87 G13' while the refit kept G23 = G13)."""
+    from types import SimpleNamespace
+
+    from identify.fitting import shear_moduli
+
+    specimen = thick_shear.specimen
+    g13, g23 = Parameter("G13", "steel"), Parameter("G23", "steel")
+    reached = specimen.with_values({g13: 40e9, g23: 4.87 * 40e9})
+    tied_reached = ties.Tied.scale(g13, [g23], reached)
+
+    def chooser(sensitivities, others, shear, specimen):
+        return shear_moduli.ShearChoice((tied_reached,), (), ("steel",), (), {tied_reached.name: 0.05})
+
+    monkeypatch.setattr(shear_moduli, "choose_shear_moduli", chooser)
+    result = SimpleNamespace(parameters=[g13, g23], jacobian=np.ones((4, 2)), model=thick_shear.with_specimen(reached))
+    parameters, model, note = shear_moduli.reconsidered(result, specimen, 1e-3)
+    (tied,) = parameters
+    assert tied.followers[0][1] == pytest.approx(1.0)
+    lead = model.specimen.value(g13)
+    assert lead == pytest.approx(np.sqrt(40e9 * 4.87 * 40e9))  # the product G13 G23 is kept
+    assert model.specimen.value(g23) == pytest.approx(lead)
+    assert "4.87 G13" not in note and "G23 / G13 = 1, the spec's (reached: 4.87" in note
