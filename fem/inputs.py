@@ -9,14 +9,18 @@ from dataclasses import dataclass
 #: Kinds of known inputs that are not model parameters (the plate's geometry, its mass).
 GEOMETRY = ("length", "width")
 MASS = "mass"
+#: A layer's angle: frequencies are even in it where the laminate is symmetric about the
+#: plate's axes, so its budget has a second-order part beside the first-order one.
+ANGLE = "angle"
+ANGLE_SECOND_ORDER = "angle, second order"
 
 
 @dataclass(frozen=True)
 class InputStd:
     """A known input's standard uncertainty [SI]: ``kind`` a material property (E1, E2,
-    G12, nu12, density, G13, G23; ``target`` the material), ``thickness`` (``target`` a
-    layer label), ``length`` / ``width`` of the plate, or ``mass`` of the weighed plate
-    (its layers' densities scale with it)."""
+    G12, nu12, density, G13, G23; ``target`` the material), ``thickness`` or ``angle``
+    [rad] (``target`` a layer label), ``length`` / ``width`` of the plate, or ``mass`` of
+    the weighed plate (its layers' densities scale with it)."""
 
     kind: str
     target: str
@@ -27,4 +31,4 @@ class InputStd:
         return f"{self.target}.{self.kind}"
 
 
-__all__ = ["InputStd", "GEOMETRY", "MASS"]
+__all__ = ["InputStd", "GEOMETRY", "MASS", "ANGLE", "ANGLE_SECOND_ORDER"]

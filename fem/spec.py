@@ -123,6 +123,10 @@ def _bounds(table, where: str) -> tuple[tuple[str, float, float], ...]:
     return tuple(out)
 
 
+#: A layer's angle std above this is not a known input (the orientation effect fits it).
+MAX_ANGLE_STD_DEG = 15.0
+
+
 def _input_std(data: dict, specimen: Specimen) -> tuple[InputStd, ...]:
     """The standard uncertainties of known inputs the spec states (``*_std`` keys), in SI.
     A property being identified gets its std from the fit, not from the spec."""
@@ -148,6 +152,13 @@ def _input_std(data: dict, specimen: Specimen) -> tuple[InputStd, ...]:
             std = _positive(item, "thickness_mm_std", f"{where}[{i}]", required=False)
             if std is not None:
                 out.append(InputStd("thickness", label(i), std * MM))
+            std = _positive(item, "angle_deg_std", f"{where}[{i}]", required=False)
+            if std is not None:
+                if std > MAX_ANGLE_STD_DEG:
+                    raise SpecError(f"{where}[{i}].angle_deg_std = {std:g}: a layer's axes known to worse than "
+                                    f"{MAX_ANGLE_STD_DEG:g} deg are not a known input; leave it out and let the "
+                                    "orientation effect identify the angle")
+                out.append(InputStd("angle", label(i), math.radians(std)))
     for key, kind in (("length_mm_std", "length"), ("width_mm_std", "width"), ("mass_g_std", "mass")):
         std = _positive(sp, key, "[specimen]", required=False)
         if std is not None:
@@ -180,7 +191,7 @@ def _layers(items, where: str, materials: dict, label, plate_size: float) -> tup
         here = f"{where}[{i}]"
         if not isinstance(item, dict):
             raise SpecError(f"{here}: need a table {{ material = ..., thickness_mm = ... }}")
-        check_keys(item, ("material", "thickness_mm", "angle_deg", "thickness_mm_std"), here)
+        check_keys(item, ("material", "thickness_mm", "angle_deg", "thickness_mm_std", "angle_deg_std"), here)
         name = item.get("material")
         if name is None:
             raise SpecError(f"{here}: missing field 'material'")
