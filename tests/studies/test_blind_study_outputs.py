@@ -22,7 +22,7 @@ def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, mon
 
 
 def test_an_effect_is_true_when_leaving_it_out_costs_the_misfit_or_a_property():
-    """blind24's figures: without the skins' 5.5 and 3.7 deg misalignment the oracle ends
+    """blind24 (std of the scatter alone): without the skins' 5.5 and 3.7 deg misalignment the oracle ends
     1.28 x the floor (below 1.5) but its skins' G12 12 std off: true.  A property already
     off in the oracle itself (4 std) does not make every effect true."""
     floor = 4.39e-4
