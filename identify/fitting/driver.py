@@ -474,7 +474,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
-    reasons = implausible(new, result.specimen, nominal, first_hz)
+    reasons = implausible(new, result.specimen, nominal, first_hz, state.model.input_std)
     notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
     return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
                        tuple(notes), reasons)
@@ -603,7 +603,7 @@ def released(result: FitResult, measurements: Measurements, baseline: FitResult,
                            pairings=fitted.pairings)
         if (not freed.finished or any(p in free for p in at_bounds(freed))
                 or any(_ran_off(freed.value(p), baseline.model.value(p)) for p in free)
-                or implausible(free, freed.specimen, nominal, first_hz)):
+                or implausible(free, freed.specimen, nominal, first_hz, freed.model.input_std)):
             return None
         return freed
 

@@ -115,6 +115,13 @@ def test_plausibility_limits():
     turned = specimen.with_values({angle: specimen.value(angle) + math.radians(12)})
     assert reasons(turned, angle) and "+12 deg" in reasons(turned, angle)[0]
     assert reasons(specimen.with_values({angle: specimen.value(angle) + math.radians(2)}), angle) == ()
+    # A stated lay-up tolerance of 3 deg widens the limit to 3 of it: 6 deg passes, 12 not.
+    from fem.inputs import InputStd
+
+    tolerance = (InputStd("angle", layer, math.radians(3.0)),)
+    six = specimen.with_values({angle: specimen.value(angle) + math.radians(6)})
+    assert reasons(six, angle) and implausible([angle], six, specimen, None, tolerance) == ()
+    assert "more than 9 deg" in implausible([angle], turned, specimen, None, tolerance)[0]
 
 
 @pytest.fixture(scope="module")
