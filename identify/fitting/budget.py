@@ -89,11 +89,14 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
         rows = objective.rows[name]
         indices = e.pairings[name].indices
         solution = model.solve(name)
+        turned = {}  # layer -> the frequencies with its angle at +u and -u (both parts of the angle use them)
         for j, u in enumerate(inputs):
             if u.kind in (ANGLE, ANGLE_SECOND_ORDER):
-                p = Parameter(ANGLE, u.target)
-                plus, minus = (model.with_values({p: model.value(p) + s * u.std}).solve(name).frequencies_hz[indices]
-                               for s in (1, -1))
+                if u.target not in turned:
+                    p = Parameter(ANGLE, u.target)
+                    turned[u.target] = [model.with_values({p: model.value(p) + s * u.std}).solve(name)
+                                        .frequencies_hz[indices] for s in (1, -1)]
+                plus, minus = turned[u.target]
                 out[rows, j] = ((plus - minus) / 2 if u.kind == ANGLE else
                                 np.sqrt(3) * (plus + minus - 2 * solution.frequencies_hz[indices]) / 2) / u.std
             elif u.kind in GEOMETRY:
