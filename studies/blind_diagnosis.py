@@ -224,9 +224,11 @@ def true_effects(without: dict, floor: float, floor_z: float) -> tuple[str, ...]
     """The effects the oracle cannot do without: ``without`` maps each to the (RMS, worst
     property in std) of the oracle refitted without it; true when the RMS ends above
     ``TRUE_RATIO`` x ``floor`` or the worst property beyond ``Z_MAX`` and the oracle's own
-    worst, ``floor_z``."""
-    limit = max(Z_MAX, floor_z if math.isfinite(floor_z) else 0.0)
-    return tuple(k for k, (rms, z) in without.items() if rms > TRUE_RATIO * floor or z > limit)
+    worst, ``floor_z``.  Where the oracle's or the refit's std are not all defined (a
+    floor fit that did not finish: blind03's), only the RMS decides."""
+    limit = max(Z_MAX, floor_z) if math.isfinite(floor_z) else math.inf
+    return tuple(k for k, (rms, z) in without.items()
+                 if rms > TRUE_RATIO * floor or (math.isfinite(z) and z > limit))
 
 
 @dataclass

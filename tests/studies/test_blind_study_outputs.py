@@ -2,6 +2,7 @@
 recorded outcome): each case's diagnosis report is kept as the case ends, the rows and the
 summary are strict JSON."""
 import json
+import math
 
 from studies import blind_diagnosis as study
 
@@ -30,3 +31,6 @@ def test_an_effect_is_true_when_leaving_it_out_costs_the_misfit_or_a_property():
     assert study.true_effects(without, floor, 1.12) == ("shear", "orientation")
     assert study.true_effects({"orientation": (4.5e-4, 3.9)}, floor, 4.0) == ()
     assert study.true_effects({"point_mass": (6.7e-4, 0.5)}, floor, 1.0) == ("point_mass",)
+    # Undefined std (a refit that did not finish) leave the RMS alone to decide.
+    assert study.true_effects({"orientation": (4.5e-4, math.inf)}, floor, 1.0) == ()
+    assert study.true_effects({"orientation": (4.5e-4, 5.0)}, floor, math.inf) == ()
