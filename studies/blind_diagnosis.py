@@ -246,6 +246,7 @@ class Outcome:
     floor_max_z: float = math.nan
     max_z: float = math.nan
     z: dict = field(default_factory=dict)
+    without: dict = field(default_factory=dict)  # effect -> the oracle's (RMS, worst property) without it
     seconds: float = math.nan
     oracle_seconds: float = math.nan
     error: str = ""
@@ -279,7 +280,9 @@ class Outcome:
                 "floor_theory": self.floor_theory, "ratio": num(self.ratio, 3),
                 "floor_max_z": num(self.floor_max_z, 2), "max_z": num(self.max_z, 2),
                 "seconds": num(self.seconds, 1), "oracle_seconds": num(self.oracle_seconds, 1),
-                "z": {k: num(v, 2) for k, v in self.z.items()}, "error": self.error}
+                "z": {k: num(v, 2) for k, v in self.z.items()},
+                "without": {k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)} for k, (rms, z) in self.without.items()},
+                "error": self.error}
 
 
 def _z(fit, truth_values: dict) -> dict:
@@ -313,6 +316,7 @@ def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | 
             started = time.perf_counter()
             o = oracle(case, data)
             out.floor, out.floor_theory, out.true_effects, out.floor_max_z = o.floor, o.theory, o.true_effects, o.max_z
+            out.without = o.without
             out.oracle_seconds = time.perf_counter() - started
         out.selected = tuple(c.kind for c in result.selected)
         out.rms_baseline = result.baseline.rms_rel_error
@@ -360,7 +364,7 @@ def summary(outcomes: list[Outcome]) -> dict:
 
 def report(outcomes: list[Outcome], title: str) -> str:
     table = pd.DataFrame([o.row() for o in outcomes])
-    lines = [f"== {title} ==", "", table.drop(columns=["half", "z"]).to_string(index=False, na_rep="-"), "",
+    lines = [f"== {title} ==", "", table.drop(columns=["half", "z", "without"]).to_string(index=False, na_rep="-"), "",
              "confusion (per effect, over the cases):", confusion(outcomes).to_string(index=False), "",
              json.dumps(summary(outcomes))]
     return "\n".join(lines)
