@@ -385,8 +385,7 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     specimen = model.specimen
     defaulted = [p for p in parameters if p.kind in SHEAR_MODULI
                  and p.kind in specimen.materials[p.target].defaulted_shear_moduli]
-    starts = [s for s in SHEAR_STARTS if s != TRANSVERSELY_ISOTROPIC or _unidirectional(specimen, defaulted)] \
-        if defaulted else [(1.0, 1.0)]
+    starts = _shear_starts(specimen, defaulted) if defaulted else [(1.0, 1.0)]
     best = None
     for start in starts:
         try:
@@ -407,10 +406,16 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     return trial, sensitivities, note
 
 
-def _unidirectional(specimen: Specimen, shear) -> bool:
-    """Whether a material of the shear moduli ``shear`` is a unidirectional ply (the
-    transversely isotropic start differs from G13 = G23 = G12)."""
-    return any(specimen.materials[p.target].E1 >= UD_ANISOTROPY * specimen.materials[p.target].E2 for p in shear)
+def _unidirectional(material) -> bool:
+    """Whether ``material`` is a unidirectional ply (E1 >= ``UD_ANISOTROPY`` E2)."""
+    return material.E1 >= UD_ANISOTROPY * material.E2
+
+
+def _shear_starts(specimen: Specimen, shear) -> list:
+    """``SHEAR_STARTS`` for the shear moduli ``shear``: the ply-class start only where a
+    material of them is a unidirectional ply (elsewhere it is G13 = G23 = G12)."""
+    ud = any(_unidirectional(specimen.materials[p.target]) for p in shear)
+    return [s for s in SHEAR_STARTS if s != TRANSVERSELY_ISOTROPIC or ud]
 
 
 def _describe_start(start) -> str:
@@ -489,8 +494,7 @@ def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
         for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
             m = specimen.materials[q.target]
             if start == TRANSVERSELY_ISOTROPIC:
-                ud = m.E1 >= UD_ANISOTROPY * m.E2
-                value = m.E2 / (2 * (1 + UD_NU23)) if q.kind == "G23" and ud else m.G12
+                value = m.E2 / (2 * (1 + UD_NU23)) if q.kind == "G23" and _unidirectional(m) else m.G12
             else:
                 value = (start[0] if q.kind == "G13" else start[1]) * m.G12
             values[Parameter(q.kind, q.target)] = value
@@ -517,8 +521,7 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
         return result, new, []
     specimen = ready.model.specimen
     tried = [(result, "the screened start")]
-    starts = [s for s in SHEAR_STARTS if s != TRANSVERSELY_ISOTROPIC or _unidirectional(specimen, shear)]
-    for start in starts + [CONTINUATION_START]:
+    for start in _shear_starts(specimen, shear) + [CONTINUATION_START]:
         trial = fit_layers(ready.model.with_values(_shear_values(specimen, shear, start)), measurements,
                            base + list(new), options, effect_of=effect_of, like=state, explain=False, settle=settle,
                            pairings=ready.pairings or state.pairings)
