@@ -34,3 +34,20 @@ def test_an_effect_is_true_when_leaving_it_out_costs_the_misfit_or_a_property():
     # Undefined std (a refit that did not finish) leave the RMS alone to decide.
     assert study.true_effects({"orientation": (4.5e-4, math.inf)}, floor, 1.0) == ()
     assert study.true_effects({"orientation": (4.5e-4, 5.0)}, floor, math.inf) == ()
+
+
+def test_the_properties_are_also_scored_in_the_measurements_std_alone():
+    """A lay-up tolerance widens a property's std; the study scores it both ways, so the
+    widening cannot pass for a better estimate (blind07's carbon nu12: 0.021 -> 0.44)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from fem.specimen import Parameter
+    from identify.fitting.budget import Budget
+
+    nu12 = Parameter("nu12", "carbon")
+    fit = SimpleNamespace(parameters=(nu12,), value=lambda p: 0.30, std=lambda p: 0.44,
+                          budget=Budget((nu12,), (), np.array([0.021]), np.zeros((1, 0))))
+    assert math.isclose(study._z(fit, {nu12: 0.41})["carbon.nu12"], 0.11 / 0.44)
+    assert math.isclose(study._z(fit, {nu12: 0.41}, measurement_only=True)["carbon.nu12"], 0.11 / 0.021)
