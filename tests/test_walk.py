@@ -76,6 +76,7 @@ def test_peak_list_residual_rows_are_null_not_nan(files):
 
 @pytest.mark.parametrize("measured,output", [("labelled", "--json"), ("peaks", "--json"), ("gap", "text"),
                                              ("peaks", "--report"), ("kHz", "--json")])
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_compare(files, tmp_path, measured, output):
     argv = ["compare", files.spec, files.measurements[measured]] + ([output] if output == "--json" else [])
     walk(identify_layers, argv, tmp_path, report=output == "--report")

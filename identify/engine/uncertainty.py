@@ -138,9 +138,11 @@ class Uncertainty:
         relative = relative_sensitivity(evaluation)
         cond = condition_number(relative)
         _, s_rel, vt_rel = np.linalg.svd(relative, full_matrices=False)
+        # Relative to the largest; all zero when no paired mode moves (frequencies in kHz).
+        s_rel = s_rel / s_rel[0] if s_rel[0] > 0 else np.zeros_like(s_rel)
         weak = tuple(
-            f"{describe_combination(vt_rel[k], names)} (singular value {s_rel[k] / s_rel[0]:.1e} of the largest)"
-            for k in range(len(s_rel)) if s_rel[k] < s_rel[0] / GOOD_BELOW
+            f"{describe_combination(vt_rel[k], names)} (singular value {s_rel[k]:.1e} of the largest)"
+            for k in range(len(s_rel)) if s_rel[k] < 1 / GOOD_BELOW
         )
         _, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
         dvdz = space.dvalue_dz(values)
@@ -158,7 +160,7 @@ class Uncertainty:
         flags = tuple(parameter_flags(parameter, value, sd, evaluation.model.specimen,
                                       space.bound_of(i, values) if on_bound[i] else None)
                       for i, (parameter, value, sd) in enumerate(zip(space.parameters, values, std)))
-        return cls(std, covariance, correlation, cond, s_rel / s_rel[0], weak, flags, tuple(warnings))
+        return cls(std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings))
 
 
 def parameter_flags(parameter, value: float, std: float, specimen, bound: float | None = None) -> tuple[str, ...]:
