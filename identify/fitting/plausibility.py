@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 
+from fem.inputs import ANGLE
 from fem.solver.attachments import PointMass, Suspension
 from fem.specimen import Parameter, Specimen
 
@@ -58,7 +59,7 @@ def implausible(parameters, fitted: Specimen, nominal: Specimen, first_hz: float
     unlikely, judged against the ``nominal`` one (the spec's); empty when plausible.
     ``first_hz``: the lowest measured frequency (for the suspension); ``input_std``: the
     spec's known inputs' std (a layer's lay-up tolerance widens its turn limit)."""
-    tolerance = {u.target: u.std for u in input_std if u.kind == "angle"}
+    tolerance = {u.target: u.std for u in input_std if u.kind == ANGLE}
     reasons = []
     done = set()
     layer_labels = {layer.label for layer in nominal.layers}
