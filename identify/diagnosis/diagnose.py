@@ -617,6 +617,10 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # settled) before the next round looks again.
             polished = continued(best.fit, measurements, FINAL_OPTIONS)
             polished, notes = with_determined_shear(polished, measurements, nominal, FINAL_OPTIONS)
+            # The layer properties the thin-plate fit held are freed where the effect now
+            # determines them, before the next round: held, their handbook error is misfit
+            # that the next round's candidates would take up.
+            polished = released(polished, measurements, baseline, nominal, FINAL_OPTIONS, settle="quick")
             if polished.finished and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares):
                 added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
                                 added=tuple(p for p in polished.parameters if p not in state.parameters))
