@@ -237,21 +237,25 @@ class Outcome:
     family: str
     half: str
     noise: float
-    true_effects: tuple[str, ...] = ()
+    oracle: Oracle | None = None  # None when it was not run (or failed)
     selected: tuple[str, ...] = ()
     rms_baseline: float = math.nan
     rms_after: float = math.nan
-    floor: float = math.nan
-    floor_theory: str = ""
-    floor_max_z: float = math.nan
     max_z: float = math.nan
     max_z_measured: float = math.nan  # the worst property in the measurements' std alone
     z: dict = field(default_factory=dict)
-    without: dict = field(default_factory=dict)  # effect -> the oracle's (RMS, worst property) without it
     seconds: float = math.nan
     oracle_seconds: float = math.nan
     error: str = ""
     report: str = ""  # the diagnosis's own report: every round's candidates and reasons
+
+    @property
+    def true_effects(self) -> tuple[str, ...]:
+        return self.oracle.true_effects if self.oracle else ()
+
+    @property
+    def floor(self) -> float:
+        return self.oracle.floor if self.oracle else math.nan
 
     @property
     def contains_truth(self) -> bool:
@@ -278,12 +282,13 @@ class Outcome:
                 "true": "+".join(self.true_effects), "selected": "+".join(self.selected),
                 "contains_true": self.contains_truth, "rms_baseline_pct": num(100 * self.rms_baseline),
                 "rms_after_pct": num(100 * self.rms_after), "floor_pct": num(100 * self.floor),
-                "floor_theory": self.floor_theory, "ratio": num(self.ratio, 3),
-                "floor_max_z": num(self.floor_max_z, 2), "max_z": num(self.max_z, 2),
+                "floor_theory": self.oracle.theory if self.oracle else "", "ratio": num(self.ratio, 3),
+                "floor_max_z": num(self.oracle.max_z, 2) if self.oracle else None, "max_z": num(self.max_z, 2),
                 "max_z_measured": num(self.max_z_measured, 2),
                 "seconds": num(self.seconds, 1), "oracle_seconds": num(self.oracle_seconds, 1),
                 "z": {k: num(v, 2) for k, v in self.z.items()},
-                "without": {k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)} for k, (rms, z) in self.without.items()},
+                "without": {k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)}
+                            for k, (rms, z) in (self.oracle.without if self.oracle else {}).items()},
                 "error": self.error}
 
 
@@ -319,9 +324,7 @@ def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | 
         out.report = result.report()
         if with_oracle:
             started = time.perf_counter()
-            o = oracle(case, data)
-            out.floor, out.floor_theory, out.true_effects, out.floor_max_z = o.floor, o.theory, o.true_effects, o.max_z
-            out.without = o.without
+            out.oracle = oracle(case, data)
             out.oracle_seconds = time.perf_counter() - started
         out.selected = tuple(c.kind for c in result.selected)
         out.rms_baseline = result.baseline.rms_rel_error

@@ -9,8 +9,9 @@ from studies import blind_diagnosis as study
 
 def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, monkeypatch):
     def recorded(name, progress=None):
-        return study.Outcome(name, "hybrid", "dev", 5e-4, true_effects=("shear",), selected=("layerwise",),
-                             rms_baseline=0.01, rms_after=2e-4, floor=1.9e-4, max_z=1.2, z={"cfrp_ud.E1": 1.2},
+        oracle = study.Oracle(1.9e-4, "layerwise", 1.1, {"shear": (5e-3, 40.0)}, ("shear",))
+        return study.Outcome(name, "hybrid", "dev", 5e-4, oracle, selected=("layerwise",),
+                             rms_baseline=0.01, rms_after=2e-4, max_z=1.2, z={"cfrp_ud.E1": 1.2},
                              seconds=12.0, oracle_seconds=3.0, report=f"== diagnosis of {name} ==")
 
     monkeypatch.setattr(study, "run_case", recorded)
@@ -18,6 +19,7 @@ def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, mon
     assert (tmp_path / "cases" / "blind04_hybrid.txt").read_text() == "== diagnosis of blind04_hybrid ==\n"
     data = json.loads((tmp_path / "blind_dev.json").read_text(), parse_constant=lambda c: 1 / 0)
     assert data["cases"][0]["selected"] == "layerwise"
+    assert data["cases"][0]["without"] == {"shear": {"rms_pct": 0.5, "max_z": 40.0}}
     assert data["summary"]["dev"]["cases"] == 1
     assert data["summary"]["dev"]["contains_true_pct"] == 100.0
 
