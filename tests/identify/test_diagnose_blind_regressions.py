@@ -59,3 +59,16 @@ def test_foam_sandwich():
     assert not o.error, o.error
     assert "shear" in _physics(o.selected), o.row()
     assert o.within_floor, o.row()
+
+
+@pytest.mark.skipif(not os.environ.get("LAYER_ID_LONG_TESTS"), reason="long: set LAYER_ID_LONG_TESTS=1")
+def test_held_properties_are_freed_before_the_next_round():
+    """blind07 (development half): the thin-plate fit holds the carbon's nu12 and the
+    glass's E1 at their handbook values.  Freed only in the final refit, their error stayed
+    in every round's misfit: layerwise stopped at 0.073 % (3.5 x the floor) and a spurious
+    bond line was added.  Freed as layerwise is selected, the misfit is consistent with
+    the scatter in round 1 (measured 0.0285 %, floor 0.0209 %)."""
+    o = study.run_case("blind07_hybrid")
+    assert not o.error, o.error
+    assert o.selected in (("layerwise",), ("thick_plate",)), o.row()
+    assert o.within_floor, o.row()
