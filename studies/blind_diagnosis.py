@@ -40,6 +40,7 @@ import time
 import tomllib
 import traceback
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -402,8 +403,18 @@ def main(argv=None) -> int:
     outcomes = []
     if args.jobs > 1:
         # One process a case; each solve runs on one BLAS thread (fem.solver.threads).
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            for o in pool.map(run_case, names):
+        try:
+            with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+                for o in pool.map(run_case, names):
+                    _keep(o, args.out)
+                    outcomes.append(o)
+        except BrokenProcessPool:
+            # A worker killed from outside (the out-of-memory killer: a layerwise diagnosis
+            # grew to 14 GB beside another of 10 GB on 23 GB): the unfinished cases are failures.
+            for name in names[len(outcomes):]:
+                case = load(name)
+                o = Outcome(name, case["family"], case["half"], math.nan,
+                            error="its process was killed before it finished (out of memory?): run it with --jobs 1")
                 _keep(o, args.out)
                 outcomes.append(o)
     else:

@@ -53,3 +53,30 @@ def test_the_properties_are_also_scored_in_the_measurements_std_alone():
                           budget=Budget((nu12,), (), np.array([0.021]), np.zeros((1, 0))))
     assert math.isclose(study._z(fit, {nu12: 0.41})["carbon.nu12"], 0.11 / 0.44)
     assert math.isclose(study._z(fit, {nu12: 0.41}, measurement_only=True)["carbon.nu12"], 0.11 / 0.021)
+
+
+def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monkeypatch):
+    """The out-of-memory killer took one of two workers (run 8 of the dev half): the study
+    still writes its table and summary, the unfinished cases counted as failures."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    class Killed:
+        def __init__(self, max_workers):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def map(self, run, names):
+            yield study.Outcome(names[0], "hybrid", "dev", 5e-4, selected=("layerwise",), rms_after=2e-4)
+            raise BrokenProcessPool("a process was terminated abruptly")
+
+    monkeypatch.setattr(study, "ProcessPoolExecutor", Killed)
+    names = ["blind04_hybrid", "blind05_cross_ply"]
+    assert study.main(["--case", names[0], "--case", names[1], "--jobs", "2", "--out", str(tmp_path)]) == 0
+    data = json.loads((tmp_path / "blind_dev.json").read_text(), parse_constant=lambda c: 1 / 0)
+    assert [c["case"] for c in data["cases"]] == names
+    assert "killed" in data["cases"][1]["error"] and data["summary"]["dev"]["tracebacks"] == 1
