@@ -386,19 +386,16 @@ def _refine(kind: str, kinds, selected, candidates, state: FitResult) -> bool:
             and any(c.eligible and c.gain > 0 for c in candidates if c.kind in refined))
 
 
-def _margins(refined: list[str], candidates, number: int, before: dict | None = None) -> dict[str, tuple]:
+def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int, float, str]]:
     """For each refinement refitted this round: (round, the chi^2 it explained beyond the
-    best of what it refines, that effect, how many of its refits so far ended worse than
-    that: failed starts, counted on from ``before``, the margins until now)."""
+    best of what it refines, that effect)."""
     out = {}
     for kind in refined:
         mine = next((c for c in candidates if c.kind == kind and c.fit is not None), None)
         base = [c for c in candidates if c.kind in REFINES[kind] and c.fit is not None]
         if mine is not None and base:
             best = min(base, key=lambda c: c.fit.statistics.sum_squares)
-            margin = best.fit.statistics.sum_squares - mine.fit.statistics.sum_squares
-            failed = (before or {}).get(kind, (0, 0.0, "", 0))[3] + (margin < 0)
-            out[kind] = (number, margin, best.kind, failed)
+            out[kind] = (number, best.fit.statistics.sum_squares - mine.fit.statistics.sum_squares, best.kind)
     return out
 
 
@@ -407,10 +404,7 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
     beyond what it refines when last refitted is less than 1 / ``PRUNE_FACTOR`` of what
     another candidate explains now, so it cannot be this round's choice (the layerwise
     refit is 70 % of a round on a thick 3-D plate, 140-160 s, and in a later round it
-    only repeated its earlier margin).  A negative margin is a failed start, not a
-    measured one (the refinement holds what it refines), and is refitted once more from
-    the new round's start (blind19: layerwise ended 0.467 % against transverse shear's
-    0.434 % in round 1 and was never tried again, 2.6 x the floor left)."""
+    only repeated its earlier margin)."""
     explained = [(state.statistics.sum_squares - c.fit.statistics.sum_squares, c.kind)
                  for c in candidates if c.selectable]
     if not explained:
@@ -418,13 +412,10 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
     best, by = max(explained)
     held = {}
     for kind in refining:
-        if kind not in margins:
-            continue
-        number, margin, of, failed = margins[kind]
-        if margin * PRUNE_FACTOR < best and not (margin < 0 and failed < 2):
+        if kind in margins and margins[kind][1] * PRUNE_FACTOR < best:
+            number, margin, of = margins[kind]
             held[kind] = (f"; {kind} not refitted again: in round {number} it explained a chi^2 of {margin:.4g} beyond "
-                          f"{of}, less than 1/{PRUNE_FACTOR:g} of the {best:.4g} {by} explains now"
-                          + (f" (its refit failed {failed} times)" if margin < 0 else ""))
+                          f"{of}, less than 1/{PRUNE_FACTOR:g} of the {best:.4g} {by} explains now")
     return held
 
 
@@ -551,7 +542,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
     nominal = model.specimen
     respec = spec_start(model, measurements, baseline)
     state, selected, steps, closed = baseline, [], [], set()
-    margins: dict[str, tuple] = {}  # refinement -> (round, chi^2 it explained beyond, of what, failed refits)
+    margins: dict[str, tuple[int, float, str]] = {}  # refinement -> (round, chi^2 it explained beyond, of what)
     pool = None
     try:
         for number in range(1, len(kinds) + 1):
@@ -587,7 +578,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 # A refinement starts where the best of what it refines ended (the layerwise
                 # model's solves cost 6-18 of the single layer's: few iterations from there).
                 candidates += run(refining, {k: _refined_start(k, candidates) for k in refining})
-                margins.update(_margins(refining, candidates, number, margins))
+                margins.update(_margins(refining, candidates, number))
             candidates = _continue_unfinished(candidates, measurements, state, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
             finished = [c for c in candidates if c.eligible]
