@@ -183,7 +183,7 @@ def _fit_from_truth(model, data, wanted: dict) -> tuple[float, float]:
     (with the budget of the inputs' std the model states)."""
     fitted = identify.fit(model, data, options=ORACLE_OPTIONS)
     z = _z(fitted, wanted)
-    return float(fitted.rms_rel_error), max(z.values()) if z else math.nan
+    return float(fitted.rms_rel_error), max(z.values(), default=math.nan)
 
 
 @dataclass(frozen=True)
@@ -275,6 +275,10 @@ class Outcome:
     def within_std(self) -> bool:
         return not self.error and self.max_z <= Z_MAX
 
+    @property
+    def within_measurement_std(self) -> bool:
+        return not self.error and self.max_z_measured <= Z_MAX
+
     def row(self) -> dict:
         def num(x, digits=4):
             return round(float(x), digits) if isinstance(x, float) and math.isfinite(x) else None
@@ -331,10 +335,10 @@ def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | 
         out.rms_baseline = result.baseline.rms_rel_error
         fitted = result.final or result.baseline
         out.rms_after = fitted.rms_rel_error
-        out.z = _z(fitted, _wanted(case, truth))
-        out.max_z = max(out.z.values()) if out.z else math.nan
-        measured = _z(fitted, _wanted(case, truth), measurement_only=True)
-        out.max_z_measured = max(measured.values()) if measured else math.nan
+        wanted = _wanted(case, truth)
+        out.z = _z(fitted, wanted)
+        out.max_z = max(out.z.values(), default=math.nan)
+        out.max_z_measured = max(_z(fitted, wanted, measurement_only=True).values(), default=math.nan)
     except Exception as exc:  # noqa: BLE001 - the study reports every failure and goes on
         out.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
         out.error += " | " + traceback.format_exc().strip().splitlines()[-3].strip()
@@ -369,7 +373,7 @@ def summary(outcomes: list[Outcome]) -> dict:
             "rms_within_1.5_floor_pct": round(100 * sum(o.within_floor for o in outcomes) / n, 1),
             "every_property_within_3_std_pct": round(100 * sum(o.within_std for o in outcomes) / n, 1),
             "every_property_within_3_measurement_std_pct":
-                round(100 * sum(not o.error and o.max_z_measured <= Z_MAX for o in outcomes) / n, 1),
+                round(100 * sum(o.within_measurement_std for o in outcomes) / n, 1),
             "tracebacks": sum(bool(o.error) for o in outcomes),
             "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
             "max_seconds": round(float(np.max(seconds)), 1) if seconds else None}
