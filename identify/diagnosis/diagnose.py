@@ -47,8 +47,8 @@ from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, add_effect, better_start, continued,
-                              point_mass_hints, point_mass_starts, prepare_effect, released, restarted_from_spec,
-                              spec_start, with_determined_shear)
+                              held_shear_moduli, point_mass_hints, point_mass_starts, prepare_effect, released,
+                              restarted_from_spec, spec_start, with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -496,14 +496,16 @@ def _add(job: dict):
 
 
 def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal, hints, pool,
-         n_workers: int, starts: dict | None = None) -> list[Candidate]:
+         n_workers: int, starts: dict | None = None, free_again=()) -> list[Candidate]:
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
     (here), then refitted most promising first (by the linearised bound), each only when
     it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
-    pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from."""
+    pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from;
+    ``free_again``: shear moduli ``state`` holds, freed again with the other effects
+    (``fitting.held_shear_moduli``)."""
     out, ready = [], []
     for kind in kinds:
-        prepared = prepare_effect(state, kind, hints, (starts or {}).get(kind))
+        prepared = prepare_effect(state, kind, hints, (starts or {}).get(kind), free_again)
         if isinstance(prepared, AddedEffect):
             out.append(_candidate(state, prepared))
         else:
@@ -560,7 +562,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
                 say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023
                     + (f" in {n_workers} processes" if pool else ""))  # noqa: B023
-                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
+                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts,  # noqa: B023
+                            held_shear_moduli(state, names))  # noqa: B023
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if k not in REFINES])
