@@ -563,7 +563,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023
                     + (f" in {n_workers} processes" if pool else ""))  # noqa: B023
                 return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts,  # noqa: B023
-                            held_shear_moduli(state, names))  # noqa: B023
+                            held_shear_moduli(state, [c.added for c in selected]))  # noqa: B023
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if k not in REFINES])

@@ -314,6 +314,7 @@ class AddedEffect:
     error: str = ""
     seconds: float = 0.0
     pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
+    held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
 
 
@@ -355,7 +356,7 @@ def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | Non
     except LayerIdError as exc:
         return AddedEffect(kind, None, error=str(exc))
     base = list(state.parameters)
-    covered = {plain(p) for p in base} | {f for p in base if isinstance(p, Tied) for f, _ in p.followers}
+    covered = _covered(base)
     new = [p for p in on.free if p not in covered]
     notes = []
     held = [] if any(p.kind in SHEAR_MODULI for p in new) else [p for p in free_again if p not in covered]
@@ -416,18 +417,22 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
     return trial, sensitivities, note
 
 
-def held_shear_moduli(state: FitResult, selected: Sequence[str]) -> tuple[Parameter, ...]:
-    """The transverse shear moduli that the ``selected`` shear effects free and ``state``
-    holds (``_held_shear``: they ran out of range while other physics was missing).  The
-    next effect's refit frees them again (``prepare_effect``'s ``free_again``), so that it
-    combines with the shear instead of competing with it: blind13 (hybrid, 4.7 g sensor),
+def held_shear_moduli(state: FitResult, selected: Sequence[AddedEffect]) -> tuple[Parameter, ...]:
+    """The transverse shear moduli that ``state`` holds because they ran out of range in
+    the refit of one of the ``selected`` effects (``_held_shear``) while other physics was
+    missing; not those the data do not see (``choose_shear_moduli``, ``reconsidered``).
+    The next effect's refit frees them again (``prepare_effect``'s ``free_again``), so that
+    it combines with the shear instead of competing with it: blind13 (hybrid, 4.7 g sensor),
     from the layerwise fit with both plies' G13/G23 held, a point mass alone ended at
     12.6 g and 0.72 % RMS (10x the floor); with them free, 4.2 g at the sensor and
     0.074 %, consistent with the scatter."""
-    free = {plain(p) for p in state.parameters} | {f for p in state.parameters if isinstance(p, Tied)
-                                                   for f, _ in p.followers}
-    freed = [p for k in selected if k in SHEAR_EFFECTS for v in effect(k).free(state.model) for p in v.free]
-    return tuple(dict.fromkeys(p for p in freed if p.kind in SHEAR_MODULI and p not in free))
+    free = _covered(state.parameters)
+    return tuple(dict.fromkeys(p for added in selected for p in added.held if p not in free))
+
+
+def _covered(parameters) -> set[Parameter]:
+    """The plain parameters ``parameters`` move (a tied scale's lead and followers)."""
+    return {plain(p) for p in parameters} | {f for p in parameters if isinstance(p, Tied) for f, _ in p.followers}
 
 
 def _unidirectional(material) -> bool:
@@ -499,16 +504,18 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
                 result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
                                                     options)
                 notes += restarted
+        freed = _covered(_shear_targets(new))
         result, new, held = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
                                         settle, options)
         notes += held
+        ran_out = tuple(sorted(freed - _covered(_shear_targets(new)), key=lambda q: q.name))
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
     reasons = implausible(new, result.specimen, nominal, first_hz, state.model.input_std)
     notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
     return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
-                       tuple(notes), reasons)
+                       tuple(notes), reasons, held=ran_out)
 
 
 def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:

@@ -219,7 +219,7 @@ def test_a_point_mass_frees_the_shear_moduli_the_state_holds():
     scatter (0.25) and the mass is within 3 of its std of the truth (3.9 +- 0.9 g).  On a
     coarser mesh (12 divisions) the point mass started at a mirrored corner and the freed
     moduli ran out again: freeing is no guarantee, the starts still decide."""
-    from identify.fitting.driver import held_shear_moduli, point_mass_hints
+    from identify.fitting.driver import AddedEffect, held_shear_moduli, point_mass_hints
 
     truth = thick(true_model()).with_attachments([PointMass(3e-3, 0.125, 0.110)]).with_options(
         modes=8, transverse_shear=True)
@@ -228,9 +228,12 @@ def test_a_point_mass_frees_the_shear_moduli_the_state_holds():
     model = thick(start_model()).with_options(modes=8, transverse_shear=True)
     model = model.with_values({g13: 0.25 * truth.value(g13)})
     state = fit(model, data)  # the layers free, the shear moduli held
-    held = held_shear_moduli(state, ["transverse_shear"])
-    assert g13 in held and not any(p in state.parameters for p in held)
-    assert held_shear_moduli(state, ["point_mass"]) == ()  # no shear effect selected: none held by one
+    steel = (g13, Parameter("G23", "steel"))
+    held = held_shear_moduli(state, [AddedEffect("transverse_shear", state, held=steel)])
+    assert held == steel
+    assert held_shear_moduli(state, [AddedEffect("transverse_shear", state)]) == ()  # none ran out: none held
+    assert held_shear_moduli(fit(model, data, parameters=list(state.parameters) + [g13]),
+                             [AddedEffect("transverse_shear", state, held=steel)]) == steel[1:]  # free again: not held
     hints = point_mass_hints(state)
     prepared = prepare_effect(state, "point_mass", hints, free_again=held)
     assert g13 in prepared.added and any("free again with point_mass" in n for n in prepared.notes)
