@@ -504,11 +504,9 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
                 result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
                                                     options)
                 notes += restarted
-        freed = _covered(_shear_targets(new))
-        result, new, held = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
-                                        settle, options)
+        result, new, held, ran_out = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
+                                                 settle, options)
         notes += held
-        ran_out = tuple(sorted(freed - _covered(_shear_targets(new)), key=lambda q: q.name))
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
@@ -574,15 +572,18 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     without them, so that they cannot sink the candidate that holds the right physics.
     Repeated while the refit sends another material's moduli out (blind13, a hybrid:
     with the carbon's held, the glass's ran to the 2000 GPa bound and every shear candidate
-    was implausible), at most once per material."""
+    was implausible), at most once per material.  Returns (result, parameters, notes, the
+    plain shear moduli held)."""
     first_hz = float(state.measurements.table["frequency_hz"].min())
     held: list[str] = []
+    removed: list[Parameter] = []
     for _ in nominal.materials:
         shear = _shear_targets(new)
         wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
         if not wandered:
             break
         held += wandered
+        removed += [p for p in shear if p.target in wandered]
         new = [p for p in new if not (p.kind in SHEAR_MODULI and p.target in wandered)]
         specimen = result.model.specimen
         for material in wandered:
@@ -590,10 +591,10 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
         result = fit_layers(result.model.with_specimen(specimen), measurements, base + new, options,
                             effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
     if not held:
-        return result, new, []
+        return result, new, [], ()
     note = (f"G13, G23 of {', '.join(held)} ran out of the plausible range (the data do not see them): held at "
             f"their start values and refitted without them")
-    return result, new, [note]
+    return result, new, [note], tuple(sorted(_covered(removed), key=lambda q: q.name))
 
 
 def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,

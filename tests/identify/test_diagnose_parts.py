@@ -206,4 +206,3 @@ def test_a_pair_tied_again_at_the_solution_is_named_with_the_ratio_it_keeps(thic
     assert lead == pytest.approx(np.sqrt(40e9 * 4.87 * 40e9))  # the product G13 G23 is kept
     assert model.specimen.value(g23) == pytest.approx(lead)
     assert "4.87 G13" not in note and "G23 / G13 = 1, the spec's (reached: 4.87" in note
-
