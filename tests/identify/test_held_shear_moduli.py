@@ -1,12 +1,18 @@
 """Shear moduli that run out of the plausible range in a candidate's refit are held and
 reported (``fitting.driver._held_shear``): the set it returns is what ``AddedEffect.held``
-carries and what the next effect frees again (``held_shear_moduli``)."""
+carries and what the next round's leading candidate frees again
+(``diagnose._leader_freed_again``)."""
 from dataclasses import replace
+from types import SimpleNamespace
+
+import pytest
 
 from fem.specimen import Parameter
 from identify import fit
+from identify.diagnosis import diagnose as diagnose_module
+from identify.diagnosis.diagnose import Candidate
 from identify.engine.updating import FitOptions
-from identify.fitting.driver import _held_shear, prepare_effect
+from identify.fitting.driver import AddedEffect, _held_shear, prepare_effect
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
@@ -35,3 +41,36 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
     start, end = (r.specimen.materials["steel"] for r in (prepared.model, result.model))
     assert (end.G13, end.G23) == (start.G13, start.G23)  # back at the start: here G13 = G23 = G12 by default
     assert result.statistics.reduced_chi2 < 2.0
+
+
+def _candidate(kind: str, sum_squares: float, added=()):
+    """A refitted candidate as the selection sees it: its misfit and criterion only."""
+    statistics = SimpleNamespace(sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3)
+    fit = SimpleNamespace(statistics=statistics, rms_rel_error=1e-3)
+    return Candidate(kind, "", AddedEffect(kind, fit, tuple(added)), 0.0, 0.0)
+
+
+@pytest.mark.parametrize("again_sum_squares, kept", [(10.0, "again"), (500.0, "leader")])
+def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkeypatch, again_sum_squares, kept):
+    """Of a round's candidates, only the one with the lowest criterion that frees no shear
+    moduli itself is refitted with the held ones free (the layerwise candidate, lower but
+    freeing its own, is passed over); its refit replaces it only when the misfit falls,
+    and otherwise the leader stays with a note saying so."""
+    steel = (Parameter("G13", "steel"), Parameter("G23", "steel"))
+    layerwise = _candidate("layerwise", 50.0, steel)
+    leader, other = _candidate("point_mass", 100.0), _candidate("orientation", 200.0)
+    calls = []
+
+    def refit(state, kinds, *args, free_again=(), **kw):
+        calls.append((tuple(kinds), tuple(free_again)))
+        return [_candidate(kinds[0], again_sum_squares, free_again)]
+
+    monkeypatch.setattr(diagnose_module, "_try", refit)
+    out = diagnose_module._leader_freed_again([layerwise, leader, other], steel, None, None, None, (), lambda t: None)
+    assert calls == [(("point_mass",), steel)]
+    assert out[0] is layerwise and out[2] is other
+    if kept == "again":
+        assert out[1].fit.statistics.sum_squares == 10.0
+    else:
+        assert out[1].fit is leader.fit and "not lower: kept without them" in out[1].note
+    assert diagnose_module._leader_freed_again([leader], (), None, None, None, (), lambda t: None) == [leader]
