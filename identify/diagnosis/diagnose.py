@@ -530,8 +530,8 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
     (here), then refitted most promising first (by the linearised bound), each only when
     it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
     pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from;
-    ``free_again``: shear moduli ``state`` holds, freed again with the other effects
-    (``fitting.held_shear_moduli``)."""
+    ``free_again``: shear moduli ``state`` holds, freed again with effects that free none
+    themselves (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
     out, ready = [], []
     for kind in kinds:
         prepared = prepare_effect(state, kind, hints, (starts or {}).get(kind), free_again)

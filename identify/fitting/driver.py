@@ -440,11 +440,11 @@ def held_shear_moduli(state: FitResult, selected: Sequence[AddedEffect]) -> tupl
     """The transverse shear moduli that ``state`` holds because they ran out of range in
     the refit of one of the ``selected`` effects (``_held_shear``) while other physics was
     missing; not those the data do not see (``choose_shear_moduli``, ``reconsidered``).
-    The next effect's refit frees them again (``prepare_effect``'s ``free_again``), so that
-    it combines with the shear instead of competing with it: blind13 (hybrid, 4.7 g sensor),
-    from the layerwise fit with both plies' G13/G23 held, a point mass alone ended at
-    12.6 g and 0.72 % RMS (10x the floor); with them free, 4.2 g at the sensor and
-    0.074 %, consistent with the scatter."""
+    The next round's leading candidate frees them again (``diagnose._leader_freed_again``),
+    so that it combines with the shear instead of competing with it: blind13 (hybrid, a
+    4.7 g sensor), from the layerwise fit with both plies' G13/G23 held, a point mass
+    alone ended at 12.6 g and 0.72 % RMS (10x the floor); with them free, 4.2 g at the
+    sensor and 0.074 %, consistent with the scatter."""
     free = _covered(state.parameters)
     return tuple(dict.fromkeys(p for added in selected for p in added.held if p not in free))
 
