@@ -449,6 +449,11 @@ def held_shear_moduli(state: FitResult, selected: Sequence[AddedEffect]) -> tupl
     return tuple(dict.fromkeys(p for added in selected for p in added.held if p not in free))
 
 
+def frees_any(prepared: Prepared, parameters) -> bool:
+    """Whether the refit ``prepared`` moves any of the plain ``parameters``."""
+    return bool(_covered(prepared.added) & set(parameters))
+
+
 def _covered(parameters) -> set[Parameter]:
     """The plain parameters ``parameters`` move (a tied scale's lead and followers)."""
     return {plain(p) for p in parameters} | {f for p in parameters if isinstance(p, Tied) for f, _ in p.followers}
@@ -573,18 +578,27 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
     if not shear or not _worse(result, state):
         return result, new, []
     specimen = ready.model.specimen
-    tried = [(result, "the screened start")]
-    for start in _shear_starts(specimen, shear) + [CONTINUATION_START]:
-        trial = fit_layers(ready.model.with_values(_shear_values(specimen, shear, start)), measurements,
-                           base + list(new), options, effect_of=effect_of, like=state, explain=False, settle=settle,
-                           pairings=ready.pairings or state.pairings)
-        tried.append((trial, _describe_start(start)))
-        if not _worse(trial, state):
+    starts = ((ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start))
+              for start in _shear_starts(specimen, shear) + [CONTINUATION_START])
+    best, where, count = _first_not_worse(state, ready, result, starts, measurements, base + list(new), effect_of,
+                                          settle, options)
+    note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
+            f"restarted {count} time(s), kept {where or 'the screened start'}")
+    return best, new, [note]
+
+
+def _first_not_worse(state, ready: Prepared, result, starts, measurements, parameters, effect_of, settle, options):
+    """``result`` (a failed refit) refitted from each of ``starts`` ((model, description)
+    pairs) in turn until one ends no worse than ``state``; returns (the lowest misfit, its
+    start's description or "" for ``result``, the number of refits)."""
+    tried = [(result, "")]
+    for model, where in starts:
+        tried.append((fit_layers(model, measurements, parameters, options, effect_of=effect_of, like=state,
+                                 explain=False, settle=settle, pairings=ready.pairings or state.pairings), where))
+        if not _worse(tried[-1][0], state):
             break
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
-    note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
-            f"restarted {len(tried) - 1} time(s), kept {where}")
-    return best, new, [note]
+    return best, where, len(tried) - 1
 
 
 def _other_starts(state, ready: Prepared, result, measurements, parameters, effect_of, settle, options):
@@ -595,17 +609,13 @@ def _other_starts(state, ready: Prepared, result, measurements, parameters, effe
     notes)."""
     if not ready.others or not _worse(result, state):
         return result, []
-    tried = [(result, None)]
-    for start in ready.others:
-        tried.append((fit_layers(start, measurements, parameters, options, effect_of=effect_of, like=state,
-                                 explain=False, settle=settle, pairings=ready.pairings or state.pairings), start))
-        if not _worse(tried[-1][0], state):
-            break
-    best, start = min(tried, key=lambda t: t[0].statistics.sum_squares)
-    if start is None:
-        return result, [f"the refit ended worse than without {ready.kind}; from {len(tried) - 1} other start(s) too"]
+    starts = ((m, _described(ready.added, m)) for m in ready.others)
+    best, where, count = _first_not_worse(state, ready, result, starts, measurements, parameters, effect_of, settle,
+                                          options)
+    if not where:
+        return result, [f"the refit ended worse than without {ready.kind}; from {count} other start(s) too"]
     return best, [f"the refit from the screened start ended worse than without {ready.kind} (RMS "
-                  f"{100 * result.statistics.rms_rel_error:.3g} %): refitted from {_described(ready.added, start)}, "
+                  f"{100 * result.statistics.rms_rel_error:.3g} %): refitted from {where}, "
                   f"RMS {100 * best.statistics.rms_rel_error:.3g} %"]
 
 
