@@ -47,9 +47,9 @@ from ..reporting import html_report as h
 from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
-from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, add_effect, better_start, continued,
-                              held_shear_moduli, point_mass_hints, point_mass_starts, prepare_effect, released,
-                              restarted_from_spec, spec_start, with_determined_shear)
+from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
+                              continued, frees_any, held_shear_moduli, point_mass_hints, point_mass_starts,
+                              prepare_effect, released, restarted_from_spec, spec_start, with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -505,8 +505,14 @@ def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, mea
     if not held or not fitted:
         return candidates
     leader = min(fitted, key=lambda c: c.bic)
-    say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
-    again = _try(state, [leader.kind], measurements, nominal, hints, None, 1, free_again=held)[0]
+    prepared = prepare_effect(state, leader.kind, hints, free_again=held)
+    if isinstance(prepared, AddedEffect):
+        again = _candidate(state, prepared)
+    elif not frees_any(prepared, held):
+        return candidates  # the data do not see them here (``choose_shear_moduli``): the refit would repeat
+    else:
+        say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
+        again = _candidate(state, _add(_job(state, prepared, measurements, nominal, hints, None)))
     if again.fit is None or not again.fit.statistics.sum_squares < leader.fit.statistics.sum_squares:
         note = (f"{leader.kind} refitted with the held G13, G23 free again: "
                 + (again.error if again.fit is None else f"RMS {100 * again.rms_rel_error:.3g} %, not lower: "
@@ -517,6 +523,12 @@ def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, mea
 
 def _frees_shear(parameters) -> bool:
     return any(p.kind in SHEAR_MODULI for p in parameters)
+
+
+def _job(state: FitResult, prepared: Prepared, measurements: Measurements, nominal, hints, below) -> dict:
+    """The keyword arguments of one candidate's refit (``_add``); ``below``: ``prune_below``."""
+    return dict(state=state, kind=prepared.kind, measurements=measurements, nominal=nominal, hints=hints,
+                settle="quick", skip_singular=True, options=CANDIDATE_OPTIONS, prune_below=below, prepared=prepared)
 
 
 def _add(job: dict):
@@ -545,9 +557,7 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
         # keep the right physics from being refitted.
         explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.selectable]
         below = max(explained) if explained else None
-        jobs = [dict(state=state, kind=r.kind, measurements=measurements, nominal=nominal, hints=hints,
-                     settle="quick", skip_singular=True, options=CANDIDATE_OPTIONS, prune_below=below, prepared=r)
-                for r in ready[i:i + (n_workers if pool else 1)]]
+        jobs = [_job(state, r, measurements, nominal, hints, below) for r in ready[i:i + (n_workers if pool else 1)]]
         out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
     return out
 
@@ -720,13 +730,12 @@ def _layerwise_instead(state: FitResult, selected, kinds, measurements: Measurem
     more complete theory, not a new effect that must bring ``MIN_GAIN``) or, with no more
     free parameters, within ``COMPLETE_MARGIN`` x c of the state's (``_more_complete``).
     On blind19 it ends at 0.0439 % against 0.0572 % with two moduli more, gain / c 2.2.
-    Needed because the
-    layerwise candidate is judged in the round where the shear first enters, with other
-    effects still missing: its ply shear moduli run out and are held, it loses to the
-    single shear layer and is not refitted again (``_held_back``).  blind19 (a hybrid with a
-    sensor and turned plies): transverse_shear + point_mass + orientation reached the
-    floor's misfit with a property 4.9 std off; the oracle's single-shear-layer model is
-    3.1 std off, its layerwise model 2.1."""
+    Needed because the layerwise candidate is judged in the round where the shear first
+    enters, with other effects still missing: its ply shear moduli run out and are held,
+    it loses to the single shear layer and is not refitted again (``_held_back``).  blind19
+    (a hybrid with a sensor and turned plies): transverse_shear + point_mass + orientation
+    reached the floor's misfit with a property 4.9 std off; the oracle's single-shear-layer
+    model is 3.1 std off, its layerwise model 2.1."""
     names = {c.kind for c in selected}
     if "layerwise" not in kinds or "layerwise" in names or not names & set(REFINES["layerwise"]):
         return None

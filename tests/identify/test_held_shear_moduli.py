@@ -45,8 +45,8 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
 
 def _candidate(kind: str, sum_squares: float, added=()):
     """A refitted candidate as the selection sees it: its misfit and criterion only."""
-    statistics = SimpleNamespace(sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3)
-    fit = SimpleNamespace(statistics=statistics, rms_rel_error=1e-3)
+    statistics = SimpleNamespace(sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3, scatter_known=False)
+    fit = SimpleNamespace(statistics=statistics, rms_rel_error=1e-3, finished=True)
     return Candidate(kind, "", AddedEffect(kind, fit, tuple(added)), 0.0, 0.0)
 
 
@@ -55,18 +55,24 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkey
     """Of a round's candidates, only the one with the lowest criterion that frees no shear
     moduli itself is refitted with the held ones free (the layerwise candidate, lower but
     freeing its own, is passed over); its refit replaces it only when the misfit falls,
-    and otherwise the leader stays with a note saying so."""
+    and otherwise the leader stays with a note saying so.  When the data do not see the
+    held moduli at this state (none of them would be freed), nothing is refitted."""
     steel = (Parameter("G13", "steel"), Parameter("G23", "steel"))
     layerwise = _candidate("layerwise", 50.0, steel)
     leader, other = _candidate("point_mass", 100.0), _candidate("orientation", 200.0)
     calls = []
 
-    def refit(state, kinds, *args, free_again=(), **kw):
-        calls.append((tuple(kinds), tuple(free_again)))
-        return [_candidate(kinds[0], again_sum_squares, free_again)]
+    def prepare(state, kind, hints=(), start=None, free_again=()):
+        calls.append(((kind,), tuple(free_again)))
+        return SimpleNamespace(kind=kind, added=tuple(free_again))
 
-    monkeypatch.setattr(diagnose_module, "_try", refit)
-    out = diagnose_module._leader_freed_again([layerwise, leader, other], steel, None, None, None, (), lambda t: None)
+    def refit(job):
+        return _candidate(job["kind"], again_sum_squares, job["prepared"].added).added
+
+    monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
+    monkeypatch.setattr(diagnose_module, "_add", refit)
+    state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))  # the round's start: only its criterion is read
+    out = diagnose_module._leader_freed_again([layerwise, leader, other], steel, state, None, None, (), lambda t: None)
     assert calls == [(("point_mass",), steel)]
     assert out[0] is layerwise and out[2] is other
     if kept == "again":
@@ -74,3 +80,7 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkey
     else:
         assert out[1].fit is leader.fit and "not lower: kept without them" in out[1].note
     assert diagnose_module._leader_freed_again([leader], (), None, None, None, (), lambda t: None) == [leader]
+    # The data do not see them at this state (nothing of them freed): no refit that would repeat the leader's.
+    monkeypatch.setattr(diagnose_module, "prepare_effect", lambda *a, **k: SimpleNamespace(kind="point_mass", added=()))
+    monkeypatch.setattr(diagnose_module, "_add", lambda job: pytest.fail("refitted without freeing anything"))
+    assert diagnose_module._leader_freed_again([leader], steel, state, None, None, (), lambda t: None) == [leader]
