@@ -174,6 +174,7 @@ class Candidate:
                 "parameters": self.effect_values(), "std": self.effect_std(),
                 "plausible": self.plausible, "implausible": list(self.added.implausible),
                 "condition_number": finite_or_none(check.condition_number) if check else None,
+                "seconds": finite_or_none(self.added.seconds),
                 "note": " ".join(x for x in (self.note, self.error) if x)}
 
 
@@ -216,11 +217,13 @@ class Step:
     chosen: Candidate | None
     reason: str
     skipped: tuple[str, ...] = ()   # refinements not tried (what they refine did not pay)
+    seconds: float = float("nan")   # the round's wall time
 
     def to_dict(self) -> dict:
         return {"round": self.number, "with": list(self.selected_before), "rms_rel_error": self.start.rms_rel_error,
                 "candidates": [c.to_dict() for c in self.candidates], "not_tried": list(self.skipped),
-                "chosen": self.chosen.kind if self.chosen else None, "reason": self.reason}
+                "chosen": self.chosen.kind if self.chosen else None, "reason": self.reason,
+                "seconds": finite_or_none(self.seconds)}
 
 
 @dataclass(frozen=True)
@@ -309,14 +312,17 @@ class Diagnosis:
                       "explain"]
         for step in self.steps:
             start = " + ".join(step.selected_before) or "the baseline"
-            lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %)",
-                      f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s}  status / parameters"]
+            took = f", {step.seconds:.0f} s" if math.isfinite(step.seconds) else ""
+            lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %{took})",
+                      f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s} {'refit s':>7s}  "
+                      "status / parameters"]
             for c in step.candidates:
                 values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
                 gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
                 status = c.fit.status.value if c.fit else _not_fitted(c).replace("_", " ")
                 mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
-                lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain}  {status}  {values}{mark}".rstrip())
+                lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain} {c.added.seconds:7.0f}  {status}  "
+                             f"{values}{mark}".rstrip())
                 if not c.fit:
                     lines.append(f"  {'':17s} {c.error}")
             if step.skipped:
@@ -587,6 +593,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
     pool = None
     try:
         for number in range(1, len(kinds) + 1):
+            round_started = time.perf_counter()
             trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
             if not trying:
                 steps.append(Step(number, tuple(c.kind for c in selected), state, (), None,
@@ -644,7 +651,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                           f"stop: the best, {best.kind}, does not pay for itself (gain / c = {best.scaled_gain:.1f} "
                           f"<= {MIN_GAIN:g})")
                 reason += _signs(ordered, best) + "".join(held.values())
-                steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped)))
+                steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped),
+                                  time.perf_counter() - round_started))
                 break
             reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
             lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
@@ -669,7 +677,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                                 added=tuple(p for p in polished.parameters if p not in state.parameters))
                 best = _candidate(state, added)
                 ordered = [best if c.kind == best.kind else c for c in ordered]
-            steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped)))
+            steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped),
+                              time.perf_counter() - round_started))
             selected.append(best)
             state = best.fit
             if state.statistics.consistent:
@@ -679,6 +688,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
     finally:
         if pool is not None:
             pool.shutdown()
+    completion_started = time.perf_counter()
     completion = _completed(state, selected, kinds, measurements, nominal, say) if selected else None
     if completion is not None:
         before = tuple(c.kind for c in selected)
@@ -687,7 +697,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                   if completion.kind == "layerwise" else
                   f"add {completion.kind} beside transverse_shear (gain / c = {completion.scaled_gain:.1f}): "
                   "the physics every real plate has besides, with no parameter more, and the misfit falls")
-        steps.append(Step(len(steps) + 1, before, state, (completion,), completion, reason))
+        steps.append(Step(len(steps) + 1, before, state, (completion,), completion, reason,
+                          seconds=time.perf_counter() - completion_started))
         selected.append(completion)
         state = completion.fit
     final = _final(state, measurements, baseline, selected, nominal, say) if selected else None
