@@ -38,7 +38,6 @@ from typing import Callable
 import pandas as pd
 
 from fem.effects import REGISTRY, effect
-from fem.laminates.material import SHEAR_MODULI
 from fem.model import SpecimenModel
 from fem.solver.sensitivity import SINGULAR_ABOVE
 from fem.numbers import finite_or_none
@@ -49,7 +48,8 @@ from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
                               continued, frees_any, held_shear_moduli, point_mass_hints, point_mass_starts,
-                              prepare_effect, released, restarted_from_spec, spec_start, with_determined_shear)
+                              prepare_effect, released, restarted_from_spec, shear_moduli_in, spec_start,
+                              with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -507,7 +507,7 @@ def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, mea
     skins' G13/G23 ran out again in each), and the leader is where the freed moduli
     decide the answer (blind13: the point mass alone 12.6 g, 0.72 % RMS, implausible; with
     the plies' G13/G23 free, 4.2 g at the sensor, 0.074 %, consistent)."""
-    fitted = [c for c in candidates if c.fit is not None and not _frees_shear(c.added.added)]
+    fitted = [c for c in candidates if c.fit is not None and not shear_moduli_in(c.added.added)]
     if not held or not fitted:
         return candidates
     leader = min(fitted, key=lambda c: c.bic)
@@ -526,9 +526,6 @@ def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, mea
         return [replace(c, note="; ".join(filter(None, [c.note, note]))) if c is leader else c for c in candidates]
     return [again if c is leader else c for c in candidates]
 
-
-def _frees_shear(parameters) -> bool:
-    return any(p.kind in SHEAR_MODULI for p in parameters)
 
 
 def _job(state: FitResult, prepared: Prepared, measurements: Measurements, nominal, hints, below) -> dict:

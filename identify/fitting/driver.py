@@ -360,7 +360,7 @@ def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | Non
     covered = _covered(base)
     new = [p for p in on.free if p not in covered]
     notes = []
-    held = [] if any(p.kind in SHEAR_MODULI for p in new) else [p for p in free_again if p not in covered]
+    held = [] if shear_moduli_in(new) else [p for p in free_again if p not in covered]
     if held:
         new += held
         notes.append(f"G13, G23 of {', '.join(sorted({p.target for p in held}))} held in the fit it adds to: free "
@@ -368,7 +368,7 @@ def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | Non
     try:
         model, sensitivities, started_at, others = _best_start(on, origin, base + new)
         notes += [started_at] if started_at else []
-        shear = [p for p in new if p.kind in SHEAR_MODULI]
+        shear = shear_moduli_in(new)
         if shear:
             choice = choose_shear_moduli(sensitivities, base + [p for p in new if p not in shear], shear,
                                          model.specimen)
@@ -518,7 +518,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
         progress(f"fitting with {kind}")
     try:
         if kind == "point_mass":
-            result, rivals = _point_mass(state, measurements, hints, base + _shear_targets(new), effect_of, settle,
+            result, rivals = _point_mass(state, measurements, hints, base + shear_moduli_in(new), effect_of, settle,
                                          progress, options)
             notes += rivals
         else:
@@ -559,7 +559,8 @@ def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
     return values
 
 
-def _shear_targets(parameters) -> list[Parameter]:
+def shear_moduli_in(parameters) -> list[Parameter]:
+    """The transverse shear moduli (G13, G23) among ``parameters``."""
     return [p for p in parameters if p.kind in SHEAR_MODULI]
 
 
@@ -574,7 +575,7 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
     result: the other ``SHEAR_STARTS`` and ``CONTINUATION_START`` (shear moduli so stiff
     that the model starts at the fit without shear, from where every step can only lower
     the misfit) are tried, the lowest misfit kept.  Returns (result, parameters, notes)."""
-    shear = _shear_targets(new)
+    shear = shear_moduli_in(new)
     if not shear or not _worse(result, state):
         return result, new, []
     specimen = ready.model.specimen
@@ -632,7 +633,7 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     held: list[str] = []
     removed: list[Parameter] = []
     for _ in nominal.materials:
-        shear = _shear_targets(new)
+        shear = shear_moduli_in(new)
         wandered = sorted({p.target for p in shear if implausible([p], result.specimen, nominal, first_hz)})
         if not wandered:
             break
