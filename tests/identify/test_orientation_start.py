@@ -76,3 +76,19 @@ def test_a_refit_that_ends_worse_than_its_state_is_refitted_from_the_other_start
     assert len(notes) == 1 and "refitted from layer1.angle = 3 deg" in notes[0]
     kept, none = _other_starts(state, prepared, state, data, [], state.effect_of, "quick", FitOptions())
     assert kept is state and none == []  # not worse: nothing refitted
+
+
+def test_only_layers_with_a_stated_lay_up_tolerance_are_turned():
+    """Where the spec states ``angle_deg_std`` for some layers (the plies), only their axes
+    are turned: a layer given none (a foam core) has no axes, and its angle would only trade
+    with its free G13 and G23 (blind06: the core ran to -37 deg).  With no tolerance stated,
+    every identified layer is turned, as before."""
+    from fem.effects import REGISTRY
+    from fem.inputs import InputStd
+
+    model = start_model()
+    orientation = REGISTRY["orientation"]
+    turned = lambda m: [p.target for s in orientation.free(m) for p in s.free]  # noqa: E731
+    assert turned(model) == ["layer1", "layer2", "layer3"]
+    plies = tuple(InputStd("angle", label, math.radians(3.0)) for label in ("layer1", "layer3"))
+    assert turned(replace(model, input_std=plies)) == ["layer1", "layer3"]
