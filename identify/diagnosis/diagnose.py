@@ -557,8 +557,11 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
     ready.sort(key=lambda r: -r.bound)
     for i in range(0, len(ready), n_workers if pool else 1):
         # Only an answer may prune: an implausible estimate that explains much must not
-        # keep the right physics from being refitted.
-        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out if c.selectable]
+        # keep the right physics from being refitted, nor may one that does not pay for
+        # itself (blind02, held-out: a thickness refit at gain / c 2.2 pruned the
+        # orientation, whose linearised bound is second order in the angles).
+        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out
+                     if c.selectable and c.scaled_gain > MIN_GAIN]
         below = max(explained) if explained else None
         jobs = [_job(state, r, measurements, nominal, hints, below) for r in ready[i:i + (n_workers if pool else 1)]]
         out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
