@@ -21,7 +21,7 @@ OTHER_ORDER = {"blind16_hybrid", "blind19_hybrid"}
 
 def _materials_drawn(hash_seed: str) -> str:
     code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import blind; "
-            "print(json.dumps([c['materials'] for c in blind.draw_cases()], sort_keys=True))")
+            "print(json.dumps([c['materials'] for c in blind.all_cases()], sort_keys=True))")
     env = dict(os.environ, PYTHONHASHSEED=hash_seed)
     return subprocess.run([sys.executable, "-c", code, str(SOLID3D)], env=env, capture_output=True, text=True,
                           check=True).stdout
@@ -34,11 +34,27 @@ def test_draws_do_not_depend_on_the_hash_seed():
     assert _materials_drawn("1") == _materials_drawn("4")
 
 
-@pytest.mark.parametrize("case", blind.draw_cases(), ids=lambda c: c["name"])
+HALVES = blind.halves(blind.all_cases())
+
+
+def test_the_index_holds_the_halves():
+    """The stored index is the generator's: the first series all development since run 8,
+    the second series (blind25-36) the held-out half."""
+    index = json.loads((blind.OUT / "index.json").read_text())
+    assert index["cases"] == HALVES
+    assert sum(h == "heldout" for h in HALVES.values()) == blind.N_CASES_2
+
+
+@pytest.mark.parametrize("case", blind.all_cases(), ids=lambda c: c["name"])
 def test_stored_records_are_the_draws(case):
-    """Every stored case holds its draw: the choices exactly, the materials to the 7
-    digits stored (except the two laminates drawn in the other ply order)."""
+    """Every case is stored with its draw: the choices exactly, the materials to the 7
+    digits stored (except the two laminates drawn in the other ply order), its half and
+    its series' seed."""
+    if case["name"] in blind.PENDING:
+        assert not (blind.OUT / f"{case['name']}.json").exists()
+        pytest.skip("not solved yet: a sensor on a sandwich waits for a footprint model (blind.PENDING)")
     record = json.loads((blind.OUT / f"{case['name']}.json").read_text())
+    assert (record["half"], record["seed"]) == (HALVES[case["name"]], case["seed"])
     assert record["choices"]["true_layers"] == [dict(material=m, thickness_mm=t, angle_deg=a)
                                                 for m, t, a in case["layers"]]
     assert record["choices"]["misalignment_max_deg"] == case["misalignment_max_deg"]

@@ -32,9 +32,12 @@ sensor and angles) their shape pairs with (MAC of w on a 13 x 11 grid, optimal
 assignment), so that the study can rank them without storing shapes.
 
 The split into a development and a held-out half is drawn once from ``SPLIT_SEED`` and
-stored in ``index.json`` with both seeds.
+stored in ``index.json`` with both seeds.  That held-out half was run once (run 8, commit
+7874d5f) and its failures were then worked on, so it joined the development half; a second
+series of ``N_CASES_2`` cases drawn from ``SEED_2`` (blind25-blind36) is the held-out half
+since (``halves``).
 
-    python tests/data/solid3d/blind.py [--cases N] [--only NAME ...] [--check]
+    python tests/data/solid3d/blind.py [--only NAME ...] [--check]
 """
 from __future__ import annotations
 
@@ -60,6 +63,15 @@ OUT = HERE / "blind"
 SEED = 20_2026
 SPLIT_SEED = 20_2027
 N_CASES = 24
+#: The second series: the held-out half after run 8 (the first series' held-out half had
+#: been run and worked on).
+SEED_2 = 20_2028
+N_CASES_2 = 12
+#: Cases not solved yet: the second series' sandwiches with a sensor.  A point mass on a
+#: shear-soft sandwich is singular in the solid model and in the project's plate model
+#: alike (blind03: the sixth mode moves 2 % from the coarse to the medium mesh in each), so
+#: they wait for a sensor modelled over its footprint in both.
+PENDING = ("blind27_sandwich", "blind33_sandwich")
 FAMILIES = ("hybrid", "cross_ply", "sandwich")
 FLEXURAL_MODES = 10
 #: Elastic modes asked of the full model (after its six rigid-body modes).
@@ -180,9 +192,23 @@ REGRESSION = (
 )
 
 
-def draw_cases(n: int = N_CASES, seed: int = SEED) -> list[dict]:
+def draw_cases(n: int = N_CASES, seed: int = SEED, first: int = 0) -> list[dict]:
+    """``n`` cases from one generator seeded with ``seed``, numbered from ``first`` + 1
+    (the family follows the number)."""
     rng = np.random.default_rng(seed)
-    return [draw_case(rng, i) for i in range(n)]
+    return [dict(draw_case(rng, first + i), seed=seed) for i in range(n)]
+
+
+def all_cases() -> list[dict]:
+    """Both series: the first (split into halves) and the second (held-out)."""
+    return draw_cases() + draw_cases(N_CASES_2, SEED_2, first=N_CASES)
+
+
+def halves(cases: list[dict]) -> dict[str, str]:
+    """Every case's half: the first series all development (its held-out half, drawn by
+    ``split``, was run once in run 8 and then worked on), the second series held-out."""
+    first = [c["name"] for c in cases if c["seed"] == SEED]
+    return {**{name: "dev" for name in split(first)}, **{c["name"]: "heldout" for c in cases if c["seed"] != SEED}}
 
 
 def split(names: list[str], seed: int = SPLIT_SEED) -> dict[str, str]:
@@ -292,7 +318,7 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
                         mac=m)
                    for f, lab, sh, r, m in zip(s["frequency_hz"], s["labels"], s["w_share"], rank, mac, strict=True)]))
     return dict(
-        case=case["name"], family=case["family"], half=half, seed=SEED, split_seed=SPLIT_SEED,
+        case=case["name"], family=case["family"], half=half, seed=case.get("seed"), split_seed=SPLIT_SEED,
         choices=dict(length_mm=case["length_mm"], width_mm=case["width_mm"],
                      nominal_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["nominal_layers"]],
                      true_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
@@ -355,7 +381,6 @@ def _write(path: Path, data) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--cases", type=int, default=N_CASES)
     parser.add_argument("--only", action="append", help="case name(s) to (re)run")
     parser.add_argument("--check", action="store_true",
                         help="coarse against medium mesh, the first hybrid and the first sandwich")
@@ -366,8 +391,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if shutil.which("ccx") is None:
         parser.error("ccx (CalculiX) is not on the PATH; on Debian: apt-get install calculix-ccx")
-    cases = draw_cases(args.cases)
-    halves = split([c["name"] for c in cases])
+    cases = all_cases()
+    half = halves(cases)
     if args.regression:
         folder = HERE / "regression"
         folder.mkdir(exist_ok=True)
@@ -388,17 +413,17 @@ def main(argv=None) -> int:
     if args.check_stored:
         _write(args.out / "mesh_check.json", dict(stored_references=stored_convergence()))
         return 0
-    _write(args.out / "index.json", dict(seed=SEED, split_seed=SPLIT_SEED, cases=halves,
+    _write(args.out / "index.json", dict(seed=SEED, split_seed=SPLIT_SEED, seed_2=SEED_2, cases=half,
                                          script="tests/data/solid3d/blind.py"))
     for case in cases:
-        if args.only and case["name"] not in args.only:
+        if (args.only and case["name"] not in args.only) or (not args.only and case["name"] in PENDING):
             continue
         path = args.out / f"{case['name']}.json"
         if path.exists() and not args.only:
             continue
         if path.exists():  # re-solved: the plate its record holds (blind16 and 19 drew the plies the other way)
             case["materials"] = json.loads(path.read_text())["materials"]
-        result = run_case(case, LEVEL, halves[case["name"]])
+        result = run_case(case, LEVEL, half[case["name"]])
         _write(path, result)
         print(f"{case['name']}: {result['made_with']['wall_time_s']:.0f} s "
               + " | ".join(f"{c['name']} {c['modes'][0]['frequency_hz']:.1f} Hz" for c in result["configurations"]),
