@@ -238,6 +238,7 @@ class Diagnosis:
     steps: tuple[Step, ...] = ()
     final: FitResult | None = None
     seconds: float = float("nan")
+    dropped: tuple[str, ...] = ()   # chosen in a round, taken out at the end (``_determined_final``)
 
     @property
     def at_noise_level(self) -> bool:
@@ -245,7 +246,7 @@ class Diagnosis:
 
     @property
     def selected(self) -> tuple[Candidate, ...]:
-        return tuple(s.chosen for s in self.steps if s.chosen is not None)
+        return tuple(s.chosen for s in self.steps if s.chosen is not None and s.chosen.kind not in self.dropped)
 
     @property
     def explained(self) -> bool:
@@ -266,6 +267,9 @@ class Diagnosis:
         odd = [c.kind for c in self.selected if not c.plausible]
         if odd:
             text += f"; implausible estimate of {', '.join(odd)}: read it as a sign of what is missing, not a value"
+        if self.dropped:
+            text += (f"; {', '.join(self.dropped)} taken out: with it the refit fitted but did not determine its "
+                     "parameters")
         if not final.converged:
             text += "; the refit still does not explain the data"
         return text
@@ -283,6 +287,7 @@ class Diagnosis:
                           "parameters": c.effect_values(), "plausible": c.plausible} for c in self.selected],
             "path": [s.to_dict() for s in self.steps],
             "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
+            "dropped": list(self.dropped),
             "seconds": finite_or_none(self.seconds),
         }
 
@@ -702,8 +707,41 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         selected.append(completion)
         state = completion.fit
     final = _final(state, measurements, baseline, selected, nominal, say) if selected else None
+    dropped = _determined_final(final, steps, selected, measurements, baseline, nominal, say)
+    if dropped is not None:
+        final, step = dropped
+        steps.append(step)
     first = steps[0].candidates if steps else ()
-    return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started)
+    return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started,
+                     tuple(c.kind for c in (steps[-1].candidates if dropped else ())))
+
+
+def _determined_final(final: FitResult | None, steps: list[Step], selected: list[Candidate],
+                      measurements: Measurements, baseline: FitResult, nominal, say) -> tuple[FitResult, Step] | None:
+    """When the final refit fits the frequencies but does not determine its parameters
+    (``not_identifiable``: the sensitivity matrix singular at the solution), the last
+    selected effect is taken out and the selection before it refitted in full; kept (the
+    new final and a step that says why) when that refit is determined.  A candidate's own
+    test compares its conditioning with the start's (``Candidate.singular``), which on a
+    model already near the limit lets an effect through that tips the final refit over
+    it, where the layer properties have no std at all.  blind22 (a hybrid without a
+    sensor): a 0.82 g point mass on the layerwise model took the misfit below the noise
+    and left the final refit not identifiable.  Only with two effects or more selected:
+    without the one, the baseline would be the answer and its misfit is what was to be
+    explained."""
+    if final is None or final.status is not FitStatus.NOT_IDENTIFIABLE or len(selected) < 2:
+        return None
+    last = selected[-1]
+    before = next(s for s in reversed(steps) if s.chosen is last)
+    say(f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without {last.kind}")
+    again = _final(before.start, measurements, baseline, selected[:-1], nominal, say)
+    if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == "singular":
+        return None
+    reason = (f"drop {last.kind}: the refit with it fits the frequencies (RMS {100 * final.rms_rel_error:.3g} %) but "
+              f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g}); "
+              f"without it the refit's parameters are determined (RMS {100 * again.rms_rel_error:.3g} %, "
+              f"{again.status.value}): an effect the data cannot tell from the layers is not an answer")
+    return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
 
 
 def _continue_unfinished(candidates: list[Candidate], measurements: Measurements, state: FitResult,

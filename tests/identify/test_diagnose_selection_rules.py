@@ -10,8 +10,9 @@ import pytest
 from fem.solver.attachments import PointMass
 from identify.diagnosis.compare import compare
 from identify.diagnosis import diagnose as diagnose_module
-from identify.diagnosis.diagnose import Candidate, _candidate, _signs
+from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
 from identify.fitting.driver import AddedEffect, add_effect, point_mass_hints
+from identify.engine.result import FitStatus
 from identify.fitting.precheck import Precheck
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
@@ -162,3 +163,52 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
     out = diagnose_module._try(state, ["orientation", "thickness"], None, None, (), None, 1)
     assert refitted == (["thickness"] if pruned else ["thickness", "orientation"])
     assert [c.kind for c in out] == ["thickness", "orientation"]
+
+
+def _fit(status, rms=1e-3, condition=1e3):
+    """A refit as ``_determined_final`` reads it: status, misfit and conditioning."""
+    verdict = "singular" if condition > 1e7 else "good"
+    return SimpleNamespace(status=status, rms_rel_error=rms, converged=status is FitStatus.CONVERGED,
+                           uncertainty=SimpleNamespace(condition_number=condition, verdict=verdict))
+
+
+def _chosen(kind):
+    return Candidate(kind, "", AddedEffect(kind, None), 100.0, 100.0)
+
+
+@pytest.mark.parametrize("final_status, n_selected, again_condition, dropped", [
+    (FitStatus.NOT_IDENTIFIABLE, 2, 1e4, True),     # blind22: the point mass taken out
+    (FitStatus.NOT_IDENTIFIABLE, 2, 1e9, False),    # without it no better determined: kept
+    (FitStatus.NOT_IDENTIFIABLE, 1, 1e4, False),    # the only effect: the baseline would be the answer
+    (FitStatus.CONVERGED, 2, 1e4, False),           # determined: nothing to do
+])
+def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(monkeypatch, final_status, n_selected,
+                                                                         again_condition, dropped):
+    """The final refit fits the frequencies but its sensitivity matrix is singular: the
+    last selected effect is taken out and the selection before it refitted from the state
+    it was chosen on; the new final is kept only when it is determined, and only when an
+    effect remains."""
+    layerwise, mass = _chosen("layerwise"), _chosen("point_mass")
+    selected = [layerwise, mass][:n_selected] if n_selected == 2 else [mass]
+    starts = {c.kind: object() for c in selected}
+    steps = [Step(i + 1, (), starts[c.kind], (c,), c, "add") for i, c in enumerate(selected)]
+    final = _fit(final_status, rms=2e-4, condition=3e9)
+    calls = []
+
+    def refit(state, measurements, baseline, chosen, nominal, say):
+        calls.append((state, [c.kind for c in chosen]))
+        return _fit(FitStatus.POOR_FIT, rms=4e-4, condition=again_condition)
+
+    monkeypatch.setattr(diagnose_module, "_final", refit)
+    out = diagnose_module._determined_final(final, steps, selected, None, None, None, lambda text: None)
+    if not dropped:
+        assert out is None
+        return
+    again, step = out
+    assert calls == [(starts["point_mass"], ["layerwise"])]  # from the state point_mass was chosen on
+    assert step.chosen is None and step.candidates == (mass,) and step.reason.startswith("drop point_mass")
+    comparison = SimpleNamespace(at_noise_level=False)
+    diagnosis = Diagnosis(_fit(FitStatus.POOR_FIT, rms=1e-2), comparison, (), tuple(steps) + (step,), again,
+                          dropped=("point_mass",))
+    assert [c.kind for c in diagnosis.selected] == ["layerwise"]
+    assert "point_mass taken out" in diagnosis.verdict
