@@ -56,7 +56,8 @@ UD_NU23 = 0.45
 #: each): the ply class's relation, then (G13, G23) / G12: fibre plies have G23 ~ 0.6-0.9
 #: G12, wood's rolling shear G23 ~ G12 / 10-20, and from G23 = G12 a refit stops in a
 #: local minimum there (the 3-D spruce reference: 1.1 % RMS left, against the noise level
-#: from G12 / 16).
+#: from G12 / 16).  The starts with G23 != G13 are for unidirectional plies (and wood) only
+#: (``_shear_starts``).
 SHEAR_STARTS = (TRANSVERSELY_ISOTROPIC, (1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
 #: The effects that free transverse shear moduli.
 SHEAR_EFFECTS = ("transverse_shear", "thick_plate", "layerwise")
@@ -430,9 +431,12 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
         raise LayerIdError("no transverse-shear start is a valid material: " + ", ".join(
             f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted))
     _, trial, sensitivities, start = best
+    alike = sorted({p.target for p in defaulted if not _unidirectional(specimen.materials[p.target])})
     note = "" if start == (1.0, 1.0) else (
         f"the refit started at {_describe_start(start)} for {', '.join(sorted({p.target for p in defaulted}))} "
-        f"(of {len(starts)} starts, the lowest misfit after one linearised step; G13 = G23 = G12 is only the default)")
+        + (f"(G23 = G13 for {', '.join(alike)}, no unidirectional ply) "
+           if alike and start != TRANSVERSELY_ISOTROPIC and start[0] != start[1] else "")
+        + f"(of {len(starts)} starts, the lowest misfit after one linearised step; G13 = G23 = G12 is only the default)")
     return trial, sensitivities, note
 
 
@@ -465,10 +469,11 @@ def _unidirectional(material) -> bool:
 
 
 def _shear_starts(specimen: Specimen, shear) -> list:
-    """``SHEAR_STARTS`` for the shear moduli ``shear``: the ply-class start only where a
-    material of them is a unidirectional ply (elsewhere it is G13 = G23 = G12)."""
+    """``SHEAR_STARTS`` for the shear moduli ``shear``: the ply-class start and the starts
+    with G23 != G13 only where a material of them is a unidirectional ply (``_shear_values``
+    gives the others G23 = G13)."""
     ud = any(_unidirectional(specimen.materials[p.target]) for p in shear)
-    return [s for s in SHEAR_STARTS if s != TRANSVERSELY_ISOTROPIC or ud]
+    return [s for s in SHEAR_STARTS if ud or (s != TRANSVERSELY_ISOTROPIC and s[0] == s[1])]
 
 
 def _describe_start(start) -> str:
@@ -546,15 +551,18 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
 def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
     """The shear moduli ``shear`` (a tied one with its followers) [Pa] at ``start``, each of
     its own material: (f13, f23) for G13 = f13 G12 and G23 = f23 G12, or
-    ``TRANSVERSELY_ISOTROPIC``."""
+    ``TRANSVERSELY_ISOTROPIC``.  A material that is no unidirectional ply (a fabric, a foam,
+    a metal: E1 < ``UD_ANISOTROPY`` E2) takes G23 = G13: its two transverse planes are
+    alike (blind18's balanced carbon fabric skins started at G23 = G12 / 16, wood's rolling
+    shear, and the final refit kept that ratio, G23 = 0.84 GPa against G13 = 13 GPa)."""
     values = {}
     for p in shear:
         for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
             m = specimen.materials[q.target]
             if start == TRANSVERSELY_ISOTROPIC:
                 value = m.E2 / (2 * (1 + UD_NU23)) if q.kind == "G23" and _unidirectional(m) else m.G12
-            else:
-                value = (start[0] if q.kind == "G13" else start[1]) * m.G12
+            else:  # a material that is no unidirectional ply is about isotropic in its plane: G23 = G13
+                value = (start[0] if q.kind == "G13" or not _unidirectional(m) else start[1]) * m.G12
             values[Parameter(q.kind, q.target)] = value
     return values
 
