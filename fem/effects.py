@@ -190,13 +190,15 @@ def _plate_mass(specimen) -> float:
 
 class PointMassEffect(Effect):
     kind = "point_mass"
-    description = "a mass at a point (an accelerometer, a glue blob): mass and position"
-    keys = ("mass_g", "x_mm", "y_mm", "label")
+    description = ("a mass at a point (an accelerometer, a glue blob): mass and position; base_mm, the side of the "
+                   "sensor's square footprint, spreads it over that")
+    keys = ("mass_g", "x_mm", "y_mm", "label", "base_mm")
 
     def fixed(self, model, table):
         self._check(table)
         mass = PointMass(self._number(table, "mass_g") * 1e-3, self._number(table, "x_mm") * 1e-3,
-                         self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)))
+                         self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)),
+                         self._number(table, "base_mm", 0.0) * 1e-3)
         plate = _plate_mass(model.specimen)
         if mass.mass > plate:
             raise SpecError(f"{self._where}.mass_g = {1e3 * mass.mass:g} g is more than the plate itself "

@@ -1,11 +1,17 @@
 """Things attached to the plate at points: a sensor or glue mass, suspension springs.
 
 A point mass m at (x, y) moves with the reference surface: it adds m (u^2 + v^2 + w^2) / 2
-to the kinetic energy.  A suspension is a set of equal springs k acting on w at given
+to the kinetic energy.  A sensor glued over a base (``PointMass.base``, the side of a
+square footprint) spreads m evenly over it: the same energy integrated over the square
+(Gauss points in each part of it that one element holds, exact for the cubic fields).  On a
+shear-soft plate a mass at one point is singular (the deflection under a point load grows
+without bound as the mesh refines, so the frequencies depend on the mesh); over a base it
+is not.  A suspension is a set of equal springs k acting on w at given
 points; it adds k w^2 / 2 each to the strain energy, so the three out-of-plane rigid-body
 motions become low "suspension modes" (the in-plane ones stay free).
 
-Exact eigenvalue derivatives for mass-normalised modes:
+Exact eigenvalue derivatives for mass-normalised modes (over a base: weighted sums over
+the footprint's points):
     d(lambda)/dm = -lambda |phi(x, y)|^2,  d(lambda)/dx = -lambda m d|phi|^2/dx,
     d(lambda)/dk = sum over points w(x_p, y_p)^2.
 """
@@ -22,14 +28,22 @@ from ..errors import SpecError
 ATTACHMENT_PARAMETERS = ("mass", "x", "y", "stiffness")
 
 
+#: Gauss points per direction in each part of a footprint that one element holds: the
+#: fields are cubic in each direction, their squares of degree 6, which 4 points integrate
+#: exactly (degree 7).
+FOOTPRINT_GAUSS = 4
+
+
 @dataclass(frozen=True)
 class PointMass:
-    """A mass [kg] at (x, y) [m] from the plate corner at the origin."""
+    """A mass [kg] at (x, y) [m] from the plate corner at the origin; ``base`` [m]: the side
+    of the square it is spread over, centred there (0: a point)."""
 
     mass: float
     x: float
     y: float
     label: str = "point_mass"
+    base: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +60,10 @@ def check_attachment(attachment, length: float, width: float) -> None:
     if isinstance(attachment, PointMass):
         if not (np.isfinite(attachment.mass) and attachment.mass >= 0):
             raise SpecError(f"point mass '{attachment.label}': mass = {attachment.mass!r} kg must not be negative")
+        if not (np.isfinite(attachment.base) and 0 <= attachment.base <= 0.5 * min(length, width)):
+            raise SpecError(f"point mass '{attachment.label}': base = {1e3 * attachment.base:g} mm must be 0 (a point) "
+                            f"up to half the plate's shorter side ({500 * min(length, width):g} mm); it is the side "
+                            "of the sensor's square footprint in mm")
         points = [(attachment.x, attachment.y)]
     else:
         if not (np.isfinite(attachment.stiffness) and attachment.stiffness >= 0):
@@ -94,15 +112,40 @@ def _data_positions(units: UnitMatrices, dofs: np.ndarray) -> np.ndarray:
     return out
 
 
+def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, float, bool, bool]]:
+    """The points (x, y) [m] a mass is spread over and their shares of it (summing to 1):
+    the point itself without a base; else ``FOOTPRINT_GAUSS`` x ``FOOTPRINT_GAUSS`` Gauss
+    points in each part of the square that one element holds, the square shifted inside
+    the plate where it would overhang an edge.  Also whether each point moves with x and
+    with y (not where the square rests against an edge)."""
+    if mass.base <= 0:
+        return [(mass.x, mass.y, 1.0, True, True)]
+    mesh, half = units.mesh, 0.5 * mass.base
+    x0, y0 = (float(np.clip(c - half, 0.0, side - mass.base)) for c, side in ((mass.x, mesh.length),
+                                                                            (mass.y, mesh.width)))
+    moves = (x0 == mass.x - half, y0 == mass.y - half)
+    nodes, weights = np.polynomial.legendre.leggauss(FOOTPRINT_GAUSS)
+    per_axis = []
+    for start, lines in ((x0, mesh.x), (y0, mesh.y)):
+        cuts = np.unique(np.concatenate([[start, start + mass.base],
+                                         lines[(lines > start) & (lines < start + mass.base)]]))
+        a, b = cuts[:-1, None], cuts[1:, None]
+        per_axis.append(((0.5 * (a + b) + 0.5 * (b - a) * nodes).ravel(),
+                         (0.5 * (b - a) * weights / mass.base).ravel()))
+    (xs, wx), (ys, wy) = per_axis
+    return [(float(x), float(y), float(a * b), *moves) for x, a in zip(xs, wx) for y, b in zip(ys, wy)]
+
+
 def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.ndarray]:
     """CSR data (on the shared pattern) of the stiffness and mass the attachments add."""
     nnz = units._pattern[0].size
     stiffness, mass = np.zeros(nnz), np.zeros(nnz)
     for attachment in attachments:
         if isinstance(attachment, PointMass):
-            dofs, n = point_operators(units, attachment.x, attachment.y)
-            block = attachment.mass * sum(np.outer(n[f], n[f]) for f in ("u", "v", "w"))
-            np.add.at(mass, _data_positions(units, dofs), block)
+            for x, y, share, _, _ in footprint(units, attachment):
+                dofs, n = point_operators(units, x, y)
+                block = share * attachment.mass * sum(np.outer(n[f], n[f]) for f in ("u", "v", "w"))
+                np.add.at(mass, _data_positions(units, dofs), block)
         else:
             for x, y in attachment.points:
                 dofs, n = point_operators(units, x, y)
@@ -115,13 +158,19 @@ def eigenvalue_derivative(units: UnitMatrices, attachment, kind: str, shapes: np
     """d(omega^2)/dp of every mode for an attachment parameter (mass [kg], x, y [m],
     stiffness [N/m])."""
     if isinstance(attachment, PointMass):
-        dofs, n = point_operators(units, attachment.x, attachment.y)
-        local = shapes[dofs]
-        if kind == "mass":
-            return -eigenvalues * sum((n[f] @ local) ** 2 for f in ("u", "v", "w"))
-        suffix = {"x": "_x", "y": "_y"}[kind]
-        slope = sum(2 * (n[f] @ local) * (n[f + suffix] @ local) for f in ("u", "v", "w"))
-        return -eigenvalues * attachment.mass * slope
+        if kind not in ("mass", "x", "y"):
+            raise SpecError(f"point mass '{attachment.label}' has no parameter {kind!r}; it has: mass, x, y")
+        total = np.zeros(shapes.shape[1])
+        for x, y, share, moves_x, moves_y in footprint(units, attachment):
+            dofs, n = point_operators(units, x, y)
+            local = shapes[dofs]
+            if kind == "mass":
+                total += share * sum((n[f] @ local) ** 2 for f in ("u", "v", "w"))
+            elif (moves_x if kind == "x" else moves_y):
+                suffix = "_" + kind
+                total += share * attachment.mass * sum(2 * (n[f] @ local) * (n[f + suffix] @ local)
+                                                       for f in ("u", "v", "w"))
+        return -eigenvalues * total
     if kind != "stiffness":
         raise SpecError(f"suspension '{attachment.label}' has no parameter {kind!r}; it has: stiffness")
     total = np.zeros(shapes.shape[1])

@@ -29,6 +29,10 @@ def test_spec_point_mass_is_applied(example_spec):
     loaded = model.solve("original").frequencies_hz
     free = example_spec.solve("original").frequencies_hz
     assert np.all(loaded < free)
+    assert mass.base == 0.0  # a point unless the spec gives the sensor's base
+    spread = parse_spec(with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0,
+                                      "base_mm": 12.0}))
+    assert spread.specimen.attachments[0].base == pytest.approx(0.012)
 
 
 def test_spec_plate_theory_effects_switch_options(example_spec):
