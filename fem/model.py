@@ -8,7 +8,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from .solver.assembly import UnitMatrices, unit_matrices
-from .solver.attachments import ATTACHMENT_PARAMETERS, Suspension, attachment_data
+from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
 from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
@@ -99,9 +99,16 @@ class ModelOptions:
 
     def mesh(self, specimen: Specimen) -> PlateMesh:
         """The mesh of every configuration: ``divisions_for`` equal elements, graded
-        towards the free edges for a shear-deformable theory (``edge_size``)."""
+        towards the free edges for a shear-deformable theory (``edge_size``) and divided
+        finely over a sensor's base (``PointMass.base``; the lines follow the sensor)."""
         edge = (self.edge_size or edge_size_for(specimen)) if self.shear_deformable else None
-        return PlateMesh.with_element_size(specimen.length, specimen.width, self.divisions_for(specimen), edge)
+        bases = []
+        for a in specimen.attachments:
+            if isinstance(a, PointMass) and a.base > 0:
+                x0, y0 = base_square(a, specimen.length, specimen.width)
+                bases.append((x0, x0 + a.base, y0, y0 + a.base))
+        return PlateMesh.with_element_size(specimen.length, specimen.width, self.divisions_for(specimen), edge,
+                                           tuple(bases))
 
 
 def edge_size_for(specimen: Specimen) -> float:

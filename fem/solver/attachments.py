@@ -112,6 +112,14 @@ def _data_positions(units: UnitMatrices, dofs: np.ndarray) -> np.ndarray:
     return out
 
 
+def base_square(mass: PointMass, length: float, width: float) -> tuple[float, float]:
+    """The corner (x0, y0) [m] of a mass's square base of side ``mass.base`` centred on it,
+    shifted inside a ``length`` x ``width`` plate where it would overhang an edge."""
+    half = 0.5 * mass.base
+    return (float(np.clip(mass.x - half, 0.0, length - mass.base)),
+            float(np.clip(mass.y - half, 0.0, width - mass.base)))
+
+
 def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, float, bool, bool]]:
     """The points (x, y) [m] a mass is spread over and their shares of it (summing to 1):
     the point itself without a base; else ``FOOTPRINT_GAUSS`` x ``FOOTPRINT_GAUSS`` Gauss
@@ -121,8 +129,7 @@ def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, 
     if mass.base <= 0:
         return [(mass.x, mass.y, 1.0, True, True)]
     mesh, half = units.mesh, 0.5 * mass.base
-    x0, y0 = (float(np.clip(c - half, 0.0, side - mass.base)) for c, side in ((mass.x, mesh.length),
-                                                                            (mass.y, mesh.width)))
+    x0, y0 = base_square(mass, mesh.length, mesh.width)
     moves = (x0 == mass.x - half, y0 == mass.y - half)
     nodes, weights = np.polynomial.legendre.leggauss(FOOTPRINT_GAUSS)
     per_axis = []

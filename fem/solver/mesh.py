@@ -32,6 +32,12 @@ EDGE_GROWTH_LIMIT = 0.6
 EDGE_LEVELS = 2
 #: Edge element sizes are this [m] times a power of two.
 EDGE_QUANTUM = 1e-4
+#: Elements across each side of a sensor's base (``PointMass.base``): on a shear-soft plate
+#: the plate bends sharply at its edges.  A 6 g sensor on a 12 mm base on the foam sandwich
+#: reference (FSDT, 8 modes, default divisions): 0.71 % off without, 0.046 % with 3 and
+#: 0.018 % with 4 from a mesh of 8 per side and 40 divisions (layerwise: 0.049 % and
+#: 0.024 %; 6 per side 0.007 % and 0.014 %).
+FOOTPRINT_ELEMENTS = 4
 
 
 def edge_size(thickness: float) -> float:
@@ -63,6 +69,18 @@ def _spacing(length: float, divisions: int, edge_size: float | None) -> np.ndarr
     return nodes
 
 
+def with_footprints(nodes: np.ndarray, spans, per_side: int) -> np.ndarray:
+    """Node positions ``nodes`` [m] along one side with each span (lo, hi) [m] (a sensor's
+    base) divided into ``per_side`` equal elements: those lines added, the nodes closer to
+    them than half such an element dropped (the sides' ends kept)."""
+    for lo, hi in spans:
+        inner = np.linspace(lo, hi, per_side + 1)
+        far = np.abs(nodes[:, None] - inner[None, :]).min(axis=1) > 0.5 * (hi - lo) / per_side
+        ends = (nodes == nodes[0]) | (nodes == nodes[-1])
+        nodes = np.unique(np.concatenate([nodes[far | ends], inner]))
+    return nodes
+
+
 @dataclass(frozen=True)
 class PlateMesh:
     """nx x ny rectangles over [0, length] x [0, width] (metres): equal ones, or graded
@@ -90,14 +108,19 @@ class PlateMesh:
 
     @classmethod
     def with_element_size(cls, length: float, width: float, divisions: int,
-                          edge_size: float | None = None) -> "PlateMesh":
+                          edge_size: float | None = None, bases=()) -> "PlateMesh":
         """``divisions`` elements along the longer side, a matching count along the other;
-        with ``edge_size`` [m], graded towards the four edges (``_spacing``)."""
+        with ``edge_size`` [m], graded towards the four edges (``_spacing``); each of
+        ``bases`` ((x0, x1, y0, y1) [m], a sensor's footprint) divided into
+        ``FOOTPRINT_ELEMENTS`` x ``FOOTPRINT_ELEMENTS`` elements (``with_footprints``)."""
         long_side = max(length, width)
         n_long = divisions
         n_short = max(4, int(round(divisions * min(length, width) / long_side)))
         nx, ny = (n_long, n_short) if length >= width else (n_short, n_long)
         x, y = _spacing(length, nx, edge_size), _spacing(width, ny, edge_size)
+        if bases and FOOTPRINT_ELEMENTS:
+            x = with_footprints(x, [(b[0], b[1]) for b in bases], FOOTPRINT_ELEMENTS)
+            y = with_footprints(y, [(b[2], b[3]) for b in bases], FOOTPRINT_ELEMENTS)
         if len(x) == nx + 1 and len(y) == ny + 1 and np.allclose(np.diff(x), x[1]) and np.allclose(np.diff(y), y[1]):
             return cls(length, width, nx, ny)
         return cls(length, width, len(x) - 1, len(y) - 1, tuple(map(float, x)), tuple(map(float, y)))
