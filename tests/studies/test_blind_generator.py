@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 SOLID3D = Path(__file__).resolve().parents[1] / "data" / "solid3d"
@@ -65,3 +66,26 @@ def test_stored_records_are_the_draws(case):
         assert record["materials"][name]["E1"] == generate._sig(constants["E1"]), name
         assert record["materials"][name]["density"] == generate._sig(constants["density"]), name
 
+
+
+def test_a_sandwich_sensor_is_spread_over_its_base_in_the_solid_model():
+    """blind27 (a foam sandwich with a 2.83 g sensor): its base, 5 mm + 1 mm per gram, is
+    divided into 3 elements a side on the coarse mesh, the top skin's elements under it
+    (and only those) carry the sensor's mass as added density, and the truth spec gives
+    the project's model the same base."""
+    case = next(c for c in blind.all_cases() if c["name"] == "blind27_sandwich")
+    assert case["sensor"]["base_mm"] == round(blind.SENSOR_BASE_MM + case["sensor"]["mass_g"], 1)
+    configuration = case["configurations"][0]
+    layers = generate.stack(case, configuration)
+    level = generate.LEVELS[0]
+    mesh, (heavy, added) = blind._on_base(generate.build_mesh(case, layers, level, quarter=False), case, level, layers)
+    x0, y0, side = blind._base_square(case)
+    for lines, start in ((mesh.xs, x0), (mesh.ys, y0)):
+        inside = lines[(lines >= start - 1e-9) & (lines <= start + side + 1e-9)]
+        assert inside == pytest.approx(np.linspace(start, start + side, 4))
+    top_rows = int(np.sum(mesh.element_layer == len(layers) - 1))
+    assert len(heavy) == 9 * top_rows
+    volume_mm3 = np.sum(mesh.element_areas()[heavy] * np.repeat(np.diff(mesh.z_levels), mesh.nx * mesh.ny)[heavy])
+    assert added * volume_mm3 * 1e-9 == pytest.approx(1e-3 * case["sensor"]["mass_g"], rel=1e-9)
+    assert f"base_mm = {case['sensor']['base_mm']!r}" in blind.truth_spec(case, (case["sensor"]["x_mm"],
+                                                                                case["sensor"]["y_mm"]))

@@ -13,8 +13,12 @@ Each case draws, from one ``numpy`` generator seeded with ``SEED``:
 - misaligned plies: every orthotropic ply turned by +-U(0, d) deg with d = U(0, 8) per
   case (the spec the user writes keeps the nominal 0/90 deg);
 - a sensor (half of the cases): 1-10 g on the top surface at a point in the middle 80 %
-  of the plate, as a ``*MASS`` element on the surface node nearest to the point (the point
-  stored is the node's);
+  of the plate.  On a laminate a ``*MASS`` element on the surface node nearest to the point
+  (the point stored is the node's; there a point is a converged model).  On a sandwich,
+  where a mass at a point is singular (the skin and the soft core deform without bound
+  under it), spread over the sensor's square base of ``SENSOR_BASE_MM`` + 1 mm per gram
+  (1-10 g accelerometers stand on 6-15 mm): the top layer's elements under the base made
+  denser by the mass, the mesh lines following the base (``FOOTPRINT_3D``);
 - the bonded configurations: a soft bond line of 0.05-0.3 mm and an aluminium plate of
   1-2 mm under (``al_bottom``) or over (``al_top``) the specimen.
 
@@ -73,6 +77,12 @@ N_CASES_2 = 12
 #: they wait for a sensor modelled over its footprint in both.
 PENDING = ("blind27_sandwich", "blind33_sandwich")
 FAMILIES = ("hybrid", "cross_ply", "sandwich")
+#: A sensor's square base on a sandwich: this side [mm] plus 1 mm per gram of its mass.
+SENSOR_BASE_MM = 5.0
+#: Elements across each side of a sensor's base in the solid model, per thickness factor of
+#: the mesh level (coarse 3, medium 5, fine 7: the bending at the base's edges is the
+#: sharpest on the plate).
+FOOTPRINT_3D = 2
 FLEXURAL_MODES = 10
 #: Elastic modes asked of the full model (after its six rigid-body modes).
 ELASTIC = 18
@@ -150,6 +160,8 @@ def draw_case(rng, index: int) -> dict:
     if rng.random() < 0.5:
         sensor = dict(mass_g=round(rng.uniform(1.0, 10.0), 2), x_mm=rng.uniform(0.1, 0.9) * length,
                       y_mm=rng.uniform(0.1, 0.9) * width)
+        if family == "sandwich":
+            sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
     bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
     added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
     return dict(
@@ -234,16 +246,53 @@ def _sensor_lines(mesh: g.Mesh, case: dict, n_elements: int) -> tuple[tuple[str,
     return lines, (float(x), float(y))
 
 
+def _base_square(case: dict) -> tuple[float, float, float]:
+    """A sensor's base: its corner (x0, y0) and side [mm], shifted inside the plate as the
+    project's model shifts it (``fem.solver.attachments.base_square``)."""
+    from fem.solver.attachments import PointMass, base_square  # noqa: PLC0415
+
+    s = case["sensor"]
+    mass = PointMass(1e-3 * s["mass_g"], 1e-3 * s["x_mm"], 1e-3 * s["y_mm"], base=1e-3 * s["base_mm"])
+    x0, y0 = base_square(mass, 1e-3 * case["length_mm"], 1e-3 * case["width_mm"])
+    return 1e3 * x0, 1e3 * y0, s["base_mm"]
+
+
+def _on_base(mesh: g.Mesh, case: dict, level: g.Level, layers) -> tuple[g.Mesh, tuple[np.ndarray, float]]:
+    """The mesh with its lines following the sensor's base (``FOOTPRINT_3D`` x the level's
+    thickness factor + 1 elements a side) and the base's mass as added density of the top
+    layer's elements under it: (element indices, kg/m^3)."""
+    from fem.solver.mesh import with_footprints  # noqa: PLC0415
+
+    x0, y0, side = _base_square(case)
+    per_side = FOOTPRINT_3D * level.thickness_factor + 1
+    xs = with_footprints(np.linspace(0.0, mesh.lx, mesh.nx + 1), [(x0, x0 + side)], per_side)
+    ys = with_footprints(np.linspace(0.0, mesh.ly, mesh.ny + 1), [(y0, y0 + side)], per_side)
+    mesh = g.Mesh(mesh.lx, mesh.ly, len(xs) - 1, len(ys) - 1, mesh.z_levels, mesh.element_layer, xs, ys)
+    tol = 1e-6 * side
+    in_x = np.nonzero((xs[:-1] >= x0 - tol) & (xs[1:] <= x0 + side + tol))[0]
+    in_y = np.nonzero((ys[:-1] >= y0 - tol) & (ys[1:] <= y0 + side + tol))[0]
+    top = len(layers) - 1
+    rows = np.nonzero(mesh.element_layer == top)[0]
+    heavy = np.array([(ez * mesh.ny + ey) * mesh.nx + ex for ez in rows for ey in in_y for ex in in_x])
+    thickness_mm = layers[top][1]
+    added = 1e-3 * case["sensor"]["mass_g"] / (1e-9 * side**2 * thickness_mm)
+    return mesh, (heavy, added)
+
+
 def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> dict:
     """Elastic frequencies, w-shares and mid-plane w grids of the full plate."""
     mesh = g.build_mesh(case, layers, level, quarter=False)
+    extra, where, heavier = (), None, None
+    if case["sensor"] and case["sensor"].get("base_mm"):
+        mesh, heavier = _on_base(mesh, case, level, layers)
+        where = (case["sensor"]["x_mm"], case["sensor"]["y_mm"])
     ids, coords = mesh.lattice()
     elements = mesh.elements(ids)
-    extra, where = ((), None)
-    if case["sensor"]:
+    if case["sensor"] and heavier is None:
         extra, where = _sensor_lines(mesh, case, len(elements))
     job = workdir / tag
-    g.write_input(job.with_suffix(".inp"), mesh, layers, None, 6 + ELASTIC, materials=case["materials"], extra=extra)
+    g.write_input(job.with_suffix(".inp"), mesh, layers, None, 6 + ELASTIC, materials=case["materials"], extra=extra,
+                  heavier=heavier)
     wall = g.run_ccx(job, 1)
     lam = g.read_eigenvalues(job.with_suffix(".dat"))
     disp = g.read_displacements(job.with_suffix(".frd"), len(coords))
@@ -253,7 +302,10 @@ def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> d
         raise RuntimeError(f"{tag}: the 6 lowest modes are not rigid-body modes ({lam[:7]})")
     lam, disp = lam[6:], disp[6:]
     densities = np.repeat([case["materials"][m]["density"] * 1e-12 for m, _, _ in layers], 1)
-    shares = g.kinetic_shares(mesh, elements, np.repeat(densities[mesh.element_layer], mesh.nx * mesh.ny), disp)
+    density = np.repeat(densities[mesh.element_layer], mesh.nx * mesh.ny)
+    if heavier is not None:
+        density[heavier[0]] += heavier[1] * 1e-12
+    shares = g.kinetic_shares(mesh, elements, density, disp)
     solved = g.Solved(mesh, elements, lam, disp, None, shares, wall)
     z_mid = sum(t for _, t, _ in layers) / 2
     grid = g.sample(solved, case, z_mid, *g.GRID)
@@ -275,6 +327,8 @@ def truth_spec(case: dict, sensor_xy=None) -> str:
         x, y = sensor_xy
         text += (f'\n[[effects]]\nkind = "point_mass"\nmass_g = {case["sensor"]["mass_g"]!r}\n'
                  f"x_mm = {x:.6g}\ny_mm = {y:.6g}\n")
+        if case["sensor"].get("base_mm"):
+            text += f"base_mm = {case['sensor']['base_mm']!r}\n"
     return text
 
 

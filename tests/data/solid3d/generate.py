@@ -203,16 +203,31 @@ class Mesh:
     ny: int
     z_levels: np.ndarray  # element boundaries through the thickness (nz + 1,)
     element_layer: np.ndarray  # layer index of every element row through the thickness (nz,)
+    x_lines: np.ndarray | None = None  # element boundaries along x (nx + 1,); None: equal elements
+    y_lines: np.ndarray | None = None
 
     @property
     def nz(self) -> int:
         return len(self.z_levels) - 1
 
+    @property
+    def xs(self) -> np.ndarray:
+        """Element boundaries along x (nx + 1,) [mm]."""
+        return np.linspace(0.0, self.lx, self.nx + 1) if self.x_lines is None else np.asarray(self.x_lines)
+
+    @property
+    def ys(self) -> np.ndarray:
+        return np.linspace(0.0, self.ly, self.ny + 1) if self.y_lines is None else np.asarray(self.y_lines)
+
+    def element_areas(self) -> np.ndarray:
+        """In-plane area of every element (order of ``elements``) [mm^2]."""
+        area = np.outer(np.diff(self.ys), np.diff(self.xs)).ravel()  # y rows, x fastest
+        return np.tile(area, self.nz)
+
     def lattice(self):
         """Node ids on the quadratic lattice (2nx+1, 2ny+1, 2nz+1), -1 where no node
         (face and body centres), and the coordinates of the nodes in id order."""
-        xs = np.linspace(0.0, self.lx, 2 * self.nx + 1)
-        ys = np.linspace(0.0, self.ly, 2 * self.ny + 1)
+        xs, ys = (_with_midpoints(a) for a in (self.xs, self.ys))
         zm = 0.5 * (self.z_levels[:-1] + self.z_levels[1:])
         zs = np.empty(2 * self.nz + 1)
         zs[0::2], zs[1::2] = self.z_levels, zm
@@ -234,13 +249,21 @@ class Mesh:
     def locate(self, x: float, y: float, z: float) -> tuple[int, np.ndarray]:
         """Element number (0-based, order of ``elements``) holding the point, and its
         natural coordinates (xi, eta, zeta) in [-1, 1]."""
-        hx, hy = self.lx / self.nx, self.ly / self.ny
-        ex = min(max(int(math.floor(x / hx)), 0), self.nx - 1)
-        ey = min(max(int(math.floor(y / hy)), 0), self.ny - 1)
+        xs, ys = self.xs, self.ys
+        ex = int(np.clip(np.searchsorted(xs, x, side="right") - 1, 0, self.nx - 1))
+        ey = int(np.clip(np.searchsorted(ys, y, side="right") - 1, 0, self.ny - 1))
         ez = int(np.clip(np.searchsorted(self.z_levels, z, side="right") - 1, 0, self.nz - 1))
         z0, z1 = self.z_levels[ez], self.z_levels[ez + 1]
-        natural = np.array([2 * (x - ex * hx) / hx - 1, 2 * (y - ey * hy) / hy - 1, 2 * (z - z0) / (z1 - z0) - 1])
+        natural = np.array([2 * (x - xs[ex]) / (xs[ex + 1] - xs[ex]) - 1, 2 * (y - ys[ey]) / (ys[ey + 1] - ys[ey]) - 1,
+                            2 * (z - z0) / (z1 - z0) - 1])
         return (ez * self.ny + ey) * self.nx + ex, natural
+
+
+def _with_midpoints(lines: np.ndarray) -> np.ndarray:
+    """Element boundaries and the mid-side positions between them (2n + 1,)."""
+    out = np.empty(2 * len(lines) - 1)
+    out[0::2], out[1::2] = lines, 0.5 * (lines[:-1] + lines[1:])
+    return out
 
 
 #: Natural coordinates of the 20 nodes of C3D20 in ccx/Abaqus order.
@@ -286,41 +309,55 @@ def build_mesh(case: dict, layers, level: Level, quarter: bool) -> Mesh:
 
 
 def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: int, materials=None,
-                extra: tuple[str, ...] = ()) -> None:
+                extra: tuple[str, ...] = (), heavier: tuple[np.ndarray, float] | None = None) -> None:
     """A ccx deck: nodes, C3D20R elements by layer, materials (mm, N, t, s -> MPa, t/mm^3;
     ``materials`` defaults to ``MATERIALS``), orientations for turned plies, mirror
-    conditions of a symmetry class, ``extra`` model lines (e.g. a point mass), *FREQUENCY."""
+    conditions of a symmetry class, ``extra`` model lines (e.g. a point mass), *FREQUENCY.
+    ``heavier``: (element indices of one layer, 0-based, added density [kg/m^3]): those
+    elements in a set of their own, of their layer's material with that much more density
+    (a sensor's mass spread over the elements under its base)."""
     materials = MATERIALS if materials is None else materials
     ids, coords = mesh.lattice()
     elements = mesh.elements(ids)
     lines = ["*HEADING", f"layer-id 3-D reference, {path.stem}", "*NODE"]
     lines += [f"{n},{x:.10g},{y:.10g},{z:.10g}" for n, (x, y, z) in enumerate(coords, start=1)]
     per_layer = mesh.nx * mesh.ny
-    for index in range(len(layers)):
-        lines.append(f"*ELEMENT, TYPE=C3D20R, ELSET=LAYER{index + 1}")
-        for e in np.nonzero(np.repeat(mesh.element_layer == index, per_layer))[0]:
+    element_layer = np.repeat(mesh.element_layer, per_layer)
+    heavy = set() if heavier is None else {int(e) for e in heavier[0]}
+    sets = [(f"LAYER{index + 1}", index, [e for e in np.nonzero(element_layer == index)[0] if e not in heavy])
+            for index in range(len(layers))]
+    if heavy:
+        sets.append(("SENSOR", int(element_layer[min(heavy)]), sorted(heavy)))
+    for elset, _, members in sets:
+        lines.append(f"*ELEMENT, TYPE=C3D20R, ELSET={elset}")
+        for e in members:
             nodes = elements[e]
             lines.append(f"{e + 1}," + ",".join(map(str, nodes[:15])) + ",")
             lines.append(",".join(map(str, nodes[15:])))
-    for name in sorted({m for m, _, _ in layers}):
+    kinds = [(name, name.upper(), 0.0) for name in sorted({m for m, _, _ in layers})]
+    if heavy:
+        kinds.append((layers[sets[-1][1]][0], "SENSOR_BASE", heavier[1]))
+    for name, label, added in kinds:
         c = materials[name]
         lines += [
-            f"*MATERIAL, NAME={name.upper()}",
+            f"*MATERIAL, NAME={label}",
             "*ELASTIC, TYPE=ENGINEERING CONSTANTS",
             ",".join(f"{v:.10g}" for v in (1e3 * c["E1"], 1e3 * c["E2"], 1e3 * c["E3"], c["nu12"], c["nu13"],
                                             c["nu23"], 1e3 * c["G12"], 1e3 * c["G13"])),
             f"{1e3 * c['G23']:.10g}",
             "*DENSITY",
-            f"{c['density'] * 1e-12:.10g}",
+            f"{(c['density'] + added) * 1e-12:.10g}",
         ]
-    for index, (name, _, angle) in enumerate(layers):
+    for elset, index, _ in sets:
+        name, _, angle = layers[index]
         option = ""
         if angle != 0.0:
             a = math.radians(angle)
-            lines += [f"*ORIENTATION, NAME=OR{index + 1}, SYSTEM=RECTANGULAR",
+            lines += [f"*ORIENTATION, NAME=OR{elset}, SYSTEM=RECTANGULAR",
                       f"{math.cos(a):.12g},{math.sin(a):.12g},0,{-math.sin(a):.12g},{math.cos(a):.12g},0"]
-            option = f", ORIENTATION=OR{index + 1}"
-        lines.append(f"*SOLID SECTION, ELSET=LAYER{index + 1}, MATERIAL={name.upper()}{option}")
+            option = f", ORIENTATION=OR{elset}"
+        material = "SENSOR_BASE" if elset == "SENSOR" else name.upper()
+        lines.append(f"*SOLID SECTION, ELSET={elset}, MATERIAL={material}{option}")
     if boundary is not None:
         on_x = ids[-1, :, :][ids[-1, :, :] > 0]  # x = lx (the mirror plane x = L/2)
         on_y = ids[:, -1, :][ids[:, -1, :] > 0]
@@ -413,7 +450,7 @@ def kinetic_shares(mesh: Mesh, elements: np.ndarray, densities: np.ndarray, disp
     n = shape_functions(pts)  # (27, 20)
     hz = np.diff(mesh.z_levels)
     per_layer = mesh.nx * mesh.ny
-    volume = np.repeat(hz, per_layer) * (mesh.lx / mesh.nx) * (mesh.ly / mesh.ny) / 8  # det J
+    volume = np.repeat(hz, per_layer) * mesh.element_areas() / 8  # det J
     weight = densities * volume
     shares = []
     for d in disp:
