@@ -707,13 +707,15 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         selected.append(completion)
         state = completion.fit
     final = _final(state, measurements, baseline, selected, nominal, say) if selected else None
-    dropped = _determined_final(final, steps, selected, measurements, baseline, nominal, say)
-    if dropped is not None:
-        final, step = dropped
+    taken_out = ()
+    determined = _determined_final(final, steps, selected, measurements, baseline, nominal, say)
+    if determined is not None:
+        final, step = determined
         steps.append(step)
+        taken_out = (step.candidates[0].kind,)
     first = steps[0].candidates if steps else ()
     return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started,
-                     tuple(c.kind for c in (steps[-1].candidates if dropped else ())))
+                     taken_out)
 
 
 def _determined_final(final: FitResult | None, steps: list[Step], selected: list[Candidate],

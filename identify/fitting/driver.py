@@ -560,7 +560,7 @@ def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
         for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
             m = specimen.materials[q.target]
             if start == TRANSVERSELY_ISOTROPIC:
-                value = m.E2 / (2 * (1 + UD_NU23)) if q.kind == "G23" and _unidirectional(m) else m.G12
+                value = (_class_g23(m) or m.G12) if q.kind == "G23" else m.G12
             else:  # a material that is no unidirectional ply is about isotropic in its plane: G23 = G13
                 value = (start[0] if q.kind == "G13" or not _unidirectional(m) else start[1]) * m.G12
             values[Parameter(q.kind, q.target)] = value
@@ -634,8 +634,8 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     G13/G23 in a sandwich): they are held at the spec's values or, where it gives none, at
     the ply class's relation (``_class_shear``: a value the data need not see, not the
     screened start, which one linearised step chose with every modulus free) and the
-    candidate refitted without
-    them, so that they cannot sink the candidate that holds the right physics.  blind14 (a
+    candidate refitted without them, so that they cannot sink the candidate that holds the
+    right physics.  blind14 (a
     cross-ply with a 7 g sensor): the glass core's G23 ran to the bound from 0.25 G12;
     held there (with the carbon's, which then ran out too) the transverse-shear refit
     ended at 4.0 % against a 1.81 % baseline; held at the relation, at 0.51 %.
@@ -668,14 +668,17 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     return result, new, [note], tuple(sorted(_covered(removed), key=lambda q: q.name))
 
 
+def _class_g23(material) -> float | None:
+    """The ply class's G23 [Pa]: a unidirectional ply's E2 / 2(1 + ``UD_NU23``); None for
+    other materials (G23 follows G12)."""
+    return material.E2 / (2 * (1 + UD_NU23)) if _unidirectional(material) else None
+
+
 def _class_shear(material, given):
     """``material`` with its transverse shear moduli where a hold puts them: as the spec
-    gives them (``given``), or where it gives none the ply class's relation (G13 follows G12;
-    a unidirectional ply's G23 = E2 / 2(1 + ``UD_NU23``) at ``material``'s E2, others' G12)."""
-    g13 = given.G13
-    g23 = given.G23 if given.G23 is not None else (
-        material.E2 / (2 * (1 + UD_NU23)) if _unidirectional(material) else None)
-    return replace(material, G13=g13, G23=g23)
+    gives them (``given``), or where it gives none the ply class's relation (G13 follows G12,
+    G23 ``_class_g23`` at ``material``'s E2)."""
+    return replace(material, G13=given.G13, G23=given.G23 if given.G23 is not None else _class_g23(material))
 
 
 def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
