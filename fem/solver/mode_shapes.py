@@ -34,6 +34,10 @@ POINTS = 40
 #: A second product whose share is at least this fraction of the dominant one's makes
 #: the mode "mixed": both are named.
 MIXED = 0.35
+#: A labelled pattern is part of a mode when it holds at least this share of the mode's
+#: shape: the share of a mixed label's second term (``MIXED`` of the first), so that both
+#: members of a mixed pair carry the label of either term.
+LABEL_SHARE = MIXED / (1 + MIXED)
 #: Free-free beam eigenvalues beta L of the first bending modes (then (2n + 1) pi / 2).
 _BETA = (4.730040745, 7.853204624, 10.995607838, 14.137165491, 17.278759657)
 
@@ -157,4 +161,4 @@ def affinity(coefficients: np.ndarray, label_pattern: np.ndarray) -> np.ndarray:
     return np.einsum("mij,ij->m", coefficients, label_pattern) ** 2
 
 
-__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "ORDER"]
+__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "ORDER", "LABEL_SHARE"]

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.solver.mode_shapes import affinity, pattern
+from fem.solver.mode_shapes import LABEL_SHARE, affinity, pattern
 
 from .statistics import ASSUMED_SCATTER_REL
 
@@ -34,8 +34,6 @@ START_TOLERANCE = 0.03
 #: Scale factors scanned at the start: the model's frequencies x 1/3 .. 3 (stiffness off
 #: by up to a factor 9), log-spaced finely enough (0.1 %) to fall within any tolerance.
 SCALES = np.exp(np.linspace(np.log(1 / 3), np.log(3), 2200))
-#: A labelled peak matches only model modes showing its pattern at least this well.
-LABEL_AFFINITY = 0.5
 #: Cost that forbids a match (a label the mode does not show).
 FORBIDDEN = 1e12
 
@@ -114,14 +112,15 @@ def align(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
 
 
 def label_permits(labels, coefficients: np.ndarray) -> np.ndarray | None:
-    """(peaks, modes): which model modes each peak's label allows (every mode for a peak
-    without a label); None when no peak has a label."""
+    """(peaks, modes): which model modes each peak's label allows: those holding its pattern
+    (``LABEL_SHARE``: a member of a mixed pair carries either term), every mode for a peak
+    without a label; None when no peak has a label."""
     if not any(labels):
         return None
     out = np.ones((len(labels), len(coefficients)), dtype=bool)
     for i, label in enumerate(labels):
         if label:
-            out[i] = affinity(coefficients, pattern(label)) >= LABEL_AFFINITY
+            out[i] = affinity(coefficients, pattern(label)) >= LABEL_SHARE
     return out
 
 
