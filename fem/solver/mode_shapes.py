@@ -161,4 +161,12 @@ def affinity(coefficients: np.ndarray, label_pattern: np.ndarray) -> np.ndarray:
     return np.einsum("mij,ij->m", coefficients, label_pattern) ** 2
 
 
-__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "ORDER", "LABEL_SHARE"]
+def label_shares(coefficients: np.ndarray, mode_labels, label: str) -> np.ndarray:
+    """Each mode's share in a label's pattern (``affinity``), 0 for a mode labelled
+    'in-plane': the normalised projection of its small deflection can show any pattern (a
+    cross-ply's in-plane mode under bonded aluminium is 95 % '(3,1)')."""
+    shares = affinity(coefficients, pattern(label))
+    return np.where(np.asarray(mode_labels) == "in-plane", 0.0, shares)
+
+
+__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "label_shares", "ORDER", "LABEL_SHARE"]

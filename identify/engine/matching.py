@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.solver.mode_shapes import LABEL_SHARE, affinity, pattern
+from fem.solver.mode_shapes import LABEL_SHARE, label_shares
 
 from .statistics import ASSUMED_SCATTER_REL
 
@@ -111,16 +111,17 @@ def align(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
     return best[1]
 
 
-def label_permits(labels, coefficients: np.ndarray) -> np.ndarray | None:
-    """(peaks, modes): which model modes each peak's label allows: those holding its pattern
-    (``LABEL_SHARE``: a member of a mixed pair carries either term), every mode for a peak
-    without a label; None when no peak has a label."""
+def label_permits(labels, solution) -> np.ndarray | None:
+    """(peaks, modes): which of the solution's modes each peak's label allows: those
+    holding its pattern (``LABEL_SHARE``: a member of a mixed pair carries either term;
+    never an in-plane mode), every mode for a peak without a label; None when no peak
+    has a label."""
     if not any(labels):
         return None
-    out = np.ones((len(labels), len(coefficients)), dtype=bool)
+    out = np.ones((len(labels), len(solution.labels)), dtype=bool)
     for i, label in enumerate(labels):
         if label:
-            out[i] = affinity(coefficients, pattern(label)) >= LABEL_SHARE
+            out[i] = label_shares(solution.shape_coefficients, solution.labels, label) >= LABEL_SHARE
     return out
 
 

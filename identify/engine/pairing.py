@@ -16,7 +16,7 @@ from scipy.optimize import linear_sum_assignment
 
 from fem.errors import MeasurementError
 from fem.solver.modal import Modes
-from fem.solver.mode_shapes import LABEL_SHARE, affinity, pattern
+from fem.solver.mode_shapes import LABEL_SHARE, label_shares
 
 #: Below this MAC a tracked mode is reported as lost (its shape changed too much).
 MAC_LOST = 0.8
@@ -63,7 +63,8 @@ class ModePairing:
     @classmethod
     def initial(cls, configuration: str, solution, measured_modes, labels) -> "ModePairing":
         """By nodal pattern where a label is given: a labelled mode goes to the nearest-ranked
-        model mode that holds its pattern (affinity at least ``LABEL_SHARE``; an optimal
+        model mode that holds its pattern (``label_shares`` at least ``LABEL_SHARE``, never an
+        in-plane mode; an optimal
         assignment, ties to the higher affinity).  Near-degenerate modes that a sensor's
         mass mixes share both patterns in proportions that small changes swing (blind33:
         the 3-D (3,2) at 1585 Hz is 35 % (3,2) in the plate model at 1590 Hz and 63 % in
@@ -81,7 +82,7 @@ class ModePairing:
         labelled = [k for k, label in enumerate(labels) if label]
         unmatched = []
         if labelled:
-            affinities = np.array([affinity(solution.shape_coefficients, pattern(labels[k])) for k in labelled])
+            affinities = np.array([label_shares(solution.shape_coefficients, solution.labels, labels[k]) for k in labelled])
             nearness = np.abs(np.arange(n_model)[None, :] - ranks[labelled][:, None]) / n_model
             permitted = affinities >= LABEL_SHARE
             rows, cols = linear_sum_assignment(np.where(permitted, nearness - LABEL_TIE * affinities, n_model))

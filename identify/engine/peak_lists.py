@@ -79,7 +79,7 @@ def _match_all(solver: SpecimenModel, peaks: Measurements, tolerance: float | No
         rows = peaks.of(name)
         solution = solver.solve(name)
         std = rows["std_hz"].to_numpy() if peaks.has_std else None
-        allowed = label_permits(rows["label"].tolist(), solution.shape_coefficients)
+        allowed = label_permits(rows["label"].tolist(), solution)
         f = rows["frequency_hz"].to_numpy()
         out[name] = (align(f, std, solution.frequencies_hz, allowed) if tolerance is None
                      else match(f, std, solution.frequencies_hz, tolerance, allowed))
