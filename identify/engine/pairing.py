@@ -64,14 +64,13 @@ class ModePairing:
     def initial(cls, configuration: str, solution, measured_modes, labels) -> "ModePairing":
         """By nodal pattern where a label is given: a labelled mode goes to the nearest-ranked
         model mode that holds its pattern (``label_shares`` at least ``LABEL_SHARE``, never an
-        in-plane mode; an optimal
-        assignment, ties to the higher affinity).  Near-degenerate modes that a sensor's
-        mass mixes share both patterns in proportions that small changes swing (blind33:
-        the 3-D (3,2) at 1585 Hz is 35 % (3,2) in the plate model at 1590 Hz and 63 % in
-        its partner 5 % higher); their ranks are what stays.  The others by rank (``mode``
-        numbers): measured mode k with model mode k, so ranks with a gap skip the
-        unmeasured mode; where labels took modes out of order, the rest keep their order
-        among the modes left free."""
+        in-plane mode; an optimal assignment, ties to the higher affinity).  Near-degenerate
+        modes that a sensor's mass mixes share both patterns in proportions that small
+        changes swing (blind33: the 3-D (3,2) at 1585 Hz is 35 % (3,2) in the plate model at
+        1590 Hz and 63 % in its partner 5 % higher); their ranks are what stays.  The others
+        by rank (``mode`` numbers): measured mode k with model mode k, so ranks with a gap
+        skip the unmeasured mode; where labels took modes out of order, the rest keep their
+        order among the modes left free."""
         modes = solution.modes
         n_model = len(modes.eigenvalues)
         ranks = np.asarray(measured_modes, dtype=int) - 1

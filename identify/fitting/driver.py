@@ -635,10 +635,10 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     the ply class's relation (``_class_shear``: a value the data need not see, not the
     screened start, which one linearised step chose with every modulus free) and the
     candidate refitted without them, so that they cannot sink the candidate that holds the
-    right physics.  blind14 (a
-    cross-ply with a 7 g sensor): the glass core's G23 ran to the bound from 0.25 G12;
-    held there (with the carbon's, which then ran out too) the transverse-shear refit
-    ended at 4.0 % against a 1.81 % baseline; held at the relation, at 0.51 %.
+    right physics.  blind14 (a cross-ply with a 7 g sensor): the glass core's G23 ran to the
+    bound from 0.25 G12; held there (with the carbon's, which then ran out too) the
+    transverse-shear refit ended at 4.0 % against a 1.81 % baseline; held at the relation,
+    at 0.51 %.
     Repeated while the refit sends another material's moduli out (blind13, a hybrid:
     with the carbon's held, the glass's ran to the 2000 GPa bound and every shear candidate
     was implausible), at most once per material.  Returns (result, parameters, notes, the
