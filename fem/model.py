@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import cached_property, lru_cache
+from functools import cached_property, lru_cache, partial
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
 from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
+from .solver.reduced_basis import ReducedModel
 from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
 from .solver.sensitivity import (
@@ -153,6 +154,25 @@ class LaminateSolution:
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
+    def reduced(self) -> ReducedModel | None:
+        """The Rayleigh-Ritz model on this solution's modes (``fem.solver.reduced_basis``),
+        its attachments held fixed; None for the layerwise theory (its coefficients are
+        not the laminate's)."""
+        if self.layerwise is not None:
+            return None
+        units = self.units
+        if self.transverse_shear:
+            n_c = units.element_stiffness.shape[0]
+            stiffness = [units.combined_data(np.eye(n_c)[c], units.element_stiffness) for c in range(n_c)]
+            mass = [units.combined_data(np.eye(3)[j], units.element_mass) for j in range(3)]
+        else:
+            stiffness, mass = units.stiffness_data, units.mass_data
+        fixed = attachment_data(units, self.attachments) if self.attachments else (None, None)
+        weights = partial(system_coefficients, transverse_shear=self.transverse_shear,
+                          inertia_terms=self.inertia_terms)
+        return ReducedModel.project(weights, units, self.modes.shapes, np.asarray(stiffness), np.asarray(mass),
+                                    *fixed)
+
     @one_blas_thread
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:
         """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""
@@ -179,6 +199,17 @@ class LaminateSolution:
         return frequency_derivatives(self.modes.eigenvalues, d_lambda)
 
 
+def system_coefficients(laminate: Laminate, transverse_shear: bool,
+                        inertia_terms: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The weights of the unit stiffness and mass matrices of a single-layer theory: the
+    18 CLT coefficients (and the 3 shear stiffnesses with ``transverse_shear``) [SI], and
+    the inertia terms I0, I1, I2 the theory keeps."""
+    coefficients = laminate.stiffness
+    if transverse_shear:
+        coefficients = np.concatenate([coefficients, laminate.shear_stiffness])
+    return coefficients, laminate.inertia * np.array(inertia_terms)
+
+
 @lru_cache(maxsize=512)
 @one_blas_thread
 def solve_laminate(
@@ -198,7 +229,7 @@ def solve_laminate(
     stack = LayerwiseLaminate.of(laminate, layer_groups, core_stretch) if theory == "layerwise" else None
     transverse_shear, rotary_inertia = (True, True) if stack is not None else (transverse_shear, rotary_inertia)
     terms = ROTARY_INERTIA if rotary_inertia else KIRCHHOFF_INERTIA
-    inertia = laminate.inertia * np.array(terms)
+    coefficients, inertia = system_coefficients(laminate, transverse_shear, terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
     if stack is not None:
         units, stiffness, mass = layerwise_system(stack, mesh)
@@ -206,12 +237,11 @@ def solve_laminate(
         # 80 x 80 elements: weighting the element matrices before one aggregation keeps
         # memory at one data array instead of 21.
         units = unit_matrices(mesh, ShearDifferencePlate)
-        coefficients = np.concatenate([laminate.stiffness, laminate.shear_stiffness])
         stiffness = units.combined_data(coefficients, units.element_stiffness)
         mass = units.combined_data(inertia, units.element_mass)
     else:
         units = unit_matrices(mesh)
-        stiffness, mass = laminate.stiffness @ units.stiffness_data, inertia @ units.mass_data
+        stiffness, mass = coefficients @ units.stiffness_data, inertia @ units.mass_data
     if attachments:
         extra_stiffness, extra_mass = attachment_data(units, attachments)
         stiffness, mass = stiffness + extra_stiffness, mass + extra_mass

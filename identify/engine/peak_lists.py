@@ -29,6 +29,8 @@ from .peak_assignment import PeakAssignment, peak_table
 from .result import FitResult, FitStatus, Iteration
 from .statistics import ASSUMED_SCATTER_REL
 from .objective import solving_model
+from .parameters import display
+from .peak_screen import SCREEN_TOLERANCE, screen
 from .updating import FitOptions, update
 
 #: Model modes solved beyond the number of peaks of a configuration (spurious peaks and
@@ -118,6 +120,23 @@ def _rescaled_start(model: SpecimenModel, scale: float, parameters) -> tuple[Spe
                                        "peaks (frequencies go as the square root of stiffness)")
 
 
+def _screened_start(handbook: SpecimenModel, scaled: SpecimenModel, matches: dict[str, Match], peaks: Measurements,
+                    parameters, options: FitOptions) -> tuple[SpecimenModel, dict[str, Match], str]:
+    """The screen's start (``peak_screen``) in place of the scaled one where it pairs the
+    peaks otherwise; where it pairs them as the scaled start does, that start (the
+    user's, rescaled) and its matching."""
+    screened = screen(_solver(handbook, peaks, options), peaks, parameters, scaled)
+    if screened is None or all(np.array_equal(screened.matches[c].modes, matches[c].modes) for c in matches):
+        return scaled, matches, ""
+    moved = ", ".join(f"{p.name} {display(p, scaled.value(p)):.4g} -> {display(p, v):.4g}"
+                      for p, v in screened.values.items() if not np.isclose(v, scaled.value(p), rtol=1e-6))
+    count = sum(int(m.matched.sum()) for m in screened.matches.values())
+    return scaled.with_values(screened.values), screened.matches, (
+        f"start screened over {screened.scored} points of the moduli on a reduced model: {moved}; on a full solve "
+        f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} at a cost {screened.cost:.3g}, "
+        f"against {screened.scaled_cost:.3g} from the scaled start")
+
+
 def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Parameter] | None = None,
                   options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
                   effect_of: dict | None = None, start_matches: dict[str, Match] | None = None) -> FitResult:
@@ -129,9 +148,12 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
     matches = start_matches or _match_all(_solver(model, peaks, options), peaks, None)
     if start_matches is None:
         first = peaks.configurations[0]
+        handbook = model
         model, note = _rescaled_start(model, matches[first].scale, parameters)
         notes += [note] if note else []
         matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
+        model, matches, note = _screened_start(handbook, model, matches, peaks, parameters, options)
+        notes += [note] if note else []
     seen = [_signature(matches)]
     history: list[Iteration] = []
     result = None
@@ -142,6 +164,7 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of,
                             settle=False)
             history += _renumbered(result.history, history)
+            model = result.model  # the last fit's solution: where the next round and the final fit start
         tightening = round_ < len(TIGHTENING)
         tolerance = TIGHTENING[round_] if tightening else _model_error(result)
         again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
@@ -151,7 +174,7 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             break
         if tightening:  # a peak left out while the model was still far off gets another chance
             seen.append(_signature(again))
-            matches, model, result = again, result.model, (result if unchanged else None)
+            matches, result = again, (result if unchanged else None)
             continue
         if _signature(again) in seen:  # the matching cycles: keep the last fit and say so
             notes.append("the peak matching did not settle (it cycles between alternatives): check the "
@@ -159,11 +182,13 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             break
         seen.append(_signature(again))
         notes.append("peaks re-matched at the solution (a different set of peaks or modes fits): refitted")
-        matches, model, result = again, result.model, None
+        matches, result = again, None
     else:
+        # The last round may have re-matched after its fit (result None): the final fit
+        # below starts from that fit's solution with the new matching.
         notes.append(f"the peak matching had not settled after {MAX_ROUNDS} rounds at the final tolerance")
     ranked = _ranked(peaks, matches)
-    result = update(result.model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
+    result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
     history += _renumbered(result.history, history)
     assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
     return replace(_without_redundancy(result), warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings,
