@@ -122,19 +122,18 @@ def _rescaled_start(model: SpecimenModel, scale: float, parameters) -> tuple[Spe
 
 def _screened_start(handbook: SpecimenModel, scaled: SpecimenModel, matches: dict[str, Match], peaks: Measurements,
                     parameters, options: FitOptions) -> tuple[SpecimenModel, dict[str, Match], str]:
-    """The screen's start (``peak_screen``) in place of the scaled one where it pairs the
-    peaks otherwise; where it pairs them as the scaled start does, that start (the
-    user's, rescaled) and its matching."""
+    """The screen's start and matching (``peak_screen``) in place of the scaled start's,
+    where the screen runs."""
     screened = screen(_solver(handbook, peaks, options), peaks, parameters, scaled)
-    if screened is None or all(np.array_equal(screened.matches[c].modes, matches[c].modes) for c in matches):
+    if screened is None:
         return scaled, matches, ""
     moved = ", ".join(f"{p.name} {display(p, scaled.value(p)):.4g} -> {display(p, v):.4g}"
                       for p, v in screened.values.items() if not np.isclose(v, scaled.value(p), rtol=1e-6))
     count = sum(int(m.matched.sum()) for m in screened.matches.values())
     return scaled.with_values(screened.values), screened.matches, (
         f"start screened over {screened.scored} points of the moduli on a reduced model: {moved}; on a full solve "
-        f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} at a cost {screened.cost:.3g}, "
-        f"against {screened.scaled_cost:.3g} from the scaled start")
+        f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} (matching cost {screened.cost:.3g}; "
+        f"the scaled start polished: {screened.scaled_cost:.3g})")
 
 
 def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Parameter] | None = None,
