@@ -193,6 +193,7 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
         warnings += merged
     vague = undetermined(objective.space, current.values, uncertainty.std)
     status, message = _status(stop, uncertainty, statistics, options, vague.all())
+    status, message = _bounded(status, message, objective.space, current.values, model.specimen)
     if vague.any() and not vague.all():
         warnings.append(f"not determined by the stated scatter (std above {UNDETERMINED_Z:g} x the parameter's own "
                         f"scale): {_listed(parameters, current.values, uncertainty.std, vague)}; fix them or "
@@ -206,6 +207,24 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
                      measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
                      tuple(values for values, _ in twins), current.pairings, objective.jacobian(current),
                      dict(effect_of or {}), stop=stop)
+
+
+def _bounded(status: FitStatus, message: str, space, values: np.ndarray, specimen) -> tuple[FitStatus, str]:
+    """A fit whose misfit is consistent but a layer property sits on its bound is not
+    converged: the data push it beyond what the material (or the spec's ``bounds``)
+    allows, so the admissible optimum is not the data's; nu12 = 0.5 on a wooden plate is
+    the usual sign.  Its status is ``poor_fit``, naming the properties and the likely causes."""
+    if status is not FitStatus.CONVERGED:
+        return status, message
+    on_bound = space.at_bound(values) & np.array([p.target in specimen.materials for p in space.parameters])
+    if not on_bound.any():
+        return status, message
+    named = ", ".join(f"{p.name} = {display(p, space.bound_of(i, values)):.4g}"
+                      for i, p in enumerate(space.parameters) if on_bound[i])
+    return FitStatus.POOR_FIT, (
+        f"poor fit: {named} ended on its bound, so the data's optimum lies outside what the material or the "
+        "spec's bounds allow; likely causes: a peak paired with the wrong mode (see the left-out peaks and unseen "
+        "modes), a missing effect (run 'identify-layers diagnose'), or bounds set too tight")
 
 
 def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:
