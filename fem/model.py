@@ -154,10 +154,10 @@ class LaminateSolution:
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
-    def reduced(self, with_attachments: bool = True) -> ReducedModel | None:
+    def reduced(self) -> ReducedModel | None:
         """The Rayleigh-Ritz model on this solution's modes (``fem.solver.reduced_basis``),
-        its attachments held fixed (or left out); None for the layerwise theory (its
-        coefficients are not the laminate's)."""
+        its attachments held fixed; None for the layerwise theory (its coefficients are
+        not the laminate's)."""
         if self.layerwise is not None:
             return None
         units = self.units
@@ -167,25 +167,11 @@ class LaminateSolution:
             mass = [units.combined_data(np.eye(3)[j], units.element_mass) for j in range(3)]
         else:
             stiffness, mass = units.stiffness_data, units.mass_data
-        fixed = attachment_data(units, self.attachments) if self.attachments and with_attachments else (None, None)
+        fixed = attachment_data(units, self.attachments) if self.attachments else (None, None)
         weights = partial(system_coefficients, transverse_shear=self.transverse_shear,
                           inertia_terms=self.inertia_terms)
         return ReducedModel.project(weights, units, self.modes.shapes, np.asarray(stiffness), np.asarray(mass),
                                     *fixed)
-
-    def reanalysed(self, reduced: ReducedModel, laminate: Laminate, attachments: tuple,
-                   n_modes: int) -> "LaminateSolution":
-        """The lowest ``n_modes`` modes of ``laminate`` with ``attachments`` on this
-        solution's mesh, by Rayleigh-Ritz on its modes (``reduced``: ``reduced(False)``),
-        with their modal energies from the projection; an approximation whose error
-        grows with the distance from this solution (callers verify by full solves)."""
-        if attachments:
-            reduced = reduced.with_fixed(self.units, self.modes.shapes, *attachment_data(self.units, attachments))
-        eigenvalues, vectors = reduced.eigenpairs(laminate, n_modes)
-        solution = LaminateSolution(laminate, self.units, Modes(eigenvalues, self.modes.shapes @ vectors),
-                                    self.inertia_terms, self.transverse_shear, attachments)
-        solution.__dict__["energies"] = ModalEnergies(*reduced.energies(vectors))  # the cached_property's slot
-        return solution
 
     @one_blas_thread
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:

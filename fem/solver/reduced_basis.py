@@ -14,7 +14,7 @@ accepted point is solved again in full.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -60,32 +60,12 @@ class ReducedModel:
     def size(self) -> int:
         return self.stiffness.shape[1]
 
-    def with_fixed(self, units: UnitMatrices, basis: np.ndarray, stiffness_data: np.ndarray,
-                   mass_data: np.ndarray) -> "ReducedModel":
-        """The same projection with other fixed parts (CSR data on ``units``' pattern)."""
-        return replace(self, fixed_stiffness=basis.T @ (units.matrix(stiffness_data) @ basis),
-                       fixed_mass=basis.T @ (units.matrix(mass_data) @ basis))
-
-    def _matrices(self, laminate) -> tuple[np.ndarray, np.ndarray]:
+    def eigenvalues(self, laminate) -> np.ndarray:
+        """Ritz values omega^2 [rad^2/s^2] of ``laminate``, lowest first."""
         stiffness_coefficients, inertia = self.weights(laminate)
         k = np.tensordot(stiffness_coefficients, self.stiffness, 1) + self.fixed_stiffness
         m = np.tensordot(inertia, self.mass, 1) + self.fixed_mass
-        return k, m
-
-    def eigenvalues(self, laminate) -> np.ndarray:
-        """Ritz values omega^2 [rad^2/s^2] of ``laminate``, lowest first."""
-        return sla.eigh(*self._matrices(laminate), eigvals_only=True, check_finite=False)
-
-    def eigenpairs(self, laminate, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """The lowest ``n`` Ritz values omega^2 and their vectors in the basis (r, n),
-        normalised to the projected mass (so the expanded modes are mass-normalised)."""
-        return sla.eigh(*self._matrices(laminate), subset_by_index=(0, n - 1), check_finite=False)
-
-    def energies(self, vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """phi^T K_c phi (n_c, n) and phi^T M_j phi (n_i, n) of the expanded Ritz modes,
-        from the projected unit matrices: no pass over the mesh."""
-        return (np.einsum("rn,crs,sn->cn", vectors, self.stiffness, vectors, optimize=True),
-                np.einsum("rn,crs,sn->cn", vectors, self.mass, vectors, optimize=True))
+        return sla.eigh(k, m, eigvals_only=True, check_finite=False)
 
     def frequencies_hz(self, laminate) -> np.ndarray:
         """Ritz frequencies [Hz] of ``laminate``, lowest first."""

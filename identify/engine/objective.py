@@ -7,14 +7,11 @@ exact derivatives, so the global sensitivity matrix is one array.
 """
 from __future__ import annotations
 
-import copy
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fem.model import MAX_SOLVED_MODES, LaminateSolution, SpecimenModel
-from fem.solver.reduced_basis import ReducedModel
+from fem.model import SpecimenModel
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
@@ -26,14 +23,6 @@ from .statistics import FitStatistics, weighted_residuals
 #: Singular values of the Jacobian below this fraction of the largest span its null
 #: space: the pseudo-inverse of the paper's eq. 15 drops them.
 NULL_SINGULAR_VALUE = 1e-12
-#: Reanalysis: basis modes per solved mode, and how far (in z: a relative change of a
-#: modulus, a plate length of a position) the parameters may move from the basis point
-#: before the basis is solved again there.  Ritz frequencies err at second order in the
-#: move, the modes and so the sensitivities at first order: on the paper's plate, moving
-#: the coatings and steel 2 % against the brass gives the frequencies within 4e-5 and the
-#: sensitivities within 2 % (a Gauss-Newton step needs the direction; full solves finish).
-BASIS_PER_MODE = 1.5
-REBASE_STEP = 0.02
 
 
 @dataclass(frozen=True)
@@ -56,28 +45,10 @@ def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes:
     return model.with_options(modes=highest + extra_modes, divisions=divisions)
 
 
-@dataclass(frozen=True)
-class _Basis:
-    """A configuration's reanalysis basis: the full solve at ``z`` (with
-    ``BASIS_PER_MODE`` x the modes) and its projection without attachments."""
-
-    z: np.ndarray
-    solution: LaminateSolution
-    reduced: ReducedModel
-
-
 class Objective:
-    """Evaluates the model for parameter values and pairs its modes with the measurements.
+    """Evaluates the model for parameter values and pairs its modes with the measurements."""
 
-    With ``reanalysis`` the modes come from Rayleigh-Ritz on a basis of modes solved in
-    full near the point (``fem.solver.reduced_basis``), rebuilt once the parameters have
-    moved ``REBASE_STEP`` in z from it: iterations cost a dense eigenproblem of a few
-    tens of DOFs instead of a sparse solve.  Such an objective is for the way to a
-    solution only; :meth:`exact` gives the one every accepted point is verified with.
-    """
-
-    def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3,
-                 reanalysis: bool = False):
+    def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
         self.model = model
         self.measurements = measurements
         self.space = ParameterSpace.of(parameters, model.specimen)
@@ -87,41 +58,10 @@ class Objective:
         self.measured_hz = table["frequency_hz"].to_numpy()
         self.sigma = table["std_hz"].to_numpy() if measurements.has_std else self.measured_hz.copy()
         self.rows = {c: np.flatnonzero(table["configuration"].to_numpy() == c) for c in self.configurations}
-        self.reanalysis = reanalysis and self.solved.options.theory != "layerwise"
-        self._bases: dict[str, _Basis] = {}
-        self._recent: dict[tuple, LaminateSolution] = {}
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
         return self.space.parameters
-
-    def exact(self) -> "Objective":
-        """The same objective solving every point in full."""
-        if not self.reanalysis:
-            return self
-        out = copy.copy(self)
-        out.reanalysis, out._bases, out._recent = False, {}, {}
-        return out
-
-    def _solve(self, model: SpecimenModel, name: str, values: np.ndarray):
-        """The configuration's solution at ``values``: full, or by reanalysis."""
-        if not self.reanalysis:
-            return model.solve(name)
-        key = (name, values.tobytes())
-        if key in self._recent:
-            return self._recent[key]
-        z = self.space.to_z(values)
-        basis = self._bases.get(name)
-        if basis is None or basis.solution.units.mesh != model.mesh or np.max(np.abs(z - basis.z)) > REBASE_STEP:
-            modes = min(MAX_SOLVED_MODES, math.ceil(BASIS_PER_MODE * model.options.modes))
-            full = model.with_options(modes=modes).solve(name)
-            basis = self._bases[name] = _Basis(z, full, full.reduced(with_attachments=False))
-        solution = basis.solution.reanalysed(basis.reduced, model.specimen.laminate(name),
-                                             model.specimen.attachments, model.options.modes)
-        if len(self._recent) >= 4 * len(self.configurations):  # a trial step and its successor: a few suffice
-            self._recent.pop(next(iter(self._recent)))
-        self._recent[key] = solution
-        return solution
 
     def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True,
                  differentiate: bool = True) -> Evaluation:
@@ -136,7 +76,7 @@ class Objective:
         derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
         new_pairings = {}
         for name in self.configurations:
-            solution = self._solve(model, name, values)
+            solution = model.solve(name)
             rows = self.rows[name]
             group = self.measurements.table.iloc[rows]
             previous = None if pairings is None else pairings[name].shapes
@@ -164,7 +104,7 @@ class Objective:
         model = self.solved.with_specimen(e.model.specimen)
         derivatives = np.empty((len(self.measured_hz), len(e.values)))
         for name in self.configurations:
-            solution = self._solve(model, name, e.values)
+            solution = model.solve(name)
             derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[e.pairings[name].indices]
         return replace(e, derivatives=derivatives)
 

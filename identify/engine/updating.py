@@ -46,9 +46,6 @@ class FitOptions:
     # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
     # even where an ill-conditioned direction still creeps (off by default).
     stall_chi2: float = 0.0
-    # Iterate on a reduced basis of modes (``Objective`` reanalysis) and finish with full
-    # solves from there; off: every iteration solves in full.
-    reanalysis: bool = True
 
     def __post_init__(self):
         where = "FitOptions"
@@ -162,7 +159,7 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             f"{len(measurements)} measured frequencies for {len(parameters)} unknown parameters: "
             "measure at least as many modes as unknowns (the paper uses 5 per configuration)"
         )
-    objective = Objective(model, measurements, parameters, options.extra_modes, reanalysis=options.reanalysis)
+    objective = Objective(model, measurements, parameters, options.extra_modes)
     given = np.array([model.value(p) for p in parameters], dtype=float)
     values = objective.space.clip(given)
     warnings = [f"start {p.name} = {display(p, v):.4g} is outside its bounds "
@@ -176,17 +173,6 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
         progress(history[-1])
     current, stop, tracking = iterate(objective, current, history, options, progress)
     warnings += tracking
-    if objective.reanalysis:
-        # The reduced model's solution is verified and finished by full solves: every
-        # accepted point, and all that follows (pairing checks, statistics), is exact.
-        # Where the reduced iterations used up the budget, the full ones do not go on.
-        objective = objective.exact()
-        current = objective.evaluate(current.values, current.pairings)
-        if stop is not Stop.MAX_ITERATIONS:
-            left = max(options.max_iterations - history[-1].number + history[0].number, 1)
-            current, stop, tracking = iterate(objective, current, history, replace(options, max_iterations=left),
-                                              progress)
-            warnings += tracking
     twins, repaired = [], ""
     if stop.converged and settle:
         def refit(state, branch, max_iterations):
