@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import tomli_w
 
 from fem.solver.attachments import PointMass
 from fem.solver.mode_shapes import deflection_operator
@@ -60,6 +61,11 @@ PROPERTIES = ("E1", "E2", "G12", "nu12")
 
 def handbook_model():
     return parse_spec(HANDBOOK, "<long_plates handbook spruce>")
+
+
+def spec_text() -> str:
+    """The handbook spec as the TOML file a lab writes (for the command line)."""
+    return tomli_w.dumps(HANDBOOK)
 
 
 @dataclass(frozen=True)
