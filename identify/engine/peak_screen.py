@@ -23,6 +23,7 @@ moduli instead, on a Rayleigh-Ritz model of each configuration
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,11 +31,12 @@ from scipy.optimize import least_squares
 from scipy.stats import qmc
 
 from fem.errors import SpecError
-from fem.model import SpecimenModel
+from fem.model import MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
 from .matching import START_TOLERANCE, Match, match
+from . import ties
 from .parameters import ParameterSpace
 
 #: Basis modes per model mode of the screen's reduced model (Ritz error 0.01-0.04 % at
@@ -84,14 +86,14 @@ class _Search:
         self.start = np.array([solver.value(p) for p in parameters], dtype=float)
         self.moved = np.array([p.kind in SCREENED_KINDS for p in parameters])
         n_modes = solver.options.modes
-        basis = solver.with_options(modes=min(int(np.ceil(BASIS_PER_MODE * n_modes)), 70))
+        basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * n_modes), MAX_SOLVED_MODES))
         self.reduced = {name: basis.solve(name).reduced() for name in peaks.configurations}
         self.n_modes = n_modes
         self.rows = {name: peaks.of(name) for name in peaks.configurations}
 
     @property
     def usable(self) -> bool:
-        return self.moved.any() and all(r is not None for r in self.reduced.values())
+        return all(r is not None for r in self.reduced.values())
 
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds in z of the screened parameters: the search box within the space's bounds."""
@@ -109,7 +111,7 @@ class _Search:
     def spectra(self, z: np.ndarray) -> dict[str, np.ndarray] | None:
         """The Ritz frequencies of every configuration at z; None where z is inadmissible."""
         try:
-            specimen = self.space.apply(self.solver.specimen, self.values(z))
+            specimen = ties.apply(self.solver.specimen, self.space.parameters, self.values(z))
         except SpecError:
             return None
         return {name: red.frequencies_hz(specimen.laminate(name))[: self.n_modes]
@@ -167,8 +169,11 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
     the pairing)."""
     if "label" in peaks.table and peaks.table["label"].fillna("").astype(str).str.len().gt(0).any():
         return None
+    screened = sum(p.kind in SCREENED_KINDS for p in parameters)
+    if not 0 < screened <= MAX_DIMENSIONS:
+        return None
     search = _Search(solver, peaks, parameters)
-    if not search.usable or search.moved.sum() > MAX_DIMENSIONS:
+    if not search.usable:
         return None
     low, high = search.box()
     sobol = qmc.Sobol(len(low), scramble=True, seed=0).random(SAMPLES)
