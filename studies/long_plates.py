@@ -21,6 +21,7 @@ nu12 0.40) with no mode numbers.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -111,7 +112,8 @@ def simulate(seed: int, folder: Path, real_like: bool = True) -> Plate:
 class Outcome:
     """One plate's loop: seconds per step, the fits' statuses, the peaks used, the
     effects selected and (identified - true) / std of the layer properties after the
-    recommended refit (the baseline fit's where nothing was selected)."""
+    recommended refit (the baseline fit's where nothing was selected; NaN where the std
+    is infinite)."""
 
     seed: int
     real_like: bool
@@ -153,7 +155,8 @@ def run_plate(plate: Plate, folder: Path) -> Outcome:
     z, ratio = {}, {}
     for p, v, s in zip(final.parameters, final.values, final.uncertainty.std):
         if p.target == "spruce" and p.kind in PROPERTIES:
-            z[p.kind] = float((v - plate.truth[p.kind]) / s)
+            # An undetermined estimate (infinite std) has no z-score, not a perfect one.
+            z[p.kind] = float((v - plate.truth[p.kind]) / s) if np.isfinite(s) and s > 0 else math.nan
             ratio[p.kind] = float(v / plate.truth[p.kind])
     write_text(folder / "report.txt", "\n\n".join([baseline.report(), diagnosis.report(), final.report()]) + "\n")
     used = int((final.peaks.modes > 0).sum()) if final.peaks is not None else len(measurements)
