@@ -162,9 +162,14 @@ class LaminateSolution:
             return None
         units = self.units
         if self.transverse_shear:
-            n_c = units.element_stiffness.shape[0]
-            stiffness = [units.combined_data(np.eye(n_c)[c], units.element_stiffness) for c in range(n_c)]
-            mass = [units.combined_data(np.eye(3)[j], units.element_mass) for j in range(3)]
+            # One unit matrix at a time, not ``units.stiffness_data``: that would keep all
+            # 21 assembled arrays of a shear mesh cached with its units (``solve_laminate``
+            # avoids them for the same reason).
+            def unit_data(element_matrices):
+                n = len(element_matrices)
+                return [units.combined_data(np.eye(n)[c], element_matrices) for c in range(n)]
+
+            stiffness, mass = unit_data(units.element_stiffness), unit_data(units.element_mass)
         else:
             stiffness, mass = units.stiffness_data, units.mass_data
         fixed = attachment_data(units, self.attachments) if self.attachments else (None, None)

@@ -175,7 +175,8 @@ def run(out=None, seeds=(10, 11, 12), real_like: bool = True) -> list[Outcome]:
     rows = [{"plate": o.seed, "peaks": o.peaks, "used": o.used, "fit": o.fit_status,
              "fit_rms_%": round(100 * o.fit_rms, 3), "selected": " + ".join(o.selected) or "-",
              "refit": o.refit_status or "-", **{f"{k}_s": round(v, 1) for k, v in o.seconds.items()},
-             **{f"z_{k}": round(v, 2) for k, v in o.z.items()}} for o in outcomes]
+             **{f"z_{k}": round(v, 2) if math.isfinite(v) else "undetermined" for k, v in o.z.items()}}
+            for o in outcomes]
     summary = pd.DataFrame(rows).to_string(index=False)
     write_text(folder / "summary.txt", "Long spruce-like plates, recordings to layers\n\n" + summary + "\n")
     return outcomes

@@ -56,10 +56,6 @@ class ReducedModel:
         return cls(weights, np.stack([projected(d) for d in stiffness_data]),
                    np.stack([projected(d) for d in mass_data]), fixed_k, fixed_m)
 
-    @property
-    def size(self) -> int:
-        return self.stiffness.shape[1]
-
     def eigenvalues(self, laminate) -> np.ndarray:
         """Ritz values omega^2 [rad^2/s^2] of ``laminate``, lowest first."""
         stiffness_coefficients, inertia = self.weights(laminate)

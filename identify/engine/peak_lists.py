@@ -130,10 +130,12 @@ def _screened_start(handbook: SpecimenModel, scaled: SpecimenModel, matches: dic
     moved = ", ".join(f"{p.name} {display(p, scaled.value(p)):.4g} -> {display(p, v):.4g}"
                       for p, v in screened.values.items() if not np.isclose(v, scaled.value(p), rtol=1e-6))
     count = sum(int(m.matched.sum()) for m in screened.matches.values())
+    scaled_cost = (f"{screened.scaled_cost:.3g}" if np.isfinite(screened.scaled_cost)
+                   else "inadmissible")  # polished onto an inadmissible material
     return scaled.with_values(screened.values), screened.matches, (
         f"start screened over {screened.scored} points of the moduli on a reduced model: {moved}; on a full solve "
         f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} (matching cost {screened.cost:.3g}; "
-        f"the scaled start polished: {screened.scaled_cost:.3g})")
+        f"the scaled start polished: {scaled_cost})")
 
 
 def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Parameter] | None = None,

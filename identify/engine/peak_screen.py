@@ -85,6 +85,7 @@ class _Search:
         self.space = ParameterSpace.of(parameters, solver.specimen)
         self.start = np.array([solver.value(p) for p in parameters], dtype=float)
         self.moved = np.array([p.kind in SCREENED_KINDS for p in parameters])
+        self.z_start = self.space.to_z(self.start)[self.moved]
         n_modes = solver.options.modes
         basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * n_modes), MAX_SOLVED_MODES))
         self.reduced = {name: basis.solve(name).reduced() for name in peaks.configurations}
@@ -97,11 +98,10 @@ class _Search:
 
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds in z of the screened parameters: the search box within the space's bounds."""
-        z0 = self.space.to_z(self.start)[self.moved]
         log = self.space.is_log[self.moved]
         half = np.where(log, np.log(MODULUS_RANGE), NU_RANGE)
         low, high = (b[self.moved] for b in self.space.z_bounds())
-        return np.maximum(z0 - half, low), np.minimum(z0 + half, high)
+        return np.maximum(self.z_start - half, low), np.minimum(self.z_start + half, high)
 
     def values(self, z: np.ndarray) -> np.ndarray:
         full = self.space.to_z(self.start)
@@ -135,7 +135,6 @@ class _Search:
         directions the peaks determine move freely, those they do not (a weak layer of
         a laminate) stay at the start instead of wandering."""
         low, high = self.box()
-        z0 = self.space.to_z(self.start)[self.moved]
         half = (high - low) / 2
         for tolerance in POLISH_TOLERANCES:
             spectra = self.spectra(z)
@@ -149,7 +148,7 @@ class _Search:
                 spectra = self.spectra(trial)
                 if spectra is None:
                     return np.full(len(trial) + sum(int(m.matched.sum()) for m in pairs.values()), 1e3)
-                out = [(trial - z0) / half]  # the start as a prior: a direction no peak sets stays there
+                out = [(trial - self.z_start) / half]  # the start as a prior: a direction no peak sets stays there
                 for name, m in pairs.items():
                     f = self.rows[name]["frequency_hz"].to_numpy()[m.matched]
                     out.append(np.log(spectra[name][m.modes[m.matched]] / f) / SCREEN_TOLERANCE)
@@ -167,7 +166,7 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
     candidate; None where the screen does not run (no stiffness parameter, more than
     ``MAX_DIMENSIONS`` of them, a layerwise model, labelled peaks: labels already pin
     the pairing)."""
-    if "label" in peaks.table and peaks.table["label"].fillna("").astype(str).str.len().gt(0).any():
+    if any(peaks.table["label"]):  # "" where none is given
         return None
     screened = sum(p.kind in SCREENED_KINDS for p in parameters)
     if not 0 < screened <= MAX_DIMENSIONS:
@@ -177,7 +176,7 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
         return None
     low, high = search.box()
     sobol = qmc.Sobol(len(low), scramble=True, seed=0).random(SAMPLES)
-    points = [search.space.to_z(search.start)[search.moved]] + list(qmc.scale(sobol, low, high))
+    points = [search.z_start] + list(qmc.scale(sobol, low, high))
     costs = np.array([search.cost(z) for z in points])
     best = [search.polish(points[i]) for i in np.argsort(costs)[:POLISHED] if np.isfinite(costs[i])]
     z_scaled = search.space.to_z(np.array([scaled.value(p) for p in parameters]))[search.moved]

@@ -5,16 +5,21 @@ import numpy as np
 import pytest
 
 from fem.solver.attachments import PointMass
+from fem.spec import parse_spec
 from fem.specimen import Parameter
-from studies import long_plates
 
+#: A long spruce plate at handbook values (the shape of a public tap-test data set's).
+SPRUCE = {"specimen": {"length_mm": 580.0, "width_mm": 213.0, "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
+          "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.80, "G12_GPa": 0.62, "nu12": 0.40,
+                                   "density_kg_m3": 440.0, "identify": True}},
+          "configurations": [{"name": "original"}]}
 MOVED = {"E1": 1.15, "E2": 0.95, "G12": 1.05}
 
 
 def _models(**options):
     """A long spruce plate solved with 30 modes (the basis) and the same mesh moved to
     E1 +15 %, E2 -5 %, G12 +5 %, nu12 0.40 -> 0.35 (a screen's range)."""
-    start = long_plates.handbook_model()
+    start = parse_spec(SPRUCE)
     divisions = start.with_options(modes=20).options.divisions_for(start.specimen)
     start = start.with_options(modes=30, divisions=divisions, **options)
     if options.get("transverse_shear"):
@@ -43,5 +48,5 @@ def test_ritz_frequencies_against_full_solves(options):
 
 
 def test_layerwise_has_no_reduced_model():
-    start = long_plates.handbook_model().with_options(modes=4, theory="layerwise")
+    start = parse_spec(SPRUCE).with_options(modes=4, theory="layerwise")
     assert start.solve("original").reduced() is None
