@@ -47,9 +47,9 @@ from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
-                              continued, frees_any, held_shear_moduli, point_mass_hints, point_mass_starts,
-                              prepare_effect, released, restarted_from_spec, shear_moduli_in, spec_start,
-                              with_determined_shear)
+                              continued, frees_any, held_shear_moduli, matched_peaks, point_mass_hints,
+                              point_mass_starts, prepare_effect, rematched, released, restarted_from_spec,
+                              shear_moduli_in, spec_start, with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -592,6 +592,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         say("the baseline fits at the noise level: no effect refitted")
         return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
     nominal = model.specimen
+    peak_list, measurements = measurements, matched_peaks(baseline, measurements)  # the selection's data
     respec = spec_start(model, measurements, baseline)
     state, selected, steps, closed = baseline, [], [], set()
     margins: dict[str, tuple[int, float, str]] = {}  # refinement -> (round, chi^2 it explained beyond, of what)
@@ -706,9 +707,9 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                           seconds=time.perf_counter() - completion_started))
         selected.append(completion)
         state = completion.fit
-    final = _final(state, measurements, baseline, selected, nominal, say) if selected else None
+    final = _final(state, peak_list, baseline, selected, nominal, say) if selected else None
     taken_out = ()
-    determined = _determined_final(final, steps, selected, measurements, baseline, nominal, say)
+    determined = _determined_final(final, steps, selected, peak_list, baseline, nominal, say)
     if determined is not None:
         final, step = determined
         steps.append(step)
@@ -828,8 +829,10 @@ def _final(state: FitResult, measurements: Measurements, baseline: FitResult, se
     check, the layer properties the thin-plate fit held freed again where the data now
     determine them (``released``); its status is its own (converged only when consistent
     with the scatter)."""
-    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = continued(state, measurements, FINAL_OPTIONS, settle=True)
+    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full"
+        + ("" if measurements.ranked else ", the peaks matched again") + ")")
+    result = rematched(state, measurements, baseline, FINAL_OPTIONS) if not measurements.ranked \
+        else continued(state, measurements, FINAL_OPTIONS, settle=True)
     result = with_causes(with_budget(released(result, measurements, baseline, nominal, FINAL_OPTIONS)))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),

@@ -158,12 +158,34 @@ def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None
 
 
 def continued(fit: FitResult, measurements: Measurements, options: FitOptions, settle: bool | str = "quick",
-              effect_of: dict | None = None) -> FitResult:
+              effect_of: dict | None = None, like: FitResult | None = None) -> FitResult:
     """``fit`` iterated on from where it stopped: its model, parameters, effects and
-    pairing (``effect_of`` default its own); causes of a poor fit are left to the caller."""
+    pairing (``effect_of`` default its own); causes of a poor fit are left to the caller.
+    ``like``: the fit whose peak matching a peak list starts from (default ``fit``; a fit
+    made on ``matched_peaks`` has none, its baseline's is the one it was fitted on)."""
     return fit_layers(fit.model, measurements, list(fit.parameters), options,
-                      effect_of=fit.effect_of if effect_of is None else effect_of, like=fit, explain=False,
+                      effect_of=fit.effect_of if effect_of is None else effect_of, like=like or fit, explain=False,
                       settle=settle, pairings=fit.pairings)
+
+
+def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
+    """The data an effect's refit on top of ``fit`` is made on: a peak list's peaks as
+    ``fit`` matched them (ranked), ranked measurements as they are.  A refit of the peak
+    list itself would match its peaks again on the way, so its misfit would be over other
+    peaks than ``fit``'s: neither comparable (a real-like spruce plate's candidates all
+    ended "worse" than the baseline) nor bound to descend from it, and each round of
+    re-matching is a refit.  The peaks are matched again once, by the final refit
+    (``rematched``)."""
+    return measurements if measurements.ranked else fit.measurements
+
+
+def rematched(fit: FitResult, measurements: Measurements, baseline: FitResult, options: FitOptions) -> FitResult:
+    """A fit made on ``matched_peaks(baseline, measurements)`` refitted on the peak list
+    ``measurements`` itself, from ``baseline``'s matching, the peaks matched again at its
+    solution and the pairing checked in full; ranked measurements: ``fit`` as it is."""
+    if measurements.ranked:
+        return fit
+    return continued(fit, measurements, options, settle=True, like=baseline)
 
 
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
@@ -193,16 +215,17 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         baseline = comparison.fitted
         hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
                                   comparison.node_xy)
-    respec = spec_start(model, measurements, baseline)
+    data = matched_peaks(baseline, measurements)
+    respec = spec_start(model, data, baseline)
     state, notes = baseline, []
     for number, kind in enumerate(kinds):
-        last = number == len(kinds) - 1
+        settle = True if number == len(kinds) - 1 and data is measurements else "quick"
         hints = hints if state is baseline else point_mass_hints(state)
-        added = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
-                           progress=progress, options=options)
+        added = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
+                           options=options)
         if restarted_from_spec([kind], state, baseline, respec):
-            again = add_effect(state, kind, measurements, model.specimen, hints, settle=True if last else "quick",
-                               progress=progress, options=options, prepared=prepare_effect(state, kind, hints, respec))
+            again = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
+                               options=options, prepared=prepare_effect(state, kind, hints, respec))
             added = better_start(added, again)
         if added.result is None:
             advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
@@ -211,6 +234,7 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
         state = added.result
+    state = rematched(state, measurements, baseline, options or FitOptions(max_iterations=EFFECT_ITERATIONS))
     result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, options, settle=True)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
     result = with_causes(released(result, measurements, baseline, model.specimen,
