@@ -56,11 +56,15 @@ class ReducedModel:
         return cls(weights, np.stack([projected(d) for d in stiffness_data]),
                    np.stack([projected(d) for d in mass_data]), fixed_k, fixed_m)
 
+    def matrices(self, laminate) -> tuple[np.ndarray, np.ndarray]:
+        """The projected stiffness and mass (r, r) of ``laminate``, attachments included."""
+        stiffness_coefficients, inertia = self.weights(laminate)
+        return (np.tensordot(stiffness_coefficients, self.stiffness, 1) + self.fixed_stiffness,
+                np.tensordot(inertia, self.mass, 1) + self.fixed_mass)
+
     def eigenvalues(self, laminate) -> np.ndarray:
         """Ritz values omega^2 [rad^2/s^2] of ``laminate``, lowest first."""
-        stiffness_coefficients, inertia = self.weights(laminate)
-        k = np.tensordot(stiffness_coefficients, self.stiffness, 1) + self.fixed_stiffness
-        m = np.tensordot(inertia, self.mass, 1) + self.fixed_mass
+        k, m = self.matrices(laminate)
         return sla.eigh(k, m, eigvals_only=True, check_finite=False)
 
     def frequencies_hz(self, laminate) -> np.ndarray:
