@@ -228,6 +228,9 @@ class SuspensionEffect(Effect):
     keys = ("stiffness_N_m", "points_mm")
     #: Default support points when none are given: near the four corners (10 % in).
     DEFAULT_INSET = 0.1
+    #: The vanishing start's stiffness, a share of the default start's: the default moves
+    #: the first elastic mode by about 0.1 %, this by about 1e-8, far below any scatter.
+    VANISHING = 1e-5
 
     def _points(self, specimen, table):
         if "points_mm" not in table:
@@ -256,6 +259,13 @@ class SuspensionEffect(Effect):
         note = "springs near the four corners (give points_mm in the spec to fix them)"
         return [SwitchedOn(self.kind, model.with_attachments(specimen.attachments + (springs,)),
                            (Parameter("stiffness", self.kind),), note)]
+
+    def other_starts(self, switched):
+        """The springs all but gone (``VANISHING``): the fit the effect is added to, from
+        where a refit can only descend (from the default start one stopped above it, its
+        stiffness creeping towards zero in log space while the layers lagged)."""
+        p = Parameter("stiffness", self.kind)
+        return [switched.model.with_values({p: self.VANISHING * switched.model.value(p)})]
 
 
 class Orientation(Effect):

@@ -592,14 +592,15 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         say("the baseline fits at the noise level: no effect refitted")
         return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
     nominal = model.specimen
-    peak_list, measurements = measurements, matched_peaks(baseline, measurements)  # the selection's data
-    respec = spec_start(model, measurements, baseline)
+    peak_list = measurements
+    respec = spec_start(model, matched_peaks(baseline, peak_list), baseline)
     state, selected, steps, closed = baseline, [], [], set()
     margins: dict[str, tuple[int, float, str]] = {}  # refinement -> (round, chi^2 it explained beyond, of what)
     pool = None
     try:
         for number in range(1, len(kinds) + 1):
             round_started = time.perf_counter()
+            measurements = matched_peaks(state, peak_list)  # the candidates' data: the state's matched peaks
             trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
             if not trying:
                 steps.append(Step(number, tuple(c.kind for c in selected), state, (), None,
@@ -672,16 +673,23 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             reason += _signs(ordered, best) + "".join(held.values())
             # The chosen refit is taken to convergence (the candidates stopped once their misfit
             # settled) before the next round looks again.
-            polished = continued(best.fit, measurements, FINAL_OPTIONS)
-            polished, notes = with_determined_shear(polished, measurements, nominal, FINAL_OPTIONS)
+            # On a peak list the peaks are matched again here, from the state's matching: the
+            # next round's candidates are judged on the new state's matched peaks.
+            polished = continued(best.fit, peak_list, FINAL_OPTIONS) if peak_list.ranked else \
+                rematched(best.fit, peak_list, state, FINAL_OPTIONS, settle="quick")
+            polished, notes = with_determined_shear(polished, peak_list, nominal, FINAL_OPTIONS)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
             # that the next round's candidates would take up.
-            polished = released(polished, measurements, baseline, nominal, FINAL_OPTIONS, settle="quick")
-            if polished.finished and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares):
+            polished = released(polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle="quick")
+            rematch = not peak_list.ranked
+            if rematch or (polished.finished and (notes or polished.statistics.sum_squares
+                                                  <= best.fit.statistics.sum_squares)):
                 added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
                                 added=tuple(p for p in polished.parameters if p not in state.parameters))
-                best = _candidate(state, added)
+                # Re-matched, the misfit is over other peaks than the state's: the gain stays
+                # the one the candidate won on the state's.
+                best = replace(best, added=added) if rematch else _candidate(state, added)
                 ordered = [best if c.kind == best.kind else c for c in ordered]
             steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped),
                               time.perf_counter() - round_started))
@@ -695,7 +703,9 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         if pool is not None:
             pool.shutdown()
     completion_started = time.perf_counter()
-    completion = _completed(state, selected, kinds, measurements, nominal, say) if selected else None
+    matched = state  # the last state a peak list was matched to (the completion is refitted on its matching)
+    completion = _completed(state, selected, kinds, matched_peaks(state, peak_list), nominal, say) if selected \
+        else None
     if completion is not None:
         before = tuple(c.kind for c in selected)
         reason = (f"add {completion.kind} in place of the single shear layer (gain / c = "
@@ -707,7 +717,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                           seconds=time.perf_counter() - completion_started))
         selected.append(completion)
         state = completion.fit
-    final = _final(state, peak_list, baseline, selected, nominal, say) if selected else None
+    final = _final(state, peak_list, baseline, selected, nominal, say, like=matched) if selected else None
     taken_out = ()
     determined = _determined_final(final, steps, selected, peak_list, baseline, nominal, say)
     if determined is not None:
@@ -824,15 +834,15 @@ def _rotary_inertia(state: FitResult, selected, kinds, measurements: Measurement
     return candidate if candidate.gain > 0 else None
 
 
-def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, nominal, say) -> FitResult:
+def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, nominal, say,
+           like: FitResult | None = None) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
-    check, the layer properties the thin-plate fit held freed again where the data now
-    determine them (``released``); its status is its own (converged only when consistent
-    with the scatter)."""
-    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full"
-        + ("" if measurements.ranked else ", the peaks matched again") + ")")
-    result = rematched(state, measurements, baseline, FINAL_OPTIONS) if not measurements.ranked \
-        else continued(state, measurements, FINAL_OPTIONS, settle=True)
+    check (a peak list matched again from ``like``'s matching, default ``state``'s), the
+    layer properties the thin-plate fit held freed again where the data now determine
+    them (``released``); its status is its own (converged only when consistent with the
+    scatter)."""
+    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
+    result = continued(state, measurements, FINAL_OPTIONS, settle=True, like=like)
     result = with_causes(with_budget(released(result, measurements, baseline, nominal, FINAL_OPTIONS)))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),

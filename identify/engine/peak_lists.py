@@ -6,8 +6,9 @@
    as the square root of stiffness), a closed-form start like the plate formulas IET
    and Resonalyser users apply.
 2. The matched peaks are fitted as ranked measurements (``updating.update``).
-3. At the solution the peaks are matched again with a narrower tolerance (``TIGHTENING``),
-   then with the model's remaining error as the tolerance; if a different set of peaks
+3. At the solution the peaks are matched again with a narrower tolerance (``TIGHTENING``;
+   not when the fit starts from another fit's matching, already at a solution), then
+   with the model's remaining error as the tolerance; if a different set of peaks
    or modes is matched, the fit is redone from there, until the matching settles (at
    most ``MAX_ROUNDS``).
 Every peak left out, and every model mode in the band no peak was matched to, is
@@ -155,10 +156,13 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
         matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
         model, matches, note = _screened_start(handbook, model, matches, peaks, parameters, options)
         notes += [note] if note else []
+    # From a solution's matching the model is as close as it gets: no narrowing rounds, its
+    # own error is the tolerance at once.
+    narrowing = TIGHTENING if start_matches is None else ()
     seen = [_signature(matches)]
     history: list[Iteration] = []
     result = None
-    for round_ in range(MAX_ROUNDS + len(TIGHTENING)):
+    for round_ in range(MAX_ROUNDS + len(narrowing)):
         ranked = _ranked(peaks, matches)
         if result is None:  # a round whose matching is the last fit's would refit the same problem
             # Rounds while the matching moves skip the pairing checks; the settled one does them.
@@ -166,8 +170,8 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
                             settle=False)
             history += _renumbered(result.history, history)
             model = result.model  # the last fit's solution: where the next round and the final fit start
-        tightening = round_ < len(TIGHTENING)
-        tolerance = TIGHTENING[round_] if tightening else _model_error(result)
+        tightening = round_ < len(narrowing)
+        tolerance = narrowing[round_] if tightening else model_error(result)
         again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
         unchanged = all(np.array_equal(again[c].modes, matches[c].modes) for c in matches)
         if not tightening and _signature(again) == seen[-1]:
@@ -211,7 +215,16 @@ def _without_redundancy(result: FitResult) -> FitResult:
         "column), or identify fewer parameters"))
 
 
-def _model_error(result: FitResult) -> float:
+def matching_cost(result: FitResult, peaks: Measurements, tolerance: float) -> float:
+    """The cost of matching every peak of ``peaks`` to ``result``'s model at ``tolerance``
+    (``matching.match``: a matched peak its squared error in sigma, a left-out one
+    ``GATE^2``): two fits of one peak list compared on all its peaks at one tolerance,
+    whichever peaks each of them matched."""
+    solver = _solver(result.model, peaks, FitOptions(), result.measurements)
+    return sum(m.cost for m in _match_all(solver, peaks, tolerance).values())
+
+
+def model_error(result: FitResult) -> float:
     """How far the model may be off at a solution (relative): a robust scale of the
     residuals (1.48 x their median absolute value), at least ``SOLUTION_TOLERANCE_FLOOR``."""
     return max(1.4826 * float(np.median(np.abs(result.rel_error))), SOLUTION_TOLERANCE_FLOOR)
@@ -253,4 +266,4 @@ def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Ma
     return PeakAssignment(peaks, modes, model_hz, nearest, unseen, dict(matches))
 
 
-__all__ = ["PeakAssignment", "fit_peak_list", "matched_at", "peak_table"]
+__all__ = ["PeakAssignment", "fit_peak_list", "matched_at", "matching_cost", "model_error", "peak_table"]
