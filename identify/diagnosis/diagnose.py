@@ -47,7 +47,8 @@ from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
-                              continued, frees_any, held_shear_moduli, matched_peaks, point_mass_hints,
+                              continued, ended_worse, frees_any, held_shear_moduli, matched_peaks,
+                              point_mass_hints,
                               point_mass_starts, prepare_effect, rematched, released, restarted_from_spec,
                               shear_moduli_in, spec_start, with_determined_shear)
 from ..measurements import Measurements
@@ -218,6 +219,7 @@ class Step:
     reason: str
     skipped: tuple[str, ...] = ()   # refinements not tried (what they refine did not pay)
     seconds: float = float("nan")   # the round's wall time
+    above_start: tuple[str, ...] = ()  # candidates whose refit ended above ``start`` (``fitting.ended_worse``)
 
     def to_dict(self) -> dict:
         return {"round": self.number, "with": list(self.selected_before), "rms_rel_error": self.start.rms_rel_error,
@@ -247,6 +249,14 @@ class Diagnosis:
     @property
     def selected(self) -> tuple[Candidate, ...]:
         return tuple(s.chosen for s in self.steps if s.chosen is not None and s.chosen.kind not in self.dropped)
+
+    @property
+    def above_start(self) -> tuple[str, ...]:
+        """Candidates whose refit ended above the misfit of the state they were added to
+        (``Step.above_start``), as "round N: kind".  At the limit where its effect
+        vanishes each is that state (with rotary inertia, for the kinds that bring it), so
+        this is a failed refit to report, not a normal event: the count should be 0."""
+        return tuple(f"round {s.number}: {kind}" for s in self.steps for kind in s.above_start)
 
     @property
     def explained(self) -> bool:
@@ -288,6 +298,7 @@ class Diagnosis:
             "path": [s.to_dict() for s in self.steps],
             "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
             "dropped": list(self.dropped),
+            "above_start": list(self.above_start),
             "seconds": finite_or_none(self.seconds),
         }
 
@@ -346,6 +357,9 @@ class Diagnosis:
                 lines.append(f"  {p.name:40s} {shown}")
             notes = [text for _, text in final.effect_notes]
             lines += [f"  - {text}" for text in notes]
+        if self.above_start:
+            lines += ["", "refits that ended above the fit they were added to (where its effect vanishes each is "
+                          f"that fit: a failed refit, please report it): {', '.join(self.above_start)}"]
         if math.isfinite(self.seconds):
             lines += ["", f"({self.seconds:.1f} s)"]
         return "\n".join(lines) + "\n\n" + self.comparison.report()
@@ -638,6 +652,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 margins.update(_margins(refining, candidates, number))
             candidates = _continue_unfinished(candidates, measurements, state, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
+            above = tuple(c.kind for c in candidates if c.fit is not None and c.fit.finished
+                          and ended_worse(c.fit, state))
             finished = [c for c in candidates if c.eligible]
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
             ordered = plausible_first([c for c in candidates if c.fit is not None], c_hat, PLAUSIBILITY_MARGIN,
@@ -659,7 +675,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                           f"<= {MIN_GAIN:g})")
                 reason += _signs(ordered, best) + "".join(held.values())
                 steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped),
-                                  time.perf_counter() - round_started))
+                                  time.perf_counter() - round_started, above))
                 break
             reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
             lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
@@ -692,7 +708,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 best = replace(best, added=added) if rematch else _candidate(state, added)
                 ordered = [best if c.kind == best.kind else c for c in ordered]
             steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped),
-                              time.perf_counter() - round_started))
+                              time.perf_counter() - round_started, above))
             selected.append(best)
             state = best.fit
             if state.statistics.consistent:

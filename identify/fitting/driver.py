@@ -623,7 +623,7 @@ def shear_moduli_in(parameters) -> list[Parameter]:
     return [p for p in parameters if p.kind in SHEAR_MODULI]
 
 
-def _worse(result: FitResult, state: FitResult) -> bool:
+def ended_worse(result: FitResult, state: FitResult) -> bool:
     """A refit that ends with more misfit than the fit it started from (which is the same
     model with the effect off), by more than ``NOT_WORSE_CHI2`` units of chi^2, has
     failed: it stopped in a local minimum or diverged."""
@@ -637,7 +637,7 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
     that the model starts at the fit without shear, from where every step can only lower
     the misfit) are tried, the lowest misfit kept.  Returns (result, parameters, notes)."""
     shear = shear_moduli_in(new)
-    if not shear or not _worse(result, state):
+    if not shear or not ended_worse(result, state):
         return result, new, []
     specimen = ready.model.specimen
     starts = ((ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start))
@@ -657,19 +657,19 @@ def _first_not_worse(state, ready: Prepared, result, starts, measurements, param
     for model, where in starts:
         tried.append((fit_layers(model, measurements, parameters, options, effect_of=effect_of, like=state,
                                  explain=False, settle=settle, pairings=ready.pairings or state.pairings), where))
-        if not _worse(tried[-1][0], state):
+        if not ended_worse(tried[-1][0], state):
             break
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
     return best, where, len(tried) - 1
 
 
 def _other_starts(state, ready: Prepared, result, measurements, parameters, effect_of, settle, options):
-    """A refit that ended worse than ``state`` (``_worse``) is refitted from the effect's
+    """A refit that ended worse than ``state`` (``ended_worse``) is refitted from the effect's
     other starts (``Prepared.others``) until one is not; the lowest misfit kept.  blind19
     (a hybrid whose sensor was not yet placed): the orientation from -3 deg diverged to
     4.6 % RMS, where from +3 deg it had reached 0.29 % (study run 5).  Returns (result,
     notes)."""
-    if not ready.others or not _worse(result, state):
+    if not ready.others or not ended_worse(result, state):
         return result, []
     starts = ((m, _described(ready.added, m)) for m in ready.others)
     best, where, count = _first_not_worse(state, ready, result, starts, measurements, parameters, effect_of, settle,
@@ -875,7 +875,7 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
 
     trials = [refit(on) for on in chosen]
     result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
-    if _worse(result, state):
+    if ended_worse(result, state):
         # Every start ended above the fit the mass is added to: once more from the mass
         # all but gone at the best one's start, from where the refit can only descend.
         mass = Parameter("mass", "point_mass")

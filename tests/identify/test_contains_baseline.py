@@ -6,9 +6,11 @@ import tomllib
 
 import pytest
 
+from fem.effects import SuspensionEffect
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.compare import compare
+from identify.diagnosis.diagnose import diagnose
 from identify.fitting import driver
 from identify.fitting.driver import NOT_WORSE_CHI2, add_effect, point_mass_hints
 from identify.fitting.plausibility import plate_mass
@@ -53,8 +55,20 @@ def test_a_point_mass_whose_starts_all_end_worse_is_refitted_from_a_vanishing_ma
         return fit_layers(start_model, *args, **kwargs)
 
     monkeypatch.setattr(driver, "fit_layers", recording)
-    monkeypatch.setattr(driver, "_worse", lambda result, state: True)
+    monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
     added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
     vanishing = driver.VANISHING_MASS * plate_mass(model.specimen)
     assert started[-1] == pytest.approx(vanishing) and all(m > 100 * vanishing for m in started[:-1])
     assert added.result.statistics.sum_squares <= baseline.statistics.sum_squares + NOT_WORSE_CHI2
+
+
+def test_a_refit_that_ends_above_its_state_is_reported(heavy_sensor_baseline, monkeypatch):
+    """Without its vanishing start the suspension refit ends above the baseline: the
+    diagnosis lists it in ``above_start`` (its report and ``--json``) instead of letting
+    it pass as a candidate that did not pay."""
+    model, data, _ = heavy_sensor_baseline
+    monkeypatch.setattr(SuspensionEffect, "other_starts", lambda self, switched: [])
+    result = diagnose(model, data, ["suspension"])
+    assert result.above_start == ("round 1: suspension",)
+    assert result.to_dict()["above_start"] == ["round 1: suspension"]
+    assert "round 1: suspension" in result.report()

@@ -49,6 +49,7 @@ def test_candidates_are_judged_on_the_baselines_peaks_and_descend(sensor_peaks):
     assert all(c.fit.statistics.n == base.n for c in first), [(c.kind, c.fit.statistics.n) for c in first]
     assert all(c.fit.statistics.sum_squares <= base.sum_squares for c in first), \
         [(c.kind, c.fit.statistics.sum_squares, base.sum_squares) for c in first]
+    assert result.above_start == ()
     assert [c.kind for c in result.selected][:1] == ["point_mass"]
     final = result.final
     assert final.peaks is not None and len(final.peaks.modes) == len(peaks)
