@@ -70,9 +70,20 @@ UD_NU23 = 0.45
 SHEAR_STARTS = (TRANSVERSELY_ISOTROPIC, (1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
 #: The effects that free transverse shear moduli.
 SHEAR_EFFECTS = ("transverse_shear", "thick_plate", "layerwise")
-#: The last start of a failed shear refit: shear moduli this many times G12, where the
-#: model is close to the one without shear (a continuation from the thin-plate fit).
-CONTINUATION_START = (8.0, 8.0)
+#: The last start of a failed shear refit is the thin-plate limit: shear moduli so stiff
+#: that the shear theory's frequencies lie within this share of the measurements' scatter
+#: of the fit it is added to (``vanishing_shear_start``), from where every accepted step
+#: lowers the misfit.  A fixed multiple of G12 is no such limit: at 8 G12 a balsa core
+#: (G12 60 MPa) still moves the modes by several per cent.
+VANISHING_SHEAR = 0.1
+#: ... found by the 1 / G law of the shear correction from two evaluations at these
+#: multiples of G12, and kept this far below the moduli's upper bound.
+SHEAR_PROBES = (8.0, 64.0)
+SHEAR_BOUND_MARGIN = 0.5
+#: From the limit the shear moduli are lowered by this factor a step, the layers refitted
+#: (at most ``CONTINUATION_ITERATIONS`` iterations) at each, while the misfit falls.
+CONTINUATION_STEP = 4.0
+CONTINUATION_ITERATIONS = 6
 #: A candidate whose refit could explain, by its linearised estimate (or a point mass by the
 #: residual scan), less than 1 / PRUNE_FACTOR of what another one explained is not refitted.
 PRUNE_FACTOR = 2.0
@@ -633,20 +644,84 @@ def ended_worse(result: FitResult, state: FitResult) -> bool:
 
 def _restarted(state, ready: Prepared, result, new, measurements, base, effect_of, settle, options):
     """A transverse-shear refit that ended worse than ``state`` is a failed start, not a
-    result: the other ``SHEAR_STARTS`` and ``CONTINUATION_START`` (shear moduli so stiff
-    that the model starts at the fit without shear, from where every step can only lower
-    the misfit) are tried, the lowest misfit kept.  Returns (result, parameters, notes)."""
+    result: the other ``SHEAR_STARTS`` and the thin-plate limit (``vanishing_shear_start``,
+    from where every step can only lower the misfit) are tried, the lowest misfit kept.
+    Returns (result, parameters, notes)."""
     shear = shear_moduli_in(new)
     if not shear or not ended_worse(result, state):
         return result, new, []
     specimen = ready.model.specimen
-    starts = ((ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start))
-              for start in _shear_starts(specimen, shear) + [CONTINUATION_START])
+    parameters = base + list(new)
+
+    def starts():
+        for start in _shear_starts(specimen, shear):
+            yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
+        model, factor = vanishing_shear_start(state, ready.model, shear, measurements, parameters, effect_of)
+        model, reached = shear_continuation(state, model, shear, factor, measurements, parameters, effect_of,
+                                            options)
+        yield model, (f"the thin-plate limit (G13 = G23 = {factor:.3g} G12), the shear moduli lowered step by step "
+                      f"while the misfit fell (to {reached:.3g} G12)")
+
+    best, where, count = _first_not_worse(state, ready, result, starts(), measurements, parameters, effect_of,
+                                          settle, options)
     best, where, count = _first_not_worse(state, ready, result, starts, measurements, base + list(new), effect_of,
                                           settle, options)
     note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
             f"restarted {count} time(s), kept {where or 'the screened start'}")
     return best, new, [note]
+
+
+def vanishing_shear_start(state: FitResult, model: SpecimenModel, shear, measurements: Measurements, parameters,
+                          effect_of: dict) -> tuple[SpecimenModel, float]:
+    """``model`` (``state``'s with a shear theory on) with the ``shear`` moduli at F x G12,
+    F so large that its paired frequencies lie within ``VANISHING_SHEAR`` of each
+    measurement's scatter of ``state``'s (thin-plate) ones: the shear correction falls as
+    1 / G, so two evaluations (``SHEAR_PROBES``) give each mode's f = f_inf + c / F and F
+    follows; at most ``SHEAR_BOUND_MARGIN`` of the moduli's upper bound.  What does not
+    vanish with the shear (rotary inertia, for the Mindlin and layerwise models) stays.
+    Returns (the model, F)."""
+    specimen = model.specimen
+
+    def paired_hz(factor: float) -> np.ndarray:
+        trial = model.with_values(_shear_values(specimen, shear, (factor, factor)))
+        return fit_layers(trial, measurements, parameters, FitOptions(max_iterations=0), effect_of=effect_of,
+                          like=state, explain=False, settle=False, pairings=state.pairings).model_hz
+
+    low, high = SHEAR_PROBES
+    c = (paired_hz(low) - paired_hz(high)) / (1 / low - 1 / high)
+    table = measurements.table
+    scatter = (table["std_hz"].to_numpy() if measurements.has_std
+               else ASSUMED_SCATTER_REL * table["frequency_hz"].to_numpy())
+    factor = max(high, float(np.max(np.abs(c) / (VANISHING_SHEAR * scatter))))
+    ceiling = min(SHEAR_BOUND_MARGIN * specimen.materials[p.target].bound(p.kind)[1]
+                  / specimen.materials[p.target].G12 for p in shear)
+    factor = min(factor, ceiling)
+    return model.with_values(_shear_values(specimen, shear, (factor, factor))), factor
+
+
+def shear_continuation(state: FitResult, model: SpecimenModel, shear, factor: float, measurements: Measurements,
+                       parameters, effect_of: dict, options: FitOptions) -> tuple[SpecimenModel, float]:
+    """From the thin-plate limit (``model``, its ``shear`` moduli at ``factor`` x G12), the
+    shear moduli lowered by ``CONTINUATION_STEP`` at a time, the other parameters refitted
+    at each, as long as the misfit falls: the model where a refit with the shear moduli
+    free starts (at the limit their derivatives vanish, so the refit itself would stop
+    there with them undetermined).  Every step kept lowers the misfit.  Returns (the
+    model, its factor)."""
+    others = [p for p in parameters if p not in shear]
+    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=options.stall_chi2)
+
+    def refit(start: SpecimenModel) -> FitResult:
+        return fit_layers(start, measurements, others, steps, effect_of=effect_of, like=state, explain=False,
+                          settle=False, pairings=state.pairings)
+
+    current = refit(model)
+    while factor > 1.0:
+        lower = max(1.0, factor / CONTINUATION_STEP)
+        trial = refit(current.model.with_values(_shear_values(current.model.specimen, shear, (lower, lower))))
+        if not trial.statistics.sum_squares < current.statistics.sum_squares:
+            break
+        current, factor = trial, lower
+    return current.model, factor
 
 
 def _first_not_worse(state, ready: Prepared, result, starts, measurements, parameters, effect_of, settle, options):
