@@ -26,7 +26,7 @@ from .causes import with_causes
 from .damping import identify_damping
 from ..engine.result import FitResult, FitStatus, Iteration
 from .plausibility import implausible, plate_mass
-from .point_mass_screen import screened_point_mass_starts
+from .point_mass_screen import PointMassScreen
 from .precheck import Precheck, Sensitivities, precheck
 from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
 from ..engine.statistics import ASSUMED_SCATTER_REL
@@ -936,10 +936,18 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
             chosen.append(on)
         if len(chosen) == POINT_MASS_CONTINUED:
             break
-    # The Ritz screen's best start over the whole plate too, where it is not one of those.
-    screened = [on for hint in screened_point_mass_starts(state, 1) for on in effect("point_mass").free(state.model, hint)
-                if all(_differs(on.model, other.model, [p for p in on.free if p.kind in ("x", "y")])
-                       for other in chosen)]
+    # The Ritz screen's best start over the whole plate too, where it is at another position
+    # and scores better than each of those on the screen.
+    screen = PointMassScreen.of(state)
+    screened = []
+    if screen is not None:
+        best = screen.best(1)[0]
+        xy = [Parameter(k, "point_mass") for k in ("x", "y")]
+        mass = Parameter("mass", "point_mass")
+        screened = [on for on in effect("point_mass").free(state.model, best)
+                    if all(_differs(on.model, other.model, xy) and best["left"] < screen.score(
+                        other.model.value(xy[0]), other.model.value(xy[1]), other.model.value(mass))
+                           for other in chosen)]
     chosen += screened
     if progress:
         progress(f"point_mass: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "

@@ -19,6 +19,7 @@ import math
 import numpy as np
 import scipy.linalg as sla
 
+from fem.errors import NotApplicableError
 from fem.model import MAX_SOLVED_MODES
 from fem.solver.attachments import point_operators
 
@@ -39,60 +40,82 @@ BASIS_PER_MODE = 1.5
 DISTINCT = 0.05
 
 
-def screened_point_mass_starts(state: FitResult, count: int) -> tuple[dict, ...]:
-    """The ``count`` best point-mass starts at distinct positions ({"xy", "mass_kg",
-    "left"}: left the weighted sum of squares there with the layers followed to first
-    order), best first; empty where the screen does not apply (a layerwise model, no
-    Jacobian)."""
-    data = state.measurements
-    if state.jacobian is None or state.pairings is None or len(state.jacobian) != len(data):
-        return ()
-    solver = solving_model(state.model, data)
-    basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * solver.options.modes), MAX_SOLVED_MODES))
-    configurations = []
-    table = data.table
-    for name in data.configurations:
-        solution = basis.solve(name)
-        reduced = solution.reduced(rigid_body=True)
-        if reduced is None:
-            return ()
-        rigid = solution.units.rigid_body_modes.shape[1]  # their Ritz values lead: zero, or a suspension's
-        rows = np.flatnonzero(table["configuration"].to_numpy() == name)
-        modes = rigid + state.pairings[name].indices
-        k, m = reduced.matrices(basis.specimen.laminate(name))
-        fields = np.hstack([solution.units.rigid_body_modes, solution.modes.shapes])
-        configurations.append((rows, modes, k, m, solution.units, fields))
-    q, _ = np.linalg.qr(state.jacobian)  # the layers (and effects) of the state, followed to first order
-    specimen = state.model.specimen
-    length, width = specimen.length, specimen.width
-    xs = (np.arange(POSITIONS[0]) + 0.5) / POSITIONS[0] * length
-    ys = (np.arange(POSITIONS[1]) + 0.5) / POSITIONS[1] * width
-    masses = MASS_SHARES * plate_mass(specimen)
-    scored = []
-    model_hz = np.empty(len(data))
-    for x in xs:
-        for y in ys:
-            displacements = []
-            for _, _, _, _, units, shapes in configurations:
-                dofs, rows_of = point_operators(units, x, y)
-                v = np.stack([rows_of[f] @ shapes[dofs] for f in ("u", "v", "w")])
-                displacements.append(v.T @ v)
-            for mass in masses:
-                for (rows, modes, k, m, _, _), vv in zip(configurations, displacements, strict=True):
-                    eigenvalues = sla.eigh(k, m + mass * vv, eigvals_only=True, check_finite=False)
-                    model_hz[rows] = np.sqrt(np.clip(eigenvalues[modes], 0.0, None)) / (2 * math.pi)
-                r = weighted_residuals(model_hz, data)
-                left = r - q @ (q.T @ r)
-                scored.append((float(left @ left), x, y, mass))
-    scored.sort()
-    span = max(length, width)
-    out: list[dict] = []
-    for left, x, y, mass in scored:
-        if all(_apart((x, y), start["xy"], length, width, DISTINCT * span) for start in out):
-            out.append({"xy": (x, y), "mass_kg": mass, "left": left})
-        if len(out) == count:
-            break
-    return tuple(out)
+class PointMassScreen:
+    """The Ritz model of ``state`` (every configuration) on which a point mass at any
+    position is scored (``score``) and the plate searched (``best``)."""
+
+    def __init__(self, state: FitResult):
+        self.data = data = state.measurements
+        solver = solving_model(state.model, data)
+        basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * solver.options.modes), MAX_SOLVED_MODES))
+        self.configurations = []
+        table = data.table
+        for name in data.configurations:
+            solution = basis.solve(name)
+            reduced = solution.reduced(rigid_body=True)
+            if reduced is None:
+                raise NotApplicableError("the point-mass screen needs a single-layer theory (no layerwise model)")
+            rigid = solution.units.rigid_body_modes.shape[1]  # their Ritz values lead: zero, or a suspension's
+            rows = np.flatnonzero(table["configuration"].to_numpy() == name)
+            k, m = reduced.matrices(basis.specimen.laminate(name))
+            fields = np.hstack([solution.units.rigid_body_modes, solution.modes.shapes])
+            self.configurations.append((rows, rigid + state.pairings[name].indices, k, m, solution.units, fields))
+        self.q, _ = np.linalg.qr(state.jacobian)  # the state's parameters, followed to first order
+        self.specimen = state.model.specimen
+
+    @classmethod
+    def of(cls, state: FitResult) -> "PointMassScreen | None":
+        """The screen of ``state``; None where it does not apply (a layerwise model, no
+        Jacobian or pairing)."""
+        if state.jacobian is None or state.pairings is None or len(state.jacobian) != len(state.measurements):
+            return None
+        try:
+            return cls(state)
+        except NotApplicableError:
+            return None
+
+    def _squares(self, x: float, y: float) -> list[np.ndarray]:
+        """Per configuration, V^T V of the basis displacements at (x, y) [m]."""
+        out = []
+        for _, _, _, _, units, fields in self.configurations:
+            dofs, rows_of = point_operators(units, x, y)
+            v = np.stack([rows_of[f] @ fields[dofs] for f in ("u", "v", "w")])
+            out.append(v.T @ v)
+        return out
+
+    def _left(self, squares, mass: float) -> float:
+        model_hz = np.empty(len(self.data))
+        for (rows, modes, k, m, _, _), vv in zip(self.configurations, squares, strict=True):
+            eigenvalues = sla.eigh(k, m + mass * vv, eigvals_only=True, check_finite=False)
+            model_hz[rows] = np.sqrt(np.clip(eigenvalues[modes], 0.0, None)) / (2 * math.pi)
+        r = weighted_residuals(model_hz, self.data)
+        left = r - self.q @ (self.q.T @ r)
+        return float(left @ left)
+
+    def score(self, x: float, y: float, mass: float) -> float:
+        """The weighted sum of squares with a ``mass`` [kg] at (x, y) [m], the state's
+        parameters followed to first order (the residual's part outside the span of its
+        Jacobian)."""
+        return self._left(self._squares(x, y), mass)
+
+    def best(self, count: int) -> tuple[dict, ...]:
+        """The ``count`` best starts ({"xy", "mass_kg", "left"}) at distinct positions
+        over the ``POSITIONS`` grid and ``MASS_SHARES``, best first."""
+        length, width = self.specimen.length, self.specimen.width
+        masses = MASS_SHARES * plate_mass(self.specimen)
+        scored = []
+        for x in (np.arange(POSITIONS[0]) + 0.5) / POSITIONS[0] * length:
+            for y in (np.arange(POSITIONS[1]) + 0.5) / POSITIONS[1] * width:
+                squares = self._squares(x, y)
+                scored += [(self._left(squares, mass), x, y, mass) for mass in masses]
+        scored.sort()
+        out: list[dict] = []
+        for left, x, y, mass in scored:
+            if all(_apart((x, y), start["xy"], length, width, DISTINCT * max(length, width)) for start in out):
+                out.append({"xy": (float(x), float(y)), "mass_kg": float(mass), "left": left})
+            if len(out) == count:
+                break
+        return tuple(out)
 
 
 def _apart(a, b, length: float, width: float, distance: float) -> bool:
@@ -102,4 +125,4 @@ def _apart(a, b, length: float, width: float, distance: float) -> bool:
     return float(np.hypot(*(fold[0] - fold[1]))) > distance
 
 
-__all__ = ["screened_point_mass_starts"]
+__all__ = ["PointMassScreen"]

@@ -8,7 +8,7 @@ import scipy.linalg as sla
 
 from fem.solver.attachments import PointMass, point_operators
 from identify.diagnosis.compare import compare
-from identify.fitting.point_mass_screen import BASIS_PER_MODE, POSITIONS, screened_point_mass_starts
+from identify.fitting.point_mass_screen import BASIS_PER_MODE, POSITIONS, PointMassScreen
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
@@ -52,7 +52,8 @@ def test_the_screen_starts_at_the_hidden_sensor(sensor_baseline):
     images (the frequencies cannot tell them apart on a plate with orthotropic layers),
     with a mass within a factor 2 of it (the grid's masses are 1.5x apart and the layers
     follow only to first order)."""
-    best = screened_point_mass_starts(sensor_baseline, 3)[0]
+    screen = PointMassScreen.of(sensor_baseline)
+    best = screen.best(3)[0]
     specimen = sensor_baseline.model.specimen
     a, b = specimen.length, specimen.width
     x, y = best["xy"]
@@ -60,3 +61,5 @@ def test_the_screen_starts_at_the_hidden_sensor(sensor_baseline):
     cell = np.hypot(a / POSITIONS[0], b / POSITIONS[1])
     assert min(np.hypot(x - p, y - q) for p, q in images) < 2 * cell, (best, images)
     assert 0.5 < best["mass_kg"] / SENSOR.mass < 2
+    assert screen.score(*best["xy"], best["mass_kg"]) == best["left"]
+    assert best["left"] < screen.score(SENSOR.x, SENSOR.y, 3 * SENSOR.mass)  # a heavier mass there: worse
