@@ -664,8 +664,6 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
 
     best, where, count = _first_not_worse(state, ready, result, starts(), measurements, parameters, effect_of,
                                           settle, options)
-    best, where, count = _first_not_worse(state, ready, result, starts, measurements, base + list(new), effect_of,
-                                          settle, options)
     note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
             f"restarted {count} time(s), kept {where or 'the screened start'}")
     return best, new, [note]

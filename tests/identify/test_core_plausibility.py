@@ -107,3 +107,28 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
                           data, parameters, FitOptions(max_iterations=0), like=baseline, explain=False, settle=False,
                           pairings=baseline.pairings)
     assert np.max(np.abs(at_eight.model_hz / baseline.model_hz - 1)) > 0.01
+
+
+def test_a_failed_shear_refit_tries_every_start_then_the_continuation(monkeypatch):
+    """Where each refit counts as worse than the thin plate (forced here), the shear
+    candidate is refitted from every other screened start and last from the continuation
+    (``_restarted``); the lowest misfit is kept and the note names the starts tried."""
+    truth = parse_spec(sandwich(TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR)).with_options(theory="layerwise")
+    data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
+    start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25)))
+    baseline = compare(start, data).fitted
+    continued = []
+    continuation = driver.shear_continuation
+
+    def recording(*args, **kwargs):
+        continued.append(True)
+        return continuation(*args, **kwargs)
+
+    monkeypatch.setattr(driver, "shear_continuation", recording)
+    monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
+    added = add_effect(baseline, "transverse_shear", data, start.specimen)
+    assert continued == [True]
+    # The core is no unidirectional ply: its other starts are (1, 1) and (0.25, 0.25) x G12.
+    assert any(note.startswith("the refit from the screened start ended worse") and "restarted 3 time(s)" in note
+               for note in added.notes), added.notes
+    assert added.result.statistics.sum_squares < baseline.statistics.sum_squares
