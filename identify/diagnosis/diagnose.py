@@ -359,7 +359,8 @@ class Diagnosis:
             lines += [f"  - {text}" for text in notes]
         if self.above_start:
             lines += ["", "refits that ended above the fit they were added to (where its effect vanishes each is "
-                          f"that fit: a failed refit, please report it): {', '.join(self.above_start)}"]
+                          "that fit, so the refit failed: a start, or on a peak list a matching made for the fit "
+                          f"without the effect): {', '.join(self.above_start)}"]
         if math.isfinite(self.seconds):
             lines += ["", f"({self.seconds:.1f} s)"]
         return "\n".join(lines) + "\n\n" + self.comparison.report()
