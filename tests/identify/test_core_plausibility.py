@@ -132,3 +132,17 @@ def test_a_failed_shear_refit_tries_every_start_then_the_continuation(monkeypatc
     assert any(note.startswith("the refit from the screened start ended worse") and "restarted 3 time(s)" in note
                for note in added.notes), added.notes
     assert added.result.statistics.sum_squares < baseline.statistics.sum_squares
+
+
+def test_a_hold_that_ends_above_the_thin_plate_is_undone():
+    """The same panel with no E3 in the spec: its core is judged as a ply, the Mindlin
+    refit's core G13 (3 x G12) counts as implausible and was held at G12, which ended at
+    6.9 %, above the thin plate's 4 %.  The hold is undone: the free estimate is kept, far
+    below the thin plate, and marked implausible (a sign, never selected)."""
+    truth = parse_spec(sandwich(TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR)).with_options(theory="layerwise")
+    data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
+    start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25), e3_gpa=None))
+    baseline = compare(start, data).fitted
+    added = add_effect(baseline, "thick_plate", data, start.specimen)
+    assert added.implausible and any("stay free" in note for note in added.notes), added.notes
+    assert added.result.statistics.sum_squares < 0.01 * baseline.statistics.sum_squares
