@@ -2,6 +2,7 @@
 every candidate on the peaks the baseline matched, so that a model containing the
 baseline can only descend from it, and matches the peaks again once, in the final
 refit."""
+import importlib
 import tomllib
 
 import pandas as pd
@@ -14,6 +15,8 @@ from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
 
 from ..walk import SPEC
+
+diagnosis = importlib.import_module("identify.diagnosis.diagnose")  # the module (the package exports its function)
 
 #: The truth the peaks come from: the walk plate with a 6 g sensor the spec leaves out.
 SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}
@@ -71,3 +74,24 @@ def test_fit_with_an_effect_rematches_the_peak_list_once(sensor_peaks):
     assert result.statistics.sum_squares < result.baseline.statistics.sum_squares
     mass = next(p for p in result.parameters if p.kind == "mass")
     assert abs(result.value(mass) - 6e-3) < 3 * result.std(mass)
+
+
+def test_held_properties_are_freed_only_in_the_final_refit_of_a_peak_list(sensor_peaks, monkeypatch):
+    """On a peak list the properties the thin-plate fit held stay held through the rounds
+    and are freed in the final refit (``released`` with the full pairing check); with
+    ranked data they are freed as each effect is chosen (``settle="quick"``)."""
+    model, peaks = sensor_peaks
+    calls = []
+    released = diagnosis.released
+
+    def recording(result, measurements, *args, settle=True, **kwargs):
+        calls.append((measurements.ranked, settle))
+        return released(result, measurements, *args, settle=settle, **kwargs)
+
+    monkeypatch.setattr(diagnosis, "released", recording)
+    diagnosis.diagnose(model, peaks, ["point_mass"])
+    assert calls == [(False, True)]
+    calls.clear()
+    ranked = diagnosis.diagnose(model, diagnosis.diagnose(model, peaks, ["point_mass"]).final.measurements,
+                                ["point_mass"])
+    assert ranked.selected and (True, "quick") in calls
