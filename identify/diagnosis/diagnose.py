@@ -48,9 +48,8 @@ from ..fitting.causes import with_causes
 from .compare import Comparison, compare
 from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
                               continued, ended_worse, frees_any, held_shear_moduli, matched_peaks,
-                              point_mass_hints,
-                              point_mass_starts, prepare_effect, rematched, released, restarted_from_spec,
-                              shear_moduli_in, spec_start, with_determined_shear)
+                              point_mass_hints, point_mass_starts, prepare_effect, rematched, released,
+                              restarted_from_spec, shear_moduli_in, spec_start, with_determined_shear)
 from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
 from ..fitting.plausibility import plausible_first
@@ -692,8 +691,9 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # settled) before the next round looks again.
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
-            polished = continued(best.fit, peak_list, FINAL_OPTIONS) if peak_list.ranked else \
-                rematched(best.fit, peak_list, state, FINAL_OPTIONS, settle="quick")
+            rematch = not peak_list.ranked
+            polished = rematched(best.fit, peak_list, state, FINAL_OPTIONS) if rematch else \
+                continued(best.fit, peak_list, FINAL_OPTIONS)
             polished, notes = with_determined_shear(polished, peak_list, nominal, FINAL_OPTIONS)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
@@ -702,9 +702,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # matching follows it (a real-like spruce plate: nu12 ran to 0.2 with the sensor
             # missing, and the final refit stopped at 0.174 % RMS; held until the final
             # refit, 0.0175 %, converged, nu12 0.366 against 0.365).
-            if peak_list.ranked:
+            if not rematch:
                 polished = released(polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle="quick")
-            rematch = not peak_list.ranked
             if rematch or (polished.finished and (notes or polished.statistics.sum_squares
                                                   <= best.fit.statistics.sum_squares)):
                 added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),

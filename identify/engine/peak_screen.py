@@ -76,6 +76,12 @@ class Screened:
     scored: int
 
 
+def ritz_basis(solver: SpecimenModel) -> SpecimenModel:
+    """``solver`` solving ``BASIS_PER_MODE`` times its modes (at most the solver's cap): the
+    model whose modes are a screen's Rayleigh-Ritz basis."""
+    return solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * solver.options.modes), MAX_SOLVED_MODES))
+
+
 class _Search:
     """The reduced models of every configuration and the matching cost of a point z of
     the screened parameters (the others held at the start)."""
@@ -86,10 +92,9 @@ class _Search:
         self.start = np.array([solver.value(p) for p in parameters], dtype=float)
         self.moved = np.array([p.kind in SCREENED_KINDS for p in parameters])
         self.z_start = self.space.to_z(self.start)[self.moved]
-        n_modes = solver.options.modes
-        basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * n_modes), MAX_SOLVED_MODES))
+        basis = ritz_basis(solver)
         self.reduced = {name: basis.solve(name).reduced() for name in peaks.configurations}
-        self.n_modes = n_modes
+        self.n_modes = solver.options.modes
         self.rows = {name: peaks.of(name) for name in peaks.configurations}
 
     @property
@@ -188,4 +193,4 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
     return Screened(values, matches, sum(m.cost for m in matches.values()), search.cost(reference), len(points))
 
 
-__all__ = ["SCREEN_TOLERANCE", "Screened", "screen"]
+__all__ = ["BASIS_PER_MODE", "SCREEN_TOLERANCE", "Screened", "ritz_basis", "screen"]

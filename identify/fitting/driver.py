@@ -199,8 +199,7 @@ def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
     return measurements if measurements.ranked else fit.measurements
 
 
-def rematched(fit: FitResult, measurements: Measurements, like: FitResult, options: FitOptions,
-              settle: bool | str = True) -> FitResult:
+def rematched(fit: FitResult, measurements: Measurements, like: FitResult, options: FitOptions) -> FitResult:
     """A fit made on ``matched_peaks(like, measurements)`` refitted on the peak list
     ``measurements`` itself, the peaks matched again; ranked measurements: ``fit`` as it
     is.  Two ways, the one that matches every peak at less cost kept (``matching_cost``
@@ -214,7 +213,7 @@ def rematched(fit: FitResult, measurements: Measurements, like: FitResult, optio
     of the truth, from where the point-mass screen found the sensor."""
     if measurements.ranked:
         return fit
-    again = continued(fit, measurements, options, settle=settle, like=like)
+    again = continued(fit, measurements, options, like=like)  # a peak list's final fit checks the pairing in full
     fresh = fit_layers(fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of,
                        explain=False)
     tolerance = min(model_error(again), model_error(fresh))
@@ -222,8 +221,8 @@ def rematched(fit: FitResult, measurements: Measurements, like: FitResult, optio
     if not costs[1] < costs[0]:
         return again
     note = (f"the peaks matched afresh with {', '.join(sorted(set(fit.effect_of.values())))} on (the spectrum laid "
-            f"over them again): matching cost {costs[1]:.4g} against {costs[0]:.4g} from the fit without it, at "
-            f"{100 * tolerance:.2g} %")
+            f"over them again): matching cost {costs[1]:.4g} against {costs[0]:.4g} from the matching of the fit "
+            f"without it, at {100 * tolerance:.2g} %")
     return replace(fresh, warnings=fresh.warnings + (note,))
 
 
@@ -796,7 +795,7 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
         # Held, the refit ends above the fit it adds to: the data do see them. The free
         # estimate stays, implausible: a sign of what is missing, never a worse answer.
         return free, free_new, [f"G13, G23 of {', '.join(held)} ran out of the plausible range; held at the spec's "
-                                "values or the ply class's relation the refit ended above the fit without the effect "
+                                "values or the ply class's relation, the refit ended above the fit without the effect "
                                 f"(RMS {100 * result.rms_rel_error:.3g} %), so they stay free "
                                 f"(RMS {100 * free.rms_rel_error:.3g} %)"], ()
     note = (f"G13, G23 of {', '.join(held)} ran out of the plausible range (the data do not see them): held at "
@@ -947,12 +946,11 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
             break
     # The Ritz screen's best start over the whole plate too, where it is at another position
     # and scores better than each of those on the screen.
+    xy, mass = [Parameter(k, "point_mass") for k in ("x", "y")], Parameter("mass", "point_mass")
     screen = PointMassScreen.of(state)
     screened = []
     if screen is not None:
         best = screen.best(1)[0]
-        xy = [Parameter(k, "point_mass") for k in ("x", "y")]
-        mass = Parameter("mass", "point_mass")
         screened = [on for on in effect("point_mass").free(state.model, best)
                     if all(_differs(on.model, other.model, xy) and best["left"] < screen.score(
                         other.model.value(xy[0]), other.model.value(xy[1]), other.model.value(mass))
@@ -961,6 +959,7 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
     if progress:
         progress(f"point_mass: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
                  f"{len(chosen)} fitted")
+
     def refit(on):
         return fit_layers(on.model, measurements, base + list(on.free), options, effect_of=effect_of, like=state,
                           explain=False, settle=settle, pairings=state.pairings), on
@@ -970,7 +969,6 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
     if ended_worse(result, state):
         # Every start ended above the fit the mass is added to: once more from the mass
         # all but gone at the best one's start, from where the refit can only descend.
-        mass = Parameter("mass", "point_mass")
         gone = replace(on, model=on.model.with_values({mass: VANISHING_MASS * plate_mass(state.model.specimen)}))
         trials.append(refit(gone))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)

@@ -20,10 +20,10 @@ import numpy as np
 import scipy.linalg as sla
 
 from fem.errors import NotApplicableError
-from fem.model import MAX_SOLVED_MODES
 from fem.solver.attachments import point_operators
 
 from ..engine.objective import solving_model
+from ..engine.peak_screen import ritz_basis
 from ..engine.result import FitResult
 from ..engine.statistics import weighted_residuals
 from .plausibility import plate_mass
@@ -33,9 +33,6 @@ POSITIONS = (24, 12)
 #: Masses tried at each position, as shares of the plate's mass (a miniature sensor on a
 #: heavy plate to a general-purpose one with cable on a light one).
 MASS_SHARES = np.geomspace(1e-3, 0.08, 12)
-#: Basis modes per solved mode (as ``engine.peak_screen``: a mass of a few % of the plate
-#: moves its modes' shapes, which the state's own modes alone do not span).
-BASIS_PER_MODE = 1.5
 #: Two positions closer than this share of the plate's longer side are one start.
 DISTINCT = 0.05
 
@@ -46,8 +43,9 @@ class PointMassScreen:
 
     def __init__(self, state: FitResult):
         self.data = data = state.measurements
-        solver = solving_model(state.model, data)
-        basis = solver.with_options(modes=min(math.ceil(BASIS_PER_MODE * solver.options.modes), MAX_SOLVED_MODES))
+        # The basis of the peak screen (1.5 x the solved modes): a mass of a few % of the
+        # plate moves the shapes, which the state's own modes alone do not span.
+        basis = ritz_basis(solving_model(state.model, data))
         self.configurations = []
         table = data.table
         for name in data.configurations:

@@ -8,7 +8,8 @@ import scipy.linalg as sla
 
 from fem.solver.attachments import PointMass, point_operators
 from identify.diagnosis.compare import compare
-from identify.fitting.point_mass_screen import BASIS_PER_MODE, POSITIONS, PointMassScreen
+from identify.engine.peak_screen import BASIS_PER_MODE
+from identify.fitting.point_mass_screen import POSITIONS, PointMassScreen
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
