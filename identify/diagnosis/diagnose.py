@@ -699,9 +699,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # determines them, before the next round: held, their handbook error is misfit
             # that the next round's candidates would take up.  Not on a peak list: there a
             # property freed while an effect is still missing takes up its misfit and the
-            # matching follows it (a real-like spruce plate: nu12 ran to 0.2 with the sensor
-            # missing, and the final refit stopped at 0.174 % RMS; held until the final
-            # refit, 0.0175 %, converged, nu12 0.366 against 0.365).
+            # matching follows it, so they stay held until the final refit (the measured
+            # case is in docs/diagnosis.md, "Peak lists").
             if not rematch:
                 polished = released(polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle="quick")
             if rematch or (polished.finished and (notes or polished.statistics.sum_squares

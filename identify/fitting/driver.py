@@ -767,9 +767,8 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     Repeated while the refit sends another material's moduli out (blind13, a hybrid:
     with the carbon's held, the glass's ran to the 2000 GPa bound and every shear candidate
     was implausible), at most once per material.  A hold that makes the refit end above
-    ``state`` while the free refit does not is undone: the free, implausible estimate is
-    kept as a sign (a real-like spruce plate's shear refit, on the thin plate's matched
-    peaks: free 3314, held at the ply relation 17268, the thin plate 3773 in chi^2).
+    ``state`` while the free refit does not is undone: the data do see those moduli, and
+    the free, implausible estimate is kept as a sign (cases in docs/diagnosis.md).
     Returns (result, parameters, notes, the plain shear moduli held)."""
     first_hz = float(state.measurements.table["frequency_hz"].min())
     held: list[str] = []
