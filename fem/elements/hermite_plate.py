@@ -56,6 +56,27 @@ class EnergyQuadrature:
         return self.weights @ (first * second)
 
 
+class ProjectionQuadrature:
+    """The same integrals projected on a basis V, summed over elements: V^T K V (r, r).
+    ``local`` (n, k r) holds the basis gathered per element, element-major (k elements,
+    r basis vectors); an operator is applied to it once, and the integral of two is
+    sum_q w_q sum_e first[q, e]^T second[q, e], one BLAS product.  A symmetrised term
+    k + k.T is the projection of K + K^T, as for matrices."""
+
+    def __init__(self, weights: np.ndarray, local: np.ndarray, rank: int):
+        self.weights, self.local, self.rank = weights, local, rank
+
+    def operator(self, op: np.ndarray) -> np.ndarray:
+        return op @ self.local
+
+    def __call__(self, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+        weighted = (first * self.weights[:, None]).reshape(-1, self.rank)
+        return weighted.T @ second.reshape(-1, self.rank)
+
+
+#: What an element's ``unit_stiffness`` and ``unit_mass`` integrate with.
+Quadrature = MatrixQuadrature | EnergyQuadrature | ProjectionQuadrature
+
 class HermitePlate:
     """Four-node rectangle, 12 DOFs per node, 48 per element.
 
@@ -107,7 +128,7 @@ class HermitePlate:
         )
         return membrane, curvature
 
-    def unit_stiffness(self, pairs, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+    def unit_stiffness(self, pairs, quadrature: Quadrature | None = None) -> np.ndarray:
         """The 18 element matrices K_c (18, n, n), one per laminate coefficient (A, B, D
         blocks, each in the order of ``pairs``), from ``strain_operators``; with an
         ``EnergyQuadrature``, their quadratic forms (18, k) instead."""
@@ -133,7 +154,7 @@ class HermitePlate:
         in-plane displacements are U = u + z beta_x, V = v + z beta_y; here beta = -grad w."""
         return -self._field("Nx", "w"), -self._field("Ny", "w")
 
-    def unit_mass(self, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+    def unit_mass(self, quadrature: Quadrature | None = None) -> np.ndarray:
         """Element mass matrices per inertia term (3, n, n): I0, I1, I2 (with an
         ``EnergyQuadrature``, their quadratic forms (3, k)).
 

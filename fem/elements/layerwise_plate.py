@@ -41,7 +41,7 @@ from functools import cache
 
 import numpy as np
 
-from .hermite_plate import EnergyQuadrature, HermitePlate, MatrixQuadrature
+from .hermite_plate import HermitePlate, MatrixQuadrature, Quadrature
 
 
 def basis_pairs(n: int) -> list[tuple[int, int]]:
@@ -115,7 +115,7 @@ class LayerwisePlate(HermitePlate):
         out += [(-self._field("Nx", f"e{s + 1}"), -self._field("Ny", f"e{s + 1}")) for s in range(self.STRETCH)]
         return out
 
-    def unit_stiffness(self, pairs, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+    def unit_stiffness(self, pairs, quadrature: Quadrature | None = None) -> np.ndarray:
         """Unit stiffness matrices (n_c, N, N) in ``fem.laminates.layerwise.stiffness_names``
         order (their quadratic forms (n_c, k) with an ``EnergyQuadrature``)."""
         integral = quadrature or MatrixQuadrature(self.weights)
@@ -132,7 +132,7 @@ class LayerwisePlate(HermitePlate):
             out.append(integral(e, e))
         return np.array(out)
 
-    def unit_mass(self, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+    def unit_mass(self, quadrature: Quadrature | None = None) -> np.ndarray:
         """Unit mass matrices (n_i, N, N) in ``fem.laminates.layerwise.inertia_names`` order: the
         in-plane pairs (the first, I0, also carries w^2), then the transverse pairs of
         [w, e_s] beyond (w, w) (their quadratic forms (n_i, k) with an ``EnergyQuadrature``)."""

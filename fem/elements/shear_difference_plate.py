@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hermite_plate import EnergyQuadrature, HermitePlate, MatrixQuadrature
+from .hermite_plate import HermitePlate, MatrixQuadrature, Quadrature
 
 
 class ShearDifferencePlate(HermitePlate):
@@ -45,7 +45,7 @@ class ShearDifferencePlate(HermitePlate):
         """[gamma_yz, gamma_xz] at the quadrature points (nq, 2, 80) (Voigt 4, 5)."""
         return np.stack([self._field("N", "gy"), self._field("N", "gx")], axis=1)
 
-    def unit_stiffness(self, pairs, quadrature: MatrixQuadrature | EnergyQuadrature | None = None) -> np.ndarray:
+    def unit_stiffness(self, pairs, quadrature: Quadrature | None = None) -> np.ndarray:
         """(21, 80, 80): the 18 CLT unit matrices, then A44, A55, A45 (their quadratic
         forms (21, k) with an ``EnergyQuadrature``)."""
         integral = quadrature or MatrixQuadrature(self.weights)

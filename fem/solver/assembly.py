@@ -17,9 +17,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..elements import HermitePlate
-from ..elements.hermite_plate import EnergyQuadrature
+from ..elements.hermite_plate import EnergyQuadrature, ProjectionQuadrature
 from ..laminates.laminate import VOIGT_PAIRS
 from .mesh import PlateMesh
+
+
+#: Columns (elements x fields) integrated at once: the strains at the quadrature points of
+#: a chunk take (quadrature points x strains x columns) floats, ~40 MB for a shear mesh.
+GATHERED_COLUMNS = 20_000
 
 
 @dataclass(frozen=True)
@@ -184,17 +189,38 @@ class UnitMatrices:
         time, so it costs O(n_elements * n_local * m) per operator and never reads the
         element matrices (a graded layerwise mesh's are ~400 MB).
         """
-        local = modes[self.element_dofs]  # (ne, n_local, m)
-        group = self.mesh.size_groups[1]
         stiffness, inertia = 0.0, 0.0
-        for g, element in enumerate(self.elements):
-            x = local if len(self.elements) == 1 else local[group == g]
-            # columns element-major: (n_local, ne_g * m)
-            integral = EnergyQuadrature(element.weights, x.transpose(1, 0, 2).reshape(x.shape[1], -1))
-            shape = (-1, len(x), modes.shape[1])
+        for element, x in self._gathered(modes):
+            integral = EnergyQuadrature(element.weights, x)
+            shape = (-1, x.shape[1] // modes.shape[1], modes.shape[1])
             stiffness = stiffness + element.unit_stiffness(VOIGT_PAIRS, integral).reshape(shape).sum(axis=1)
             inertia = inertia + element.unit_mass(integral).reshape(shape).sum(axis=1)
         return stiffness, inertia
+
+    def projections(self, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """V^T K_c V and V^T M_j V for every unit stiffness matrix c and unit mass matrix j:
+        (n_c, r, r) and (n_inertia, r, r), for a basis V (n_dofs, r).  Integrated like
+        ``quadratic_forms`` (``ProjectionQuadrature``), so the global unit matrices of a
+        layerwise mesh (~180 of them) are never assembled."""
+        rank = basis.shape[1]
+        stiffness, inertia = 0.0, 0.0
+        for element, x in self._gathered(basis):
+            integral = ProjectionQuadrature(element.weights, x, rank)
+            stiffness = stiffness + element.unit_stiffness(VOIGT_PAIRS, integral)
+            inertia = inertia + element.unit_mass(integral)
+        return stiffness, inertia
+
+    def _gathered(self, fields: np.ndarray):
+        """Per element size, in chunks of at most ``GATHERED_COLUMNS`` columns: the element
+        and ``fields`` (n_dofs, m) gathered on its elements, element-major (n_local, k m)."""
+        local = fields[self.element_dofs]  # (ne, n_local, m)
+        group = self.mesh.size_groups[1]
+        chunk = max(1, GATHERED_COLUMNS // fields.shape[1])
+        for g, element in enumerate(self.elements):
+            x = local if len(self.elements) == 1 else local[group == g]
+            for start in range(0, len(x), chunk):
+                part = x[start:start + chunk]
+                yield element, part.transpose(1, 0, 2).reshape(part.shape[1], -1)
 
     @cached_property
     def rigid_body_modes(self) -> np.ndarray:
