@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import cached_property, partial
+from functools import cached_property
 
 import numpy as np
 
@@ -20,7 +20,6 @@ from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
 from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
-from .solver.reduced_basis import ReducedModel
 from .solver.solve_cache import SOLVE_CACHE_BYTES, bytes_bounded_cache
 from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
@@ -154,34 +153,6 @@ class LaminateSolution:
         computed when first asked for, not on every solve."""
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
-
-    def reduced(self, rigid_body: bool = False) -> ReducedModel | None:
-        """The Rayleigh-Ritz model on this solution's modes (``fem.solver.reduced_basis``),
-        its attachments held fixed; None for the layerwise theory (its coefficients are
-        not the laminate's).  ``rigid_body``: the rigid-body fields lead the basis (their
-        Ritz values first: zero, or a suspension's), as a mass added or moved needs: the
-        elastic modes of the plate with it carry some rigid-body motion, and without
-        those fields its Ritz values may fall below the true ones (the paper's plate with
-        3 g: its first mode 0.05 % low)."""
-        if self.layerwise is not None:
-            return None
-        units = self.units
-        basis = np.hstack([units.rigid_body_modes, self.modes.shapes]) if rigid_body else self.modes.shapes
-        if self.transverse_shear:
-            # One unit matrix at a time, not ``units.stiffness_data``: that would keep all
-            # 21 assembled arrays of a shear mesh cached with its units (``solve_laminate``
-            # avoids them for the same reason).
-            def unit_data(element_matrices):
-                n = len(element_matrices)
-                return [units.combined_data(np.eye(n)[c], element_matrices) for c in range(n)]
-
-            stiffness, mass = unit_data(units.element_stiffness), unit_data(units.element_mass)
-        else:
-            stiffness, mass = units.stiffness_data, units.mass_data
-        fixed = attachment_data(units, self.attachments) if self.attachments else (None, None)
-        weights = partial(system_coefficients, transverse_shear=self.transverse_shear,
-                          inertia_terms=self.inertia_terms)
-        return ReducedModel.project(weights, units, basis, np.asarray(stiffness), np.asarray(mass), *fixed)
 
     @one_blas_thread
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:

@@ -160,6 +160,26 @@ def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.nd
     return stiffness, mass
 
 
+def projected_attachments(units: UnitMatrices, basis: np.ndarray, attachments) -> tuple[np.ndarray, np.ndarray]:
+    """The stiffness and mass the attachments add, projected on a basis V (n_dofs, r):
+    (r, r) each, from the basis's values at their points (the same sums as
+    ``attachment_data``, on the few DOFs of the elements that hold them)."""
+    rank = basis.shape[1]
+    stiffness, mass = np.zeros((rank, rank)), np.zeros((rank, rank))
+    for attachment in attachments:
+        if isinstance(attachment, PointMass):
+            for x, y, share, _, _ in footprint(units, attachment):
+                dofs, n = point_operators(units, x, y)
+                values = np.stack([n[f] @ basis[dofs] for f in ("u", "v", "w")])
+                mass += share * attachment.mass * (values.T @ values)
+        else:
+            for x, y in attachment.points:
+                dofs, n = point_operators(units, x, y)
+                w = n["w"] @ basis[dofs]
+                stiffness += attachment.stiffness * np.outer(w, w)
+    return stiffness, mass
+
+
 def eigenvalue_derivative(units: UnitMatrices, attachment, kind: str, shapes: np.ndarray,
                           eigenvalues: np.ndarray) -> np.ndarray:
     """d(omega^2)/dp of every mode for an attachment parameter (mass [kg], x, y [m],

@@ -1,75 +1,156 @@
-"""Rayleigh-Ritz reanalysis on a basis of modes: frequencies at other stiffnesses in
-microseconds, for searches that must try thousands of parameter points.
+"""Reanalysis: a configuration's modes and exact sensitivities at other parameter values,
+on the basis of one full solve (Rayleigh-Ritz), in milliseconds instead of a factorization.
 
-The stiffness and mass are linear in the laminate coefficients (``K = sum_c X_c K_c``,
-``M = sum_j I_j M_j``), so on a fixed basis V (n_dofs, r) the projected unit matrices
-``V^T K_c V`` are computed once, and a new laminate costs a weighted sum of r x r
-matrices and one dense eigenproblem of size r.  The Ritz values are upper bounds of the
-true eigenvalues and converge with the basis: with the modes of a start model as the
-basis (the first 1.5 x as many modes as are wanted), a long spruce plate with E1 15 %,
-E2 4 % and nu12 14 % away from the start gives its first 36 frequencies within 0.07 %
-(``tests/fem/test_reduced_basis.py``).  That is screening accuracy, not a result: every
-accepted point is solved again in full.
+Stiffness and mass are affine in the theory's coefficients (the laminate's A, B, D and
+shear stiffnesses, or the layerwise stack's generalised ones) and in an attachment's mass
+or spring stiffness: ``K = sum_c X_c K_c + K_a``.  On a basis V (the full solve's rigid-
+body fields and elastic modes) the unit matrices are projected once
+(``UnitMatrices.projections``), and a new parameter point costs a weighted sum of r x r
+matrices, one dense eigenproblem of size r and the attachments' few DOFs.
+
+At the basis point the basis holds the exact modes, so the Ritz frequencies and their
+derivatives are the full solve's to round-off; away from it they are upper bounds that
+converge with the basis.  The sensitivities are the exact derivatives of the Ritz values
+(``RitzSolution.energies``: the same modal energies, from the projected units).  The fit
+screens trial steps on it (``identify.engine.objective.TrialScreen``), the peak-list
+screen searches moduli on it (``identify.engine.peak_screen``) and the point-mass screen
+positions (``identify.fitting.point_mass_screen``); each solves what it accepts in full.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
 
-from .assembly import UnitMatrices
+from ..errors import ModelError
+from ..laminates.layerwise import LayerwiseLaminate
+from ..model import LaminateSolution, ModelOptions, SpecimenModel, system_coefficients
+from ..specimen import Specimen
+from .attachments import projected_attachments
+from .modal import Modes
+from .sensitivity import ModalEnergies
+
+
+#: Basis directions whose mass is below this share of the largest are dropped: they repeat
+#: others (the modes of two nearby points) or lie in the mass matrix's null space.
+INDEPENDENT = 1e-10
+
+
+class OutsideBasis(ModelError):
+    """The parameter point needs another model structure than the basis was built on (a
+    layerwise stack whose shear groups or stretching layers changed)."""
 
 
 @dataclass(frozen=True)
-class ReducedModel:
-    """Projected unit matrices of one mesh on a basis of modes.
+class RitzSolution(LaminateSolution):
+    """A ``LaminateSolution`` whose modes are Ritz pairs: ``coordinates`` (r, m) in the
+    basis, expanded to full shapes for pairing and attachments; ``projected``: the basis's
+    unit matrices, from which the modal energies (and so the sensitivities) follow."""
 
-    weights: maps a laminate to its (stiffness coefficients X, inertia terms I), as the
-    full model weights its unit matrices; stiffness: (n_c, r, r) ``V^T K_c V``; mass:
-    (n_i, r, r) ``V^T M_j V``; fixed_stiffness, fixed_mass: (r, r) projections of what
-    the coefficients do not scale (attachments).
-    """
+    coordinates: np.ndarray | None = None
+    projected: tuple[np.ndarray, np.ndarray] | None = None
 
-    weights: Callable[[Any], tuple[np.ndarray, np.ndarray]]
-    stiffness: np.ndarray
-    mass: np.ndarray
-    fixed_stiffness: np.ndarray
-    fixed_mass: np.ndarray
+    @cached_property
+    def energies(self) -> ModalEnergies:
+        y = self.coordinates
+        stiffness, mass = self.projected
+        return ModalEnergies(np.einsum("ri,crs,si->ci", y, stiffness, y, optimize=True),
+                             np.einsum("ri,crs,si->ci", y, mass, y, optimize=True))
+
+
+@dataclass(frozen=True)
+class Reanalysis:
+    """One configuration's Rayleigh-Ritz model on the modes of ``base`` (a full solve)
+    and the mesh's six rigid-body fields, which lead the basis (their Ritz values, zero or
+    a suspension's, are dropped): an attachment moved or added mixes rigid-body motion
+    into the elastic modes, and without those fields a Ritz value may fall below the true
+    one."""
+
+    configuration: str
+    options: ModelOptions
+    base: LaminateSolution
+    basis: np.ndarray        # (n_dofs, r)
+    stiffness: np.ndarray    # (n_c, r, r) V^T K_c V
+    mass: np.ndarray         # (n_i, r, r) V^T M_j V
 
     @classmethod
-    def project(cls, weights: Callable[[Any], tuple[np.ndarray, np.ndarray]], units: UnitMatrices,
-                basis: np.ndarray, stiffness_data: np.ndarray, mass_data: np.ndarray,
-                fixed_stiffness_data: np.ndarray | None = None,
-                fixed_mass_data: np.ndarray | None = None) -> "ReducedModel":
-        """Project the unit matrices (CSR data on ``units``' pattern, one row per
-        coefficient) and the fixed parts on ``basis`` (n_dofs, r)."""
+    def of(cls, model: SpecimenModel, configuration: str, extra: np.ndarray | None = None) -> "Reanalysis":
+        """The reanalysis of ``configuration`` on ``model``'s full solve (cached), its basis
+        enlarged by the ``extra`` fields (n_dofs, k), e.g. the modes at another point on
+        the same mesh and theory: the basis then spans the modes between the two too.  The
+        basis is made mass-orthonormal at ``model``, and directions that carry no mass
+        or repeat others (below ``INDEPENDENT`` of the largest) are dropped."""
+        base = model.solve(configuration)
+        units = base.units
+        fields = [units.rigid_body_modes, base.modes.shapes]
+        if extra is not None and extra.shape[0] == units.n_dofs:
+            fields.append(extra)
+        raw = np.hstack(fields)
+        stiffness, mass = units.projections(raw)
+        inertia = base.layerwise.inertia if base.layerwise is not None else system_coefficients(
+            base.laminate, base.transverse_shear, base.inertia_terms)[1]
+        gram = np.tensordot(inertia, mass, 1)
+        if base.attachments:
+            gram = gram + projected_attachments(units, raw, base.attachments)[1]
+        mu, q = np.linalg.eigh(gram)
+        kept = mu > INDEPENDENT * mu[-1]
+        transform = q[:, kept] / np.sqrt(mu[kept])
+        return cls(configuration, model.options, base, raw @ transform,
+                   np.einsum("ra,crs,sb->cab", transform, stiffness, transform, optimize=True),
+                   np.einsum("ra,crs,sb->cab", transform, mass, transform, optimize=True))
 
-        def projected(data):
-            return basis.T @ (units.matrix(data) @ basis)
+    @property
+    def rigid(self) -> int:
+        """Rigid-body fields leading the basis."""
+        return self.base.units.rigid_body_modes.shape[1]
 
-        r = basis.shape[1]
-        fixed_k = np.zeros((r, r)) if fixed_stiffness_data is None else projected(fixed_stiffness_data)
-        fixed_m = np.zeros((r, r)) if fixed_mass_data is None else projected(fixed_mass_data)
-        return cls(weights, np.stack([projected(d) for d in stiffness_data]),
-                   np.stack([projected(d) for d in mass_data]), fixed_k, fixed_m)
+    def _system(self, specimen: Specimen) -> tuple[np.ndarray, np.ndarray, LayerwiseLaminate | None]:
+        """The projected stiffness and mass (r, r) of the configuration of ``specimen``,
+        its attachments included, and its layerwise stack (None for a single layer)."""
+        base, options = self.base, self.options
+        laminate = specimen.laminate(self.configuration)
+        stack = None
+        if base.layerwise is not None:
+            stack = LayerwiseLaminate.of(laminate, options.layer_groups, options.core_stretch)
+            if (stack.groups, stack.stretch) != (base.layerwise.groups, base.layerwise.stretch):
+                raise OutsideBasis(f"configuration {self.configuration!r}: the layerwise groups changed")
+            coefficients, inertia = stack.stiffness, stack.inertia
+        else:
+            coefficients, inertia = system_coefficients(laminate, base.transverse_shear, base.inertia_terms)
+        stiffness = np.tensordot(coefficients, self.stiffness, 1)
+        mass = np.tensordot(inertia, self.mass, 1)
+        if specimen.attachments:
+            extra_stiffness, extra_mass = projected_attachments(base.units, self.basis, specimen.attachments)
+            stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
+        return stiffness, mass, stack
 
-    def matrices(self, laminate) -> tuple[np.ndarray, np.ndarray]:
-        """The projected stiffness and mass (r, r) of ``laminate``, attachments included."""
-        stiffness_coefficients, inertia = self.weights(laminate)
-        return (np.tensordot(stiffness_coefficients, self.stiffness, 1) + self.fixed_stiffness,
-                np.tensordot(inertia, self.mass, 1) + self.fixed_mass)
+    def matrices(self, specimen: Specimen) -> tuple[np.ndarray, np.ndarray]:
+        """The projected stiffness and mass (r, r) of the configuration of ``specimen``."""
+        return self._system(specimen)[:2]
 
-    def eigenvalues(self, laminate) -> np.ndarray:
-        """Ritz values omega^2 [rad^2/s^2] of ``laminate``, lowest first."""
-        k, m = self.matrices(laminate)
-        return sla.eigh(k, m, eigvals_only=True, check_finite=False)
+    @property
+    def _elastic(self) -> slice:
+        """The elastic Ritz values: past the rigid-body ones, as many as the full solve kept."""
+        return slice(self.rigid, self.rigid + len(self.base.modes.eigenvalues))
 
-    def frequencies_hz(self, laminate) -> np.ndarray:
-        """Ritz frequencies [Hz] of ``laminate``, lowest first."""
-        return np.sqrt(np.clip(self.eigenvalues(laminate), 0.0, None)) / (2 * math.pi)
+    def frequencies_hz(self, specimen: Specimen) -> np.ndarray:
+        """The Ritz frequencies [Hz] alone (no shapes): a screen's thousands of points."""
+        stiffness, mass, _ = self._system(specimen)
+        eigenvalues = sla.eigh(stiffness, mass, eigvals_only=True, check_finite=False)[self._elastic]
+        return np.sqrt(np.clip(eigenvalues, 0.0, None)) / (2 * np.pi)
+
+    def solve(self, specimen: Specimen) -> RitzSolution:
+        """The Ritz modes of the configuration of ``specimen`` (same mesh and theory as the
+        basis), as many as the full solve kept."""
+        base = self.base
+        stiffness, mass, stack = self._system(specimen)
+        eigenvalues, coordinates = sla.eigh(stiffness, mass, check_finite=False)
+        eigenvalues, coordinates = eigenvalues[self._elastic], coordinates[:, self._elastic]
+        return RitzSolution(specimen.laminate(self.configuration), base.units,
+                            Modes(eigenvalues, self.basis @ coordinates), base.inertia_terms, base.transverse_shear,
+                            specimen.attachments, stack, coordinates=coordinates, projected=(self.stiffness, self.mass))
 
 
-__all__ = ["ReducedModel"]
+__all__ = ["OutsideBasis", "Reanalysis", "RitzSolution"]

@@ -6,8 +6,8 @@ that E1 governs then move against those E2 or G12 govern, and no single scale fa
 (``matching.align``) lays the spectrum over the peaks: on a long spruce plate the scaled
 start paired 11 of 30 peaks wrongly and the fit stopped there.  The screen searches the
 moduli instead, on a Rayleigh-Ritz model of each configuration
-(``LaminateSolution.reduced``: the start's modes, 1.5 x as many as the fit solves; 0.01-
-0.04 % from the full solve over that range, a millisecond an evaluation):
+(``fem.solver.reduced_basis.Reanalysis``: the start's modes, 1.5 x as many as the fit
+solves; 0.01-0.04 % from the full solve over that range, a millisecond an evaluation):
 
 1. ``SAMPLES`` points of a Sobol sequence in a box around the start (moduli x 1/2..2,
    Poisson's ratios +- 0.2, inside their bounds), plus the start itself; each scored by
@@ -32,6 +32,7 @@ from scipy.stats import qmc
 
 from fem.errors import SpecError
 from fem.model import MAX_SOLVED_MODES, SpecimenModel
+from fem.solver.reduced_basis import Reanalysis
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
@@ -93,13 +94,15 @@ class _Search:
         self.moved = np.array([p.kind in SCREENED_KINDS for p in parameters])
         self.z_start = self.space.to_z(self.start)[self.moved]
         basis = ritz_basis(solver)
-        self.reduced = {name: basis.solve(name).reduced() for name in peaks.configurations}
+        # Single-layer theories only (a layerwise peak list keeps the scaled start).
+        self.reduced = ({name: Reanalysis.of(basis, name) for name in peaks.configurations}
+                        if basis.options.theory != "layerwise" else None)
         self.n_modes = solver.options.modes
         self.rows = {name: peaks.of(name) for name in peaks.configurations}
 
     @property
     def usable(self) -> bool:
-        return all(r is not None for r in self.reduced.values())
+        return self.reduced is not None
 
     def box(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds in z of the screened parameters: the search box within the space's bounds."""
@@ -119,8 +122,7 @@ class _Search:
             specimen = ties.apply(self.solver.specimen, self.space.parameters, self.values(z))
         except SpecError:
             return None
-        return {name: red.frequencies_hz(specimen.laminate(name))[: self.n_modes]
-                for name, red in self.reduced.items()}
+        return {name: red.frequencies_hz(specimen)[: self.n_modes] for name, red in self.reduced.items()}
 
     def matches(self, spectra: dict[str, np.ndarray], tolerance: float = SCREEN_TOLERANCE) -> dict[str, Match]:
         out = {}

@@ -6,7 +6,7 @@ other physics still off by a few tenths of a percent, or close modes that a few 
 reorder, its best node can be far from the sensor (a real-like spruce plate: the scan's
 starts ended at (57, 56) and (501, 161) mm, the sensor sits at (422, 189) mm).  The
 screen instead solves every point of a grid of positions and masses on the fit's own
-modes and rigid-body fields (``fem.solver.reduced_basis``: the state's K and M projected
+modes and rigid-body fields (``fem.solver.reduced_basis.Reanalysis``: the state's K and M projected
 once, the mass added as m V^T V with V their displacements there, one r x r eigenproblem
 a point), and lets the
 layer properties follow to first order (the residual's part outside the span of the
@@ -21,6 +21,7 @@ import scipy.linalg as sla
 
 from fem.errors import NotApplicableError
 from fem.solver.attachments import point_operators
+from fem.solver.reduced_basis import Reanalysis
 
 from ..engine.objective import solving_model
 from ..engine.peak_screen import ritz_basis
@@ -49,15 +50,14 @@ class PointMassScreen:
         self.configurations = []
         table = data.table
         for name in data.configurations:
-            solution = basis.solve(name)
-            reduced = solution.reduced(rigid_body=True)
-            if reduced is None:
+            if basis.options.theory == "layerwise":
                 raise NotApplicableError("the point-mass screen needs a single-layer theory (no layerwise model)")
-            rigid = solution.units.rigid_body_modes.shape[1]  # their Ritz values lead: zero, or a suspension's
+            reduced = Reanalysis.of(basis, name)
             rows = np.flatnonzero(table["configuration"].to_numpy() == name)
-            k, m = reduced.matrices(basis.specimen.laminate(name))
-            fields = np.hstack([solution.units.rigid_body_modes, solution.modes.shapes])
-            self.configurations.append((rows, rigid + state.pairings[name].indices, k, m, solution.units, fields))
+            k, m = reduced.matrices(basis.specimen)
+            # The rigid-body Ritz values lead (zero, or a suspension's): the paired modes follow them.
+            modes = reduced.rigid + state.pairings[name].indices
+            self.configurations.append((rows, modes, k, m, reduced.base.units, reduced.basis))
         self.q, _ = np.linalg.qr(state.jacobian)  # the state's parameters, followed to first order
         self.specimen = state.model.specimen
 

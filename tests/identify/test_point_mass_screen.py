@@ -7,6 +7,7 @@ import pytest
 import scipy.linalg as sla
 
 from fem.solver.attachments import PointMass, point_operators
+from fem.solver.reduced_basis import Reanalysis
 from identify.diagnosis.compare import compare
 from identify.engine.peak_screen import BASIS_PER_MODE
 from identify.fitting.point_mass_screen import POSITIONS, PointMassScreen
@@ -26,12 +27,11 @@ def test_a_mass_on_the_reduced_model_matches_the_full_solve():
     percent, needs no more; the refit from its start is a full solve."""
     model = true_model().with_options(modes=8)
     model = model.with_options(divisions=model.options.divisions_for(model.specimen))  # one mesh for both
-    basis = model.with_options(modes=math.ceil(BASIS_PER_MODE * 8)).solve("original")
-    k, m = basis.reduced(rigid_body=True).matrices(model.specimen.laminate("original"))
-    fields = np.hstack([basis.units.rigid_body_modes, basis.modes.shapes])
-    rigid = basis.units.rigid_body_modes.shape[1]
-    dofs, rows = point_operators(basis.units, SENSOR.x, SENSOR.y)
-    v = np.stack([rows[f] @ fields[dofs] for f in ("u", "v", "w")])
+    basis = Reanalysis.of(model.with_options(modes=math.ceil(BASIS_PER_MODE * 8)), "original")
+    k, m = basis.matrices(model.specimen)
+    rigid = basis.rigid
+    dofs, rows = point_operators(basis.base.units, SENSOR.x, SENSOR.y)
+    v = np.stack([rows[f] @ basis.basis[dofs] for f in ("u", "v", "w")])
     eigenvalues = sla.eigh(k, m + SENSOR.mass * v.T @ v, eigvals_only=True)
     assert np.all(np.abs(eigenvalues[:rigid]) < 1e-6 * eigenvalues[rigid])  # the rigid-body motions, with the mass
     ritz = np.sqrt(eigenvalues[rigid:rigid + 8]) / (2 * math.pi)
