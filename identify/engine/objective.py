@@ -11,8 +11,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fem.model import SpecimenModel
-from fem.specimen import Parameter
+from fem.model import LaminateSolution, SpecimenModel
+from fem.solver.reduced_basis import OutsideBasis, Reanalysis
+from fem.specimen import Parameter, Specimen
 
 from ..measurements import Measurements
 from .pairing import ModePairing
@@ -70,13 +71,13 @@ class Objective:
         False) paired with the same model modes as ``pairings`` say.  Without
         ``differentiate`` the sensitivities are left out (a trial step that may be
         rejected; ``differentiated`` adds them)."""
-        model = self.solved.with_specimen(ties.apply(self.model.specimen, self.space.parameters, values))
+        specimen = ties.apply(self.model.specimen, self.space.parameters, values)
         weight = None
         model_hz = np.empty(len(self.measured_hz))
         derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
         new_pairings = {}
         for name in self.configurations:
-            solution = model.solve(name)
+            solution = self.solution(specimen, name)
             rows = self.rows[name]
             group = self.measurements.table.iloc[rows]
             previous = None if pairings is None else pairings[name].shapes
@@ -95,16 +96,19 @@ class Objective:
             model_hz[rows] = solution.frequencies_hz[pairing.indices]
             if differentiate:
                 derivatives[rows] = ties.derivatives(solution, self.space.parameters)[pairing.indices]
-        return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(model.specimen))
+        return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(specimen))
+
+    def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
+        """The modes of one configuration of ``specimen``: a full solve (cached by content)."""
+        return self.solved.with_specimen(specimen).solve(configuration)
 
     def differentiated(self, e: Evaluation) -> Evaluation:
         """``e`` with its sensitivities (the solves are cached: no new eigen-solve)."""
         if e.derivatives is not None:
             return e
-        model = self.solved.with_specimen(e.model.specimen)
         derivatives = np.empty((len(self.measured_hz), len(e.values)))
         for name in self.configurations:
-            solution = model.solve(name)
+            solution = self.solution(e.model.specimen, name)
             derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[e.pairings[name].indices]
         return replace(e, derivatives=derivatives)
 
@@ -138,9 +142,60 @@ class Objective:
         return np.where(undetermined, np.inf, np.sqrt(variance))
 
 
+class RitzObjective(Objective):
+    """``objective`` evaluated on Ritz models of every configuration
+    (``fem.solver.reduced_basis``) at the point ``at`` (full solves), their bases
+    enlarged by the modes at the point ``also``."""
+
+    def __init__(self, objective: Objective, at: Evaluation, also: Evaluation):
+        self.__dict__.update(objective.__dict__)
+        solved = objective.solved.with_specimen(at.model.specimen)
+        self.reanalyses = {name: Reanalysis.of(solved, name, objective.solution(also.model.specimen, name).modes.shapes)
+                           for name in self.configurations}
+
+    def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
+        return self.reanalyses[configuration].solve(specimen)
+
+
+@dataclass(frozen=True)
+class TrialScreen:
+    """Whether a trial step from ``current`` lowers the misfit, judged on the Ritz models:
+    a rejected step of the damped Gauss-Newton iteration then costs a dense eigenproblem
+    of a few dozen unknowns, not a factorization.
+
+    When an iteration's first trial step raises the misfit, the iteration damps the step
+    and tries again, up to ``FitOptions.max_damping_tries`` times; at the end of a fit on
+    real data, where the misfit is flat, it often tries them all (a thick-plate refit of a
+    long spruce plate's peak list: 45 of 152 trials rejected, 44 of them in four such
+    streaks).  After the first rejection the Ritz models are built on the modes of the
+    current point and of the rejected trial: the shorter trials lie between the two, where
+    they are accurate to a few 1e-5 (``tests/fem/test_reduced_basis.py``).  A trial is
+    then solved in full only where the Ritz misfit is not above the current one, and
+    accepted only where the full solve agrees: every accepted point is a full solve.
+    """
+
+    ritz: RitzObjective
+    current: Evaluation
+    cost: float
+
+    @classmethod
+    def of(cls, objective: Objective, current: Evaluation, rejected: Evaluation) -> "TrialScreen":
+        """The screen of the iteration at ``current`` whose trial ``rejected`` raised the misfit."""
+        return cls(RitzObjective(objective, current, rejected), current, objective.cost(current))
+
+    def descends(self, values: np.ndarray) -> bool:
+        """The Ritz misfit at ``values`` is not above the current one (True also where the
+        Ritz models do not apply: a layerwise stack whose groups changed)."""
+        try:
+            trial = self.ritz.evaluate(values, self.current.pairings, differentiate=False)
+        except OutsideBasis:
+            return True
+        return self.ritz.cost(trial) <= self.cost
+
+
 def relative_sensitivity(e: Evaluation) -> np.ndarray:
     """The paper's normalised sensitivity matrix (p / f) df/dp of the paired modes."""
     return e.derivatives * e.values[None, :] / e.model_hz[:, None]
 
 
-__all__ = ["Evaluation", "Objective", "relative_sensitivity", "solving_model"]
+__all__ = ["Evaluation", "Objective", "RitzObjective", "TrialScreen", "relative_sensitivity", "solving_model"]

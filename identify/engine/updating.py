@@ -22,7 +22,7 @@ from fem import validation
 from .ambiguity import lone_close_modes, settle_pairings
 from .repair import quick_repair
 from ..measurements import Measurements
-from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective
+from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, TrialScreen
 from .parameters import UNITS, display
 from .result import FitResult, FitStatus, Iteration
 from .statistics import CHI2_TEST_LEVEL, FitStatistics
@@ -46,6 +46,10 @@ class FitOptions:
     # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
     # even where an ill-conditioned direction still creeps (off by default).
     stall_chi2: float = 0.0
+    # Once a trial step is rejected, screen the further trials of that iteration on a
+    # reduced basis (``objective.TrialScreen``) and solve in full only those it
+    # says descend; off: every trial is a full solve.
+    reanalysis: bool = True
 
     def __post_init__(self):
         where = "FitOptions"
@@ -86,7 +90,7 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         if reducible <= options.cost_tolerance * objective.cost(current) or \
                 float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance:
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
-        accepted = None
+        accepted, screen = None, None
         for _ in range(options.max_damping_tries):
             gain = np.where(keep, s / np.where(keep, s**2 + damping, 1.0), 0.0)
             dz = np.zeros_like(z)
@@ -102,12 +106,15 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             else:
                 damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)  # the step leaves the bounds: damp it
                 continue
-            # Sensitivities only for an accepted step: a rejected trial needs none.
-            trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
-            if objective.cost(trial) <= objective.cost(current):
-                accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
-                damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0  # back to Gauss-Newton
-                break
+            if screen is None or screen.descends(trial_values):
+                # Sensitivities only for an accepted step: a rejected trial needs none.
+                trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
+                if objective.cost(trial) <= objective.cost(current):
+                    accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
+                    damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0  # back to Gauss-Newton
+                    break
+                if options.reanalysis and screen is None:
+                    screen = TrialScreen.of(objective, current, trial)
             damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
         if accepted is None:
             at_minimum = reducible <= ROUNDOFF_COST * objective.cost(current)
