@@ -12,6 +12,7 @@ import contextlib
 import io
 import os
 import platform
+import resource
 import sys
 from datetime import datetime, timezone
 from pathlib import Path
@@ -55,7 +56,16 @@ def _measured(module) -> str:
     tee = _Tee(sys.stdout)
     with contextlib.redirect_stdout(tee):
         module.main()
+        print(_peak_memory())
     return tee.copy.getvalue().rstrip()
+
+
+def _peak_memory() -> str:
+    """Peak resident memory so far of this process and of its largest worker (target:
+    2 GB for any command)."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
+    workers = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    return f"peak memory so far (target 2048 MB a process): {own:.0f} MB this process, {workers:.0f} MB its largest worker"
 
 
 def _sections(text: str) -> dict[str, str]:
