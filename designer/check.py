@@ -7,6 +7,7 @@ from functools import cached_property
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING, Limits
 from fem.model import SpecimenModel
+from fem.solver.sensitivity import Verdict
 
 from .scores.damping import DampingScores, damping_scores
 from .scores.design import Design
@@ -35,7 +36,7 @@ class CheckResult:
     @property
     def feasible(self) -> bool:
         """Not singular, within every limit, and every parameter meets its target std."""
-        return self.design.scores.verdict != "singular" and not self.violations and self.design.meets_targets
+        return self.design.scores.verdict != Verdict.SINGULAR and not self.violations and self.design.meets_targets
 
     @cached_property
     def test_sheet(self) -> TestSheet | None:
@@ -69,7 +70,7 @@ class CheckResult:
         if self.test_sheet is not None:
             lines += ["", self.test_sheet.report()]
         reasons = []
-        if self.design.scores.verdict == "singular":
+        if self.design.scores.verdict == Verdict.SINGULAR:
             reasons.append("singular: the layers cannot be told apart")
         if self.violations:
             reasons.append("a limit is broken")

@@ -20,7 +20,7 @@ from fem.numbers import finite_or_none
 from fem.solver.damping import close_groups, first_order_loss_factors, loss_columns
 from fem.laminates.material import LOSS_FACTORS
 from fem.model import SpecimenModel
-from fem.solver.sensitivity import condition_verdict
+from fem.solver.sensitivity import Verdict, condition_verdict
 
 #: Loss factor assumed for an identified material the spec gives none for (a polymer
 #: coating's order; only the predicted std scales with it).
@@ -37,7 +37,7 @@ class DampingScores:
     nominal: np.ndarray
     predicted_std: np.ndarray
     condition_number: float
-    verdict: str
+    verdict: Verdict
     damping_std_rel: float
 
     @property
@@ -97,7 +97,7 @@ def damping_scores(model: SpecimenModel, configurations, damping_std_rel: float)
     a = np.array(rows)
     weighted = a / np.array(sigma)[:, None]
     if len(a) < len(targets):
-        return DampingScores(tuple(targets), nominal, np.full(len(targets), math.inf), math.inf, "singular",
+        return DampingScores(tuple(targets), nominal, np.full(len(targets), math.inf), math.inf, Verdict.SINGULAR,
                              damping_std_rel)
     s = np.linalg.svd(a, compute_uv=False)
     condition = float(s[0] / s[-1]) if s[-1] > 0 else math.inf

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.solver.sensitivity import condition_verdict as verdict
+from fem.solver.sensitivity import Verdict, condition_verdict as verdict
 
 #: Relative std above which a parameter is flagged weakly identifiable (10 %).
 WEAK_STD_REL = 0.1
@@ -78,7 +78,7 @@ class Scores:
     correlation: np.ndarray
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         return verdict(self.condition_number)
 
     def loss(self, criterion: str) -> float:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 
@@ -57,8 +58,17 @@ GOOD_BELOW = 1e3
 SINGULAR_ABOVE = 1e7
 
 
-def condition_verdict(condition_number: float) -> str:
-    """'good' below 1e3, 'ill-conditioned' up to 1e7, 'singular' above (NaN: singular)."""
+class Verdict(StrEnum):
+    """The paper's verdict on a condition number: a code that decisions compare, whose
+    value is the text reports and ``--json`` print."""
+
+    GOOD = "good"
+    ILL_CONDITIONED = "ill-conditioned"
+    SINGULAR = "singular"
+
+
+def condition_verdict(condition_number: float) -> Verdict:
+    """Good below 1e3, ill-conditioned up to 1e7, singular above (NaN: singular)."""
     if not condition_number <= SINGULAR_ABOVE:
-        return "singular"
-    return "good" if condition_number < GOOD_BELOW else "ill-conditioned"
+        return Verdict.SINGULAR
+    return Verdict.GOOD if condition_number < GOOD_BELOW else Verdict.ILL_CONDITIONED

@@ -39,7 +39,7 @@ import pandas as pd
 
 from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
-from fem.solver.sensitivity import SINGULAR_ABOVE
+from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
 from fem.numbers import finite_or_none
 
 from ..reporting import html_report as h
@@ -768,7 +768,7 @@ def _determined_final(final: FitResult | None, steps: list[Step], selected: list
     before = next(s for s in reversed(steps) if s.chosen is last)
     say(f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without {last.kind}")
     again = _final(before.start, measurements, baseline, selected[:-1], nominal, say)
-    if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == "singular":
+    if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
     reason = (f"drop {last.kind}: the refit with it fits the frequencies (RMS {100 * final.rms_rel_error:.3g} %) but "
               f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g}); "

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fem.solver.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, condition_verdict
+from fem.solver.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, Verdict, condition_verdict
 
 from .parameters import display
 from .statistics import FitStatistics
@@ -46,9 +46,12 @@ class Uncertainty:
     weak_combinations: tuple[str, ...]
     flags: tuple[tuple[str, ...], ...]
     warnings: tuple[str, ...]
+    # Per parameter: on a bound of its own or at nu12's positive-definiteness limit (the
+    # code that decisions read; ``flags`` word it for the report).
+    bounded: tuple[bool, ...] = ()
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         return condition_verdict(self.condition_number)
 
     def with_covariance(self, extra: np.ndarray) -> "Uncertainty":
@@ -157,10 +160,21 @@ class Uncertainty:
             std = np.sqrt(np.diag(covariance))
             correlation = covariance / np.outer(std, std)
         on_bound = space.at_bound(values)
-        flags = tuple(parameter_flags(parameter, value, sd, evaluation.model.specimen,
-                                      space.bound_of(i, values) if on_bound[i] else None)
+        specimen = evaluation.model.specimen
+        flags = tuple(parameter_flags(parameter, value, sd, specimen, space.bound_of(i, values) if on_bound[i] else None)
                       for i, (parameter, value, sd) in enumerate(zip(space.parameters, values, std)))
-        return cls(std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings))
+        bounded = tuple(bool(on_bound[i]) or at_limit(parameter, value, specimen)
+                        for i, (parameter, value) in enumerate(zip(space.parameters, values)))
+        return cls(std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings), bounded)
+
+
+def at_limit(parameter, value: float, specimen) -> bool:
+    """A Poisson's ratio at the positive-definiteness limit of its ply (nu12^2 within 2 %
+    of E1/E2): bounded by the material, not by the data."""
+    if parameter.kind != "nu12":
+        return False
+    material = specimen.materials[parameter.target]
+    return value**2 > 0.98 * material.E1 / material.E2
 
 
 def parameter_flags(parameter, value: float, std: float, specimen, bound: float | None = None) -> tuple[str, ...]:
@@ -171,10 +185,9 @@ def parameter_flags(parameter, value: float, std: float, specimen, bound: float 
     flags = []
     if bound is not None:
         flags.append(f"at bound ({parameter.kind} = {display(parameter, bound):.4g}; set bounds in the spec to widen)")
+    if at_limit(parameter, value, specimen):
+        flags.append("at bound (nu12^2 -> E1/E2)")
     if parameter.kind == "nu12":
-        material = specimen.materials[parameter.target]
-        if value**2 > 0.98 * material.E1 / material.E2:
-            flags.append("at bound (nu12^2 -> E1/E2)")
         if std > WEAK_REL_STD * 0.3:
             flags.append("weakly identifiable")
     elif np.isfinite(std) and std > WEAK_REL_STD * abs(value):

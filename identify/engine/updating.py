@@ -16,6 +16,7 @@ from scipy.stats import chi2 as chi2_distribution
 
 from fem.errors import MeasurementError, OptionsError
 from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
+from fem.solver.sensitivity import Verdict
 from fem.specimen import Parameter
 from fem import validation
 
@@ -271,7 +272,7 @@ def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
             return FitStatus.NOT_CONVERGED, f"not converged in {options.max_iterations} iterations"
         return FitStatus.NOT_CONVERGED, (f"stopped: no step lowered the misfit after {options.max_damping_tries} "
                                          "damping increases")
-    singular = uncertainty.verdict == "singular"
+    singular = uncertainty.verdict == Verdict.SINGULAR
     if not statistics.consistent:
         also = (f"; the sensitivity matrix is singular too (condition number {uncertainty.condition_number:.3g})"
                 if singular else "")

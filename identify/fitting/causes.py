@@ -60,8 +60,7 @@ def _units(result: FitResult) -> Cause | None:
     factor = math.exp(mean)
     slip = min(UNIT_SLIPS, key=lambda f: abs(math.log(factor / f)))
     hint = f": {UNIT_SLIPS[slip]}?" if abs(math.log(factor / slip)) < math.log(1.3) else ""
-    bounded = [p.name for p, flags in zip(result.parameters, result.uncertainty.flags)
-               if any(f.startswith("at bound") for f in flags)]
+    bounded = [p.name for p, at in zip(result.parameters, result.uncertainty.bounded) if at]
     pinned = f"; {', '.join(bounded)} ran to their bounds trying" if bounded else ""
     return Cause("units", 1 - spread / abs(mean),
                  f"every measured frequency is about {factor:.4g}x the model's{hint} Check the units of the "

@@ -41,7 +41,7 @@ from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import close_groups, known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
 from fem.laminates.material import MAX_LOSS_FACTOR
 from fem.model import SpecimenModel
-from fem.solver.sensitivity import condition_verdict
+from fem.solver.sensitivity import Verdict, condition_verdict
 
 from ..measurements import Measurements
 from ..engine.statistics import CHI2_TEST_LEVEL
@@ -78,7 +78,7 @@ class DampingResult:
     values: np.ndarray
     std: np.ndarray
     condition_number: float
-    verdict: str
+    verdict: Verdict
     residuals: pd.DataFrame
     chi2: float = math.nan
     dof: int = 0
@@ -218,7 +218,7 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     if rows.table.empty:
         return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the "
                              "loss factors cannot be identified", tuple(targets), nothing, nothing, math.nan,
-                             "singular", empty, notes=tuple(notes))
+                             Verdict.SINGULAR, empty, notes=tuple(notes))
     index = rows.table["row"].to_numpy()
     columns = loss_columns(model, targets)[index]
     known = known_targets(model)
@@ -235,7 +235,7 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     condition = float(np.linalg.cond(a)) if len(a) >= len(targets) else math.inf
     verdict = condition_verdict(condition)
     scatter_stated = bool(measurements.table["damping_std"].notna().any())
-    if len(a) < len(targets) or verdict == "singular":
+    if len(a) < len(targets) or verdict == Verdict.SINGULAR:
         why = (f"{len(a)} independent damped modes for {len(targets)} loss factors" if len(a) < len(targets) else
                f"the loss-factor columns are singular (condition number {condition:.3g})")
         return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: {why}; add "
@@ -285,7 +285,7 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     else:
         status = "converged"
         message = f"the measured damping is consistent with the scatter (chi^2 {chi2:.3g} for {dof} degrees of freedom)"
-    if verdict == "ill-conditioned":
+    if verdict == Verdict.ILL_CONDITIONED:
         notes.append(f"the loss-factor columns are ill-conditioned (condition number {condition:.3g}): large std")
     return DampingResult(status, message, tuple(targets), x, std, condition, verdict,
                          _residual_table(rows, model_eta), chi2, dof, p_value, scatter_stated, method, at_bound,

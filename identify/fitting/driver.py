@@ -281,9 +281,8 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
 
 
 def at_bounds(result: FitResult) -> list[Parameter]:
-    """The parameters of ``result`` at a bound of theirs (``uncertainty`` flags them)."""
-    return [p for p, flags in zip(result.parameters, result.uncertainty.flags, strict=True)
-            if any(f.startswith("at bound") for f in flags)]
+    """The parameters of ``result`` at a bound of theirs (``Uncertainty.bounded``)."""
+    return [p for p, at in zip(result.parameters, result.uncertainty.bounded, strict=True) if at]
 
 
 def _ran_off(value: float, start: float) -> bool:

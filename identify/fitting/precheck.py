@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.model import SpecimenModel
-from fem.solver.sensitivity import SINGULAR_ABOVE, condition_verdict
+from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict, condition_verdict
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
@@ -98,7 +98,7 @@ class Precheck:
     weakest: str
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         return condition_verdict(self.condition_number)
 
     @property

@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import pytest
 
 from fem.solver.attachments import PointMass
+from fem.solver.sensitivity import condition_verdict
 from identify.diagnosis.compare import compare
 from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
@@ -167,7 +168,7 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 
 def _fit(status, rms=1e-3, condition=1e3):
     """A refit as ``_determined_final`` reads it: status, misfit and conditioning."""
-    verdict = "singular" if condition > 1e7 else "good"
+    verdict = condition_verdict(condition)
     return SimpleNamespace(status=status, rms_rel_error=rms, converged=status is FitStatus.CONVERGED,
                            uncertainty=SimpleNamespace(condition_number=condition, verdict=verdict))
 
