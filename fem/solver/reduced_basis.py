@@ -63,10 +63,9 @@ class RitzSolution(LaminateSolution):
 @dataclass(frozen=True)
 class Reanalysis:
     """One configuration's Rayleigh-Ritz model on the modes of ``base`` (a full solve)
-    and the mesh's six rigid-body fields, which lead the basis (their Ritz values, zero or
-    a suspension's, are dropped): an attachment moved or added mixes rigid-body motion
-    into the elastic modes, and without those fields a Ritz value may fall below the true
-    one."""
+    and the mesh's six rigid-body fields (their Ritz values, the lowest: zero or a
+    suspension's, are dropped): an attachment moved or added mixes rigid-body motion into
+    the elastic modes, and without those fields a Ritz value may fall below the true one."""
 
     configuration: str
     options: ModelOptions
@@ -103,7 +102,7 @@ class Reanalysis:
 
     @property
     def rigid(self) -> int:
-        """Rigid-body fields leading the basis."""
+        """Rigid-body fields in the basis: as many of the lowest Ritz values are dropped."""
         return self.base.units.rigid_body_modes.shape[1]
 
     def _system(self, specimen: Specimen) -> tuple[np.ndarray, np.ndarray, LayerwiseLaminate | None]:
