@@ -77,6 +77,7 @@ class ProjectionQuadrature:
 #: What an element's ``unit_stiffness`` and ``unit_mass`` integrate with.
 Quadrature = MatrixQuadrature | EnergyQuadrature | ProjectionQuadrature
 
+
 class HermitePlate:
     """Four-node rectangle, 12 DOFs per node, 48 per element.
 

@@ -143,40 +143,42 @@ def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, 
     return [(float(x), float(y), float(a * b), *moves) for x, a in zip(xs, wx) for y, b in zip(ys, wy)]
 
 
-def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.ndarray]:
-    """CSR data (on the shared pattern) of the stiffness and mass the attachments add."""
-    nnz = units._pattern[0].size
-    stiffness, mass = np.zeros(nnz), np.zeros(nnz)
+def _point_terms(units: UnitMatrices, attachments):
+    """Every point the attachments act at: (a mass or a spring, the DOFs of the element that
+    holds it, the rows (k, n_local) that evaluate there the fields it acts on, its weight
+    [kg or N/m]); each adds weight |rows @ field[dofs]|^2 / 2 to the kinetic or the strain
+    energy (a mass over a base: one term per footprint point, weighted by its share)."""
     for attachment in attachments:
         if isinstance(attachment, PointMass):
             for x, y, share, _, _ in footprint(units, attachment):
                 dofs, n = point_operators(units, x, y)
-                block = share * attachment.mass * sum(np.outer(n[f], n[f]) for f in ("u", "v", "w"))
-                np.add.at(mass, _data_positions(units, dofs), block)
+                yield True, dofs, np.stack([n[f] for f in ("u", "v", "w")]), share * attachment.mass
         else:
             for x, y in attachment.points:
                 dofs, n = point_operators(units, x, y)
-                np.add.at(stiffness, _data_positions(units, dofs), attachment.stiffness * np.outer(n["w"], n["w"]))
+                yield False, dofs, n["w"][None, :], attachment.stiffness
+
+
+def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.ndarray]:
+    """CSR data (on the shared pattern) of the stiffness and mass the attachments add."""
+    nnz = units._pattern[0].size
+    stiffness, mass = np.zeros(nnz), np.zeros(nnz)
+    for is_mass, dofs, rows, weight in _point_terms(units, attachments):
+        np.add.at(mass if is_mass else stiffness, _data_positions(units, dofs),
+                  weight * sum(np.outer(row, row) for row in rows))
     return stiffness, mass
 
 
 def projected_attachments(units: UnitMatrices, basis: np.ndarray, attachments) -> tuple[np.ndarray, np.ndarray]:
     """The stiffness and mass the attachments add, projected on a basis V (n_dofs, r):
-    (r, r) each, from the basis's values at their points (the same sums as
+    (r, r) each, from the basis's values at their points (the terms of
     ``attachment_data``, on the few DOFs of the elements that hold them)."""
     rank = basis.shape[1]
     stiffness, mass = np.zeros((rank, rank)), np.zeros((rank, rank))
-    for attachment in attachments:
-        if isinstance(attachment, PointMass):
-            for x, y, share, _, _ in footprint(units, attachment):
-                dofs, n = point_operators(units, x, y)
-                values = np.stack([n[f] @ basis[dofs] for f in ("u", "v", "w")])
-                mass += share * attachment.mass * (values.T @ values)
-        else:
-            for x, y in attachment.points:
-                dofs, n = point_operators(units, x, y)
-                w = n["w"] @ basis[dofs]
-                stiffness += attachment.stiffness * np.outer(w, w)
+    for is_mass, dofs, rows, weight in _point_terms(units, attachments):
+        values = rows @ basis[dofs]
+        target = mass if is_mass else stiffness
+        target += weight * (values.T @ values)
     return stiffness, mass
 
 

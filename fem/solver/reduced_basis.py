@@ -88,8 +88,7 @@ class Reanalysis:
             fields.append(extra)
         raw = np.hstack(fields)
         stiffness, mass = units.projections(raw)
-        inertia = base.layerwise.inertia if base.layerwise is not None else system_coefficients(
-            base.laminate, base.transverse_shear, base.inertia_terms)[1]
+        _, inertia = _weights(base, base.laminate, base.layerwise)
         gram = np.tensordot(inertia, mass, 1)
         if base.attachments:
             gram = gram + projected_attachments(units, raw, base.attachments)[1]
@@ -115,9 +114,7 @@ class Reanalysis:
             stack = LayerwiseLaminate.of(laminate, options.layer_groups, options.core_stretch)
             if (stack.groups, stack.stretch) != (base.layerwise.groups, base.layerwise.stretch):
                 raise OutsideBasis(f"configuration {self.configuration!r}: the layerwise groups changed")
-            coefficients, inertia = stack.stiffness, stack.inertia
-        else:
-            coefficients, inertia = system_coefficients(laminate, base.transverse_shear, base.inertia_terms)
+        coefficients, inertia = _weights(base, laminate, stack)
         stiffness = np.tensordot(coefficients, self.stiffness, 1)
         mass = np.tensordot(inertia, self.mass, 1)
         if specimen.attachments:
@@ -150,6 +147,15 @@ class Reanalysis:
         return RitzSolution(specimen.laminate(self.configuration), base.units,
                             Modes(eigenvalues, self.basis @ coordinates), base.inertia_terms, base.transverse_shear,
                             specimen.attachments, stack, coordinates=coordinates, projected=(self.stiffness, self.mass))
+
+
+def _weights(base: LaminateSolution, laminate, stack: LayerwiseLaminate | None) -> tuple[np.ndarray, np.ndarray]:
+    """The weights of the unit stiffness and mass matrices of ``base``'s theory for
+    ``laminate``: its layerwise ``stack``'s generalised coefficients, else the single-layer
+    theory's (``system_coefficients``)."""
+    if stack is not None:
+        return stack.stiffness, stack.inertia
+    return system_coefficients(laminate, base.transverse_shear, base.inertia_terms)
 
 
 __all__ = ["OutsideBasis", "Reanalysis", "RitzSolution"]

@@ -20,7 +20,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from fem.errors import NotApplicableError
-from fem.solver.attachments import point_operators
+from fem.solver.attachments import PointMass, projected_attachments
 from fem.solver.reduced_basis import Reanalysis
 
 from ..engine.objective import solving_model
@@ -47,11 +47,11 @@ class PointMassScreen:
         # The basis of the peak screen (1.5 x the solved modes): a mass of a few % of the
         # plate moves the shapes, which the state's own modes alone do not span.
         basis = ritz_basis(solving_model(state.model, data))
+        if basis.options.theory == "layerwise":
+            raise NotApplicableError("the point-mass screen needs a single-layer theory (no layerwise model)")
         self.configurations = []
         table = data.table
         for name in data.configurations:
-            if basis.options.theory == "layerwise":
-                raise NotApplicableError("the point-mass screen needs a single-layer theory (no layerwise model)")
             reduced = Reanalysis.of(basis, name)
             rows = np.flatnonzero(table["configuration"].to_numpy() == name)
             k, m = reduced.matrices(basis.specimen)
@@ -73,13 +73,10 @@ class PointMassScreen:
             return None
 
     def _squares(self, x: float, y: float) -> list[np.ndarray]:
-        """Per configuration, V^T V of the basis displacements at (x, y) [m]."""
-        out = []
-        for _, _, _, _, units, fields in self.configurations:
-            dofs, rows_of = point_operators(units, x, y)
-            v = np.stack([rows_of[f] @ fields[dofs] for f in ("u", "v", "w")])
-            out.append(v.T @ v)
-        return out
+        """Per configuration, V^T V of the basis displacements at (x, y) [m]: the projected
+        mass of 1 kg there."""
+        unit = (PointMass(1.0, x, y),)
+        return [projected_attachments(units, fields, unit)[1] for _, _, _, _, units, fields in self.configurations]
 
     def _left(self, squares, mass: float) -> float:
         model_hz = np.empty(len(self.data))
