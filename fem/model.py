@@ -161,17 +161,16 @@ class LaminateSolution:
             return np.zeros((len(self.modes.eigenvalues), 0))
         d_lambda = np.zeros((len(self.modes.eigenvalues), len(parameters)))
         laminate = [j for j, p in enumerate(parameters) if p.kind not in ATTACHMENT_PARAMETERS]
+        kinds = [(parameters[j].kind, parameters[j].target) for j in laminate]
         if laminate and self.layerwise is not None:
-            dx, di = zip(*(self.layerwise.derivative(parameters[j].kind, parameters[j].target) for j in laminate))
-            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx),
-                                                           np.array(di))
+            dx, di = self.layerwise.derivatives(kinds)
+            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, dx, di)
         elif laminate:
-            dx, di = zip(*(self.laminate.derivative(parameters[j].kind, parameters[j].target) for j in laminate))
+            dx, di = (np.array(d) for d in zip(*(self.laminate.derivative(*kind) for kind in kinds)))
             if self.transverse_shear:
-                dx = [np.concatenate([x, self.laminate.shear_derivative(parameters[j].kind, parameters[j].target)])
-                      for x, j in zip(dx, laminate)]
-            di = np.array(di) * self.inertia_terms
-            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, np.array(dx), di)
+                dx = np.hstack([dx, self.laminate.shear_derivatives(kinds)])
+            di = di * self.inertia_terms
+            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, dx, di)
         by_label = {a.label: a for a in self.attachments}
         for j, p in enumerate(parameters):
             if p.kind in ATTACHMENT_PARAMETERS and p.target in by_label:

@@ -101,6 +101,15 @@ class Layer:
         return transformation(self.angle) @ q
 
     @cached_property
+    def off_axis_derivatives(self) -> dict[str, np.ndarray]:
+        """d Qbar / dp in the plate axes for p = E1, E2, G12 [1], nu12 [Pa] and the angle
+        [Pa/rad]: computed once per layer, read by every parameter's derivative."""
+        q, dq = reduced_stiffness(self.material)
+        out = {p: transformation(self.angle) @ dq[p] for p in ELASTIC_CONSTANTS}
+        out["angle"] = transformation(self.angle, derivative=True) @ q
+        return out
+
+    @cached_property
     def shear_moduli(self) -> np.ndarray:
         """Transverse shear stiffness [Qb44, Qb55, Qb45] in the plate axes [Pa] (G13, G23
         defaulted to G12 when not given: ``Material.transverse_shear_moduli``)."""
@@ -169,13 +178,11 @@ class Laminate:
         d_rho = np.zeros(n_layers)
         for k, layer in enumerate(self.layers):
             if kind in ELASTIC_CONSTANTS and layer.material.name == target:
-                _, dq = reduced_stiffness(layer.material)
-                d_qbar[k] = transformation(layer.angle) @ dq[kind]
+                d_qbar[k] = layer.off_axis_derivatives[kind]
             elif kind == "density" and layer.material.name == target:
                 d_rho[k] = 1.0
             elif kind == "angle" and layer.label == target:
-                q, _ = reduced_stiffness(layer.material)
-                d_qbar[k] = transformation(layer.angle, derivative=True) @ q
+                d_qbar[k] = layer.off_axis_derivatives["angle"]
         if kind == "thickness":
             hit = [k for k, layer in enumerate(self.layers) if layer.label == target]
             if hit:
@@ -229,25 +236,33 @@ class Laminate:
         A defaulted G13 or G23 follows G12, so it enters the G12 derivative.  Zeros when
         the target is not in this stack or the kind does not act on transverse shear.
         """
+        return self.shear_derivatives([(kind, target)])[0]
+
+    def shear_derivatives(self, parameters) -> np.ndarray:
+        """``shear_derivative`` of every (kind, target) of ``parameters`` at once (P, 3): one
+        complex-step pass whose batch holds every direction."""
+        inputs = self._shear_inputs
+        directions = [self._shear_direction(kind, target, inputs) for kind, target in parameters]
+        return shear_stiffness_derivative(inputs, tuple(np.stack(d) for d in zip(*directions)))
+
+    def _shear_direction(self, kind: str, target: str, inputs) -> tuple[np.ndarray, ...]:
+        """d(thickness, Qb11, Qb22, [Qb44, Qb55, Qb45])/dp per layer, closed form."""
         if kind not in ELASTIC_CONSTANTS + SHEAR_MODULI + ("density", "angle", "thickness"):
             raise ValueError(f"unknown parameter kind {kind!r}")
-        inputs = self._shear_inputs
         d_t, d_q11, d_q22, d_shear = (np.zeros_like(x) for x in inputs)
         for k, layer in enumerate(self.layers):
             material = layer.material
             if kind in ELASTIC_CONSTANTS + SHEAR_MODULI and material.name == target:
                 if kind in ELASTIC_CONSTANTS:
-                    _, dq = reduced_stiffness(material)
-                    d_qbar = transformation(layer.angle) @ dq[kind]
+                    d_qbar = layer.off_axis_derivatives[kind]
                     d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
                 follows = [kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
                            for name in SHEAR_MODULI]
                 d_shear[k] = rotated_shear_moduli(*map(float, follows), layer.angle)
             elif kind == "angle" and layer.label == target:
-                q, _ = reduced_stiffness(material)
-                d_qbar = transformation(layer.angle, derivative=True) @ q
+                d_qbar = layer.off_axis_derivatives["angle"]
                 d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
                 d_shear[k] = rotated_shear_moduli(*material.transverse_shear_moduli, layer.angle, derivative=True)
             elif kind == "thickness" and layer.label == target:
                 d_t[k] = 1.0
-        return shear_stiffness_derivative(inputs, (d_t, d_q11, d_q22, d_shear))
+        return d_t, d_q11, d_q22, d_shear

@@ -48,20 +48,23 @@ def rotated_shear_moduli(g13: float, g23: float, angle: float, derivative: bool 
 
 def _energy_equivalent(thickness: np.ndarray, axial: np.ndarray, shear: np.ndarray):
     """D*^2 / int g^2 / G dz for one bending direction: axial = Qb11 (or Qb22), shear =
-    Qb55 (or Qb44) per layer.  Returns the shear stiffness [N/m]."""
-    z = np.concatenate([np.zeros(1, dtype=thickness.dtype), np.cumsum(thickness)]) - np.sum(thickness) / 2
-    a = np.sum(axial * thickness)
-    b = np.sum(axial * np.diff(z**2)) / 2
-    d = np.sum(axial * np.diff(z**3)) / 3
+    Qb55 (or Qb44) per layer (last axis; leading axes are stacks evaluated at once).
+    Returns the shear stiffness [N/m]."""
+    z = np.concatenate([np.zeros_like(thickness[..., :1]), np.cumsum(thickness, axis=-1)], axis=-1) \
+        - np.sum(thickness, axis=-1, keepdims=True) / 2
+    a = np.sum(axial * thickness, axis=-1, keepdims=True)
+    b = np.sum(axial * np.diff(z**2, axis=-1), axis=-1, keepdims=True) / 2
+    d = np.sum(axial * np.diff(z**3, axis=-1), axis=-1, keepdims=True) / 3
     z_n = b / a
-    d_star = d - b * b / a
+    d_star = (d - b * b / a)[..., 0]
     # g at the bottom of each layer, then inside it at the Gauss points.
-    step = axial * np.diff((z - z_n) ** 2) / 2
-    g_bottom = np.concatenate([np.zeros(1, dtype=step.dtype), np.cumsum(step)[:-1]])
+    step = axial * np.diff((z - z_n) ** 2, axis=-1) / 2
+    g_bottom = np.concatenate([np.zeros_like(step[..., :1]), np.cumsum(step, axis=-1)[..., :-1]], axis=-1)
     points, weights = _GAUSS
-    z_q = z[:-1, None] + thickness[:, None] * (points[None, :] + 1) / 2
-    g = g_bottom[:, None] + axial[:, None] * ((z_q - z_n) ** 2 - (z[:-1, None] - z_n) ** 2) / 2
-    integral = np.sum((g * g) @ weights * thickness / (2 * shear))
+    z_q = z[..., :-1, None] + thickness[..., None] * (points + 1) / 2
+    z_n = z_n[..., None]
+    g = g_bottom[..., None] + axial[..., None] * ((z_q - z_n) ** 2 - (z[..., :-1, None] - z_n) ** 2) / 2
+    integral = np.sum((g * g) @ weights * thickness / (2 * shear), axis=-1)
     return d_star * d_star / integral
 
 
@@ -69,12 +72,13 @@ def shear_stiffness(
     thickness: np.ndarray, q11: np.ndarray, q22: np.ndarray, shear_moduli: np.ndarray
 ) -> np.ndarray:
     """[A44, A55, A45] [N/m] of a stack: thickness [m], Qb11, Qb22 [Pa] per layer, and
-    shear_moduli (N, 3) [Qb44, Qb55, Qb45] per layer [Pa]."""
-    raw = thickness @ shear_moduli  # int Qb44, Qb55, Qb45 dz
-    a44 = _energy_equivalent(thickness, q22, shear_moduli[:, 0])
-    a55 = _energy_equivalent(thickness, q11, shear_moduli[:, 1])
-    a45 = np.sqrt(a44 / raw[0] * a55 / raw[1]) * raw[2]
-    return np.array([a44, a55, a45])
+    shear_moduli (N, 3) [Qb44, Qb55, Qb45] per layer [Pa].  Leading axes on every input
+    (thickness (B, N), shear_moduli (B, N, 3), ...) are stacks evaluated at once: (B, 3)."""
+    raw = np.sum(thickness[..., None] * shear_moduli, axis=-2)  # int Qb44, Qb55, Qb45 dz
+    a44 = _energy_equivalent(thickness, q22, shear_moduli[..., 0])
+    a55 = _energy_equivalent(thickness, q11, shear_moduli[..., 1])
+    a45 = np.sqrt(a44 / raw[..., 0] * a55 / raw[..., 1]) * raw[..., 2]
+    return np.stack([a44, a55, a45], axis=-1)
 
 
 def shear_correction_factors(thickness: np.ndarray, q11: np.ndarray, q22: np.ndarray, shear_moduli: np.ndarray):
@@ -86,6 +90,7 @@ def shear_correction_factors(thickness: np.ndarray, q11: np.ndarray, q22: np.nda
 
 def shear_stiffness_derivative(inputs: tuple[np.ndarray, ...], directions: tuple[np.ndarray, ...]) -> np.ndarray:
     """Exact directional derivative of ``shear_stiffness(*inputs)`` along ``directions``
-    (same shapes as the inputs), by complex step."""
+    (the inputs' shapes, or with a leading axis of several directions: one row each), by
+    complex step."""
     perturbed = (np.asarray(x, dtype=complex) + 1j * COMPLEX_STEP * np.asarray(dx) for x, dx in zip(inputs, directions))
     return shear_stiffness(*perturbed).imag / COMPLEX_STEP

@@ -75,7 +75,7 @@ import numpy as np
 from ..solver.assembly import UnitMatrices
 from ..elements.layerwise_plate import LayerwisePlate, basis_pairs
 from ..errors import ModelError
-from .laminate import COEFFICIENTS, Laminate, reduced_stiffness, transformation
+from .laminate import COEFFICIENTS, Laminate
 from .laminate_shear import COMPLEX_STEP, rotated_shear_moduli
 from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
 from ..solver.mesh import PlateMesh
@@ -174,31 +174,35 @@ def inertia_names(n: int, m: int = 0) -> tuple[str, ...]:
 
 def _profiles(c0: np.ndarray, c1: np.ndarray, t: np.ndarray, z: np.ndarray, local: np.ndarray):
     """For functions whose slope in layer l is c0[l] + c1[l] h (h above the layer's bottom;
-    c0, c1: (N, c)): P = int_0^z slope and L = int_0^z P at the Gauss points (N, q, c).
-    Complex-step safe (the layer holding z = 0 is chosen on the real parts)."""
-    tc = t[:, None]
-    zeros = np.zeros((1, c0.shape[1]), dtype=np.result_type(c0, c1, t))
-    p_bottom = np.concatenate([zeros, np.cumsum(c0 * tc + c1 * tc**2 / 2, axis=0)])
-    l_bottom = np.concatenate([zeros, np.cumsum(p_bottom[:-1] * tc + c0 * tc**2 / 2 + c1 * tc**3 / 6, axis=0)])
+    c0, c1: (B, N, c), t: (B, N), z: (B, N + 1), local: (B, N, q); B points evaluated at
+    once): P = int_0^z slope and L = int_0^z P at the Gauss points (B, N, q, c).
+    Complex-step safe (the layer holding z = 0 is chosen on the real parts, which every
+    point of a complex-step batch shares)."""
+    tc = t[:, :, None]
+    zeros = np.zeros((len(t), 1, c0.shape[2]), dtype=np.result_type(c0, c1, t))
+    p_bottom = np.concatenate([zeros, np.cumsum(c0 * tc + c1 * tc**2 / 2, axis=1)], axis=1)
+    l_bottom = np.concatenate([zeros, np.cumsum(p_bottom[:, :-1] * tc + c0 * tc**2 / 2 + c1 * tc**3 / 6, axis=1)],
+                              axis=1)
 
     def inside(p_b, l_b, a, b, h):  # P and L at height h above a layer's bottom
         return p_b + a * h + b * h**2 / 2, l_b + p_b * h + a * h**2 / 2 + b * h**3 / 6
 
-    k0 = min(int(np.searchsorted(np.real(z), 0.0, side="right")) - 1, len(t) - 1)
-    p0, l0 = inside(p_bottom[k0], l_bottom[k0], c0[k0], c1[k0], -z[k0])
-    p, lam = inside(p_bottom[:-1, None, :], l_bottom[:-1, None, :], c0[:, None, :], c1[:, None, :],
-                    local[:, :, None])
-    z_q = (z[:-1, None] + local)[:, :, None]
-    return p - p0, lam - l0 - p0 * z_q
+    k0 = min(int(np.searchsorted(np.real(z[0]), 0.0, side="right")) - 1, t.shape[1] - 1)
+    p0, l0 = inside(p_bottom[:, k0], l_bottom[:, k0], c0[:, k0], c1[:, k0], -z[:, k0, None])
+    p, lam = inside(p_bottom[:, :-1, None, :], l_bottom[:, :-1, None, :], c0[:, :, None, :], c1[:, :, None, :],
+                    local[..., None])
+    z_q = (z[:, :-1, None] + local)[..., None]
+    return p - p0[:, None, None], lam - l0[:, None, None] - p0[:, None, None] * z_q
 
 
 def _jourawski(t: np.ndarray, axial: np.ndarray, z: np.ndarray, z_q: np.ndarray) -> np.ndarray:
-    """g(z) = int_{-H/2}^z axial (zeta - z_n) dzeta at the Gauss points (N, q)."""
-    a = np.sum(axial * t)
-    z_n = np.sum(axial * np.diff(z**2)) / 2 / a
-    step = axial * np.diff((z - z_n) ** 2) / 2
-    g_bottom = np.concatenate([np.zeros(1, dtype=step.dtype), np.cumsum(step)[:-1]])
-    return g_bottom[:, None] + axial[:, None] * ((z_q - z_n) ** 2 - (z[:-1, None] - z_n) ** 2) / 2
+    """g(z) = int_{-H/2}^z axial (zeta - z_n) dzeta at the Gauss points (B, N, q)."""
+    a = np.sum(axial * t, axis=1)
+    z_n = (np.sum(axial * np.diff(z**2, axis=1), axis=1) / 2 / a)[:, None]
+    step = axial * np.diff((z - z_n) ** 2, axis=1) / 2
+    g_bottom = np.concatenate([np.zeros((len(t), 1), dtype=step.dtype), np.cumsum(step, axis=1)[:, :-1]], axis=1)
+    z_n = z_n[:, :, None]
+    return g_bottom[:, :, None] + axial[:, :, None] * ((z_q - z_n) ** 2 - (z[:, :-1, None] - z_n) ** 2) / 2
 
 
 def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarray, qbar: np.ndarray,
@@ -206,43 +210,53 @@ def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarra
     """(stiffness, inertia) generalised coefficients (``stiffness_names``, ``inertia_names``
     order) from per-layer thickness t [m], Qbar (N, 6) [Pa], transverse shear moduli
     [Qb44, Qb55, Qb45] (N, 3) [Pa], through-thickness modulus E3 [Pa] and density
-    [kg/m^3].  Complex inputs are allowed (complex-step derivatives)."""
-    n_layers, n, m = len(groups), max(groups) + 1, 2 * len(stretch)
-    z = np.concatenate([np.zeros(1, dtype=t.dtype), np.cumsum(t)]) - np.sum(t) / 2
+    [kg/m^3].  Complex inputs are allowed (complex-step derivatives).  With a leading
+    batch axis on every input (t (B, N), Qbar (B, N, 6), ...) B stacks at once: the
+    outputs get the same leading axis."""
+    if np.ndim(t) == 1:
+        stiffness, inertia = coefficients(groups, stretch, *(x[None] for x in (t, qbar, shear, e3, rho)))
+        return stiffness[0], inertia[0]
+    batch, n_layers, n, m = len(t), len(groups), max(groups) + 1, 2 * len(stretch)
+    z = np.concatenate([np.zeros((batch, 1), dtype=t.dtype), np.cumsum(t, axis=1)], axis=1) \
+        - np.sum(t, axis=1, keepdims=True) / 2
     points, weights = _GAUSS
-    local = t[:, None] * (points[None, :] + 1) / 2  # height above each layer's bottom
-    z_q = z[:-1, None] + local
-    w_q = t[:, None] * weights[None, :] / 2
+    local = t[:, :, None] * (points + 1) / 2  # height above each layer's bottom
+    z_q = z[:, :-1, None] + local
+    w_q = t[:, :, None] * weights / 2
     group_member = np.zeros((n_layers, n))
     group_member[np.arange(n_layers), groups] = 1.0
-    phi, _ = _profiles(group_member, 0 * group_member, t, z, local)
+    member = np.broadcast_to(group_member, (batch, n_layers, n))
+    phi, _ = _profiles(member, 0 * member, t, z, local)
     # Per stretching layer two normal strains: eps_z = e (constant) + f xi, xi = 2 h / t - 1.
-    c0, c1 = np.zeros((n_layers, m), dtype=t.dtype), np.zeros((n_layers, m), dtype=t.dtype)
+    c0, c1 = np.zeros((batch, n_layers, m), dtype=t.dtype), np.zeros((batch, n_layers, m), dtype=t.dtype)
     for j, layer in enumerate(stretch):
-        c0[layer, 2 * j], c0[layer, 2 * j + 1], c1[layer, 2 * j + 1] = 1.0, -1.0, 2.0 / t[layer]
+        c0[:, layer, 2 * j], c0[:, layer, 2 * j + 1], c1[:, layer, 2 * j + 1] = 1.0, -1.0, 2.0 / t[:, layer]
     psi, lam = _profiles(c0, c1, t, z, local)
-    in_plane = np.concatenate([np.ones_like(z_q)[:, :, None], z_q[:, :, None], phi, lam], axis=2)
-    transverse = np.concatenate([np.ones_like(z_q)[:, :, None], psi], axis=2)
-    moments = np.einsum("lq,lqa,lqb->lab", w_q, in_plane, in_plane)
-    stiff = np.einsum("lc,lab->abc", qbar, moments)
-    mass = np.einsum("l,lab->ab", rho, moments)
-    pairs = basis_pairs(in_plane.shape[2])
-    stiffness = [stiff[a, b] for a, b in pairs]
-    inertia = [mass[a, b] for a, b in pairs]
-    transverse_mass = np.einsum("l,lq,lqa,lqb->ab", rho, w_q, transverse, transverse)
-    inertia += [transverse_mass[a, b] for a, b in basis_pairs(1 + m)[1:]]
-    raw = group_member.T @ (t[:, None] * shear)  # (n, 3): int Qb44, Qb55, Qb45 over each group
+    in_plane = np.concatenate([np.ones_like(z_q)[..., None], z_q[..., None], phi, lam], axis=3)
+    transverse = np.concatenate([np.ones_like(z_q)[..., None], psi], axis=3)
+    moments = np.einsum("xlq,xlqa,xlqb->xlab", w_q, in_plane, in_plane)
+    stiff = np.einsum("xlc,xlab->xabc", qbar, moments)
+    mass = np.einsum("xl,xlab->xab", rho, moments)
+    pairs = np.array(basis_pairs(in_plane.shape[3]))
+    stiffness = stiff[:, pairs[:, 0], pairs[:, 1]].reshape(batch, -1)
+    inertia = [mass[:, pairs[:, 0], pairs[:, 1]]]
+    transverse_mass = np.einsum("xl,xlq,xlqa,xlqb->xab", rho, w_q, transverse, transverse)
+    normal_pairs = np.array(basis_pairs(1 + m)[1:], dtype=int).reshape(-1, 2)
+    inertia.append(transverse_mass[:, normal_pairs[:, 0], normal_pairs[:, 1]])
+    raw = np.einsum("ln,xlc->xnc", group_member, t[:, :, None] * shear)  # int Qb44, Qb55, Qb45 over each group
     corrected = []
-    for axial, modulus in ((qbar[:, 2], shear[:, 0]), (qbar[:, 0], shear[:, 1])):
+    for axial, modulus in ((qbar[:, :, 2], shear[:, :, 0]), (qbar[:, :, 0], shear[:, :, 1])):
         g = _jourawski(t, axial, z, z_q)
-        force = group_member.T @ np.sum(g * w_q, axis=1)  # int_k g dz
-        energy = group_member.T @ (np.sum(g * g * w_q, axis=1) / modulus)  # int_k g^2 / G dz
+        force = np.sum(g * w_q, axis=2) @ group_member  # int_k g dz
+        energy = (np.sum(g * g * w_q, axis=2) / modulus) @ group_member  # int_k g^2 / G dz
         corrected.append(force * force / energy)
     a44, a55 = corrected
-    a45 = np.sqrt(a44 / raw[:, 0] * a55 / raw[:, 1]) * raw[:, 2]
-    normal = np.ravel([(e3[s] * t[s], e3[s] * t[s] / 3) for s in stretch])  # int E3 {1, xi^2} dz
-    return (np.concatenate([np.concatenate(stiffness), np.stack([a44, a55, a45], axis=1).ravel(), normal]),
-            np.array(inertia))
+    a45 = np.sqrt(a44 / raw[:, :, 0] * a55 / raw[:, :, 1]) * raw[:, :, 2]
+    index = np.array(stretch, dtype=int)
+    normal = np.stack([e3[:, index] * t[:, index], e3[:, index] * t[:, index] / 3], axis=2)
+    return (np.concatenate([stiffness, np.stack([a44, a55, a45], axis=2).reshape(batch, -1),
+                            normal.reshape(batch, 2 * len(stretch))], axis=1),
+            np.concatenate(inertia, axis=1))
 
 
 def _layer_inputs(laminate: Laminate):
@@ -261,8 +275,7 @@ def _layer_directions(laminate: Laminate, kind: str, target: str):
         material = layer.material
         if kind in ELASTIC_CONSTANTS + SHEAR_MODULI and material.name == target:
             if kind in ELASTIC_CONSTANTS:
-                _, dq = reduced_stiffness(material)
-                qbar[k] = transformation(layer.angle) @ dq[kind]
+                qbar[k] = layer.off_axis_derivatives[kind]
             # A defaulted G13 or G23 follows G12, a defaulted E3 follows E2.
             follows = [kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
                        for name in SHEAR_MODULI]
@@ -271,8 +284,7 @@ def _layer_directions(laminate: Laminate, kind: str, target: str):
         elif kind == "density" and material.name == target:
             rho[k] = 1.0
         elif kind == "angle" and layer.label == target:
-            q, _ = reduced_stiffness(material)
-            qbar[k] = transformation(layer.angle, derivative=True) @ q
+            qbar[k] = layer.off_axis_derivatives["angle"]
             shear[k] = rotated_shear_moduli(*material.transverse_shear_moduli, layer.angle, derivative=True)
         elif kind == "thickness" and layer.label == target:
             t[k] = 1.0
@@ -325,10 +337,15 @@ class LayerwiseLaminate:
     def derivative(self, kind: str, target: str) -> tuple[np.ndarray, np.ndarray]:
         """Exact (d stiffness/dp, d inertia/dp) for a parameter (kinds of
         ``Laminate.derivative`` plus G13, G23); zeros when the target is not in the stack."""
-        directions = _layer_directions(self.laminate, kind, target)
-        if not any(np.any(d) for d in directions):
-            return np.zeros_like(self.stiffness), np.zeros_like(self.inertia)
-        perturbed = [x + 1j * COMPLEX_STEP * d for x, d in zip(_layer_inputs(self.laminate), directions)]
+        stiffness, inertia = self.derivatives([(kind, target)])
+        return stiffness[0], inertia[0]
+
+    def derivatives(self, parameters) -> tuple[np.ndarray, np.ndarray]:
+        """``derivative`` of every (kind, target) of ``parameters`` at once, (P, stiffness)
+        and (P, inertia): one complex-step pass whose batch holds every direction."""
+        directions = [_layer_directions(self.laminate, kind, target) for kind, target in parameters]
+        perturbed = [x + 1j * COMPLEX_STEP * np.stack([d[i] for d in directions])
+                     for i, x in enumerate(_layer_inputs(self.laminate))]
         stiffness, inertia = coefficients(self.groups, self.stretch, *perturbed)
         return stiffness.imag / COMPLEX_STEP, inertia.imag / COMPLEX_STEP
 

@@ -44,9 +44,27 @@ class OutsideBasis(ModelError):
 
 
 @dataclass(frozen=True)
+class RitzModes:
+    """Ritz pairs as ``Modes``: omega^2 [rad^2/s^2] and the coordinates (r, m) in the
+    ``basis`` (n_dofs, r); the full shapes are expanded only when something reads them
+    (pairing by shape, an attachment's sensitivities), not for frequencies and the
+    laminate's sensitivities."""
+
+    eigenvalues: np.ndarray
+    basis: np.ndarray
+    coordinates: np.ndarray
+
+    frequencies_hz = Modes.frequencies_hz
+
+    @cached_property
+    def shapes(self) -> np.ndarray:
+        return self.basis @ self.coordinates
+
+
+@dataclass(frozen=True)
 class RitzSolution(LaminateSolution):
-    """A ``LaminateSolution`` whose modes are Ritz pairs: ``coordinates`` (r, m) in the
-    basis, expanded to full shapes for pairing and attachments; ``projected``: the basis's
+    """A ``LaminateSolution`` whose modes are Ritz pairs (``RitzModes``): ``coordinates``
+    (r, m) in the basis, expanded to full shapes when read; ``projected``: the basis's
     unit matrices, from which the modal energies (and so the sensitivities) follow."""
 
     coordinates: np.ndarray | None = None
@@ -145,7 +163,7 @@ class Reanalysis:
         eigenvalues, coordinates = sla.eigh(stiffness, mass, check_finite=False)
         eigenvalues, coordinates = eigenvalues[self._elastic], coordinates[:, self._elastic]
         return RitzSolution(specimen.laminate(self.configuration), base.units,
-                            Modes(eigenvalues, self.basis @ coordinates), base.inertia_terms, base.transverse_shear,
+                            RitzModes(eigenvalues, self.basis, coordinates), base.inertia_terms, base.transverse_shear,
                             specimen.attachments, stack, coordinates=coordinates, projected=(self.stiffness, self.mass))
 
 

@@ -109,3 +109,26 @@ def test_shear_derivatives_match_central_differences(kind, target):
     assert np.abs(exact).max() > 0
     assert np.abs(exact - finite).max() < 1e-7 * np.abs(exact).max(), (exact, finite)
     assert not np.any(STACK.shear_derivative("density", "steel"))
+
+
+def test_a_batch_of_stacks_is_each_stack_alone():
+    """The shear stiffness of several stacks at once (a leading batch axis, what the
+    derivatives of every parameter in one complex-step pass use) equals each stack's own,
+    to rounding (1e-14): three-layer stacks with random thicknesses and moduli."""
+    rng = np.random.default_rng(3)
+    thickness = rng.uniform(1e-4, 1e-3, (5, 3))
+    q11, q22 = rng.uniform(5e9, 150e9, (5, 3)), rng.uniform(5e9, 150e9, (5, 3))
+    shear = rng.uniform(1e9, 30e9, (5, 3, 3)) * [1, 1, 0.1]
+    batch = shear_stiffness(thickness, q11, q22, shear)
+    alone = np.array([shear_stiffness(*x) for x in zip(thickness, q11, q22, shear, strict=True)])
+    assert batch.shape == (5, 3)
+    assert np.allclose(batch, alone, rtol=1e-14, atol=0)
+
+
+def test_every_derivative_at_once_is_each_alone():
+    """``shear_derivatives`` (one complex-step pass for all of them) gives the rows of
+    ``shear_derivative`` taken one at a time (the central-difference test checks those)."""
+    together = STACK.shear_derivatives(CASES)
+    for row, (kind, target) in zip(together, CASES, strict=True):
+        alone = STACK.shear_derivative(kind, target)
+        assert np.allclose(row, alone, rtol=1e-14, atol=1e-14 * np.abs(alone).max())

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from fem.laminates.laminate import Layer
+from fem.laminates.layerwise import LayerwiseLaminate, _layer_inputs, coefficients
 from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Configuration, Parameter, Specimen
@@ -98,3 +99,33 @@ def test_relative_sensitivities_keep_homogeneity(grouping):
     densities = [Parameter("density", n) for n in names]
     np.testing.assert_allclose(m.sensitivity_matrix(moduli).sum(axis=1), 0.5, atol=1e-9)
     np.testing.assert_allclose(m.sensitivity_matrix(densities).sum(axis=1), -0.5, atol=1e-9)
+
+
+@pytest.mark.parametrize("grouping", GROUPINGS)
+def test_a_batch_of_stacks_is_each_stack_alone(grouping):
+    """The generalised coefficients of several stacks at once (a leading batch axis: the
+    derivatives of every parameter come from one complex-step pass) equal each stack's
+    own to rounding (1e-13 of the largest coefficient of its kind): the bonded sandwich
+    with its layers' thicknesses, stiffnesses and densities scattered by +-30 %."""
+    stack = LayerwiseLaminate.of(sandwich().laminate("al_bottom"), grouping)
+    inputs = _layer_inputs(stack.laminate)
+    rng = np.random.default_rng(7)
+    batch = [x * rng.uniform(0.7, 1.3, (4,) + x.shape) for x in inputs]
+    stiffness, inertia = coefficients(stack.groups, stack.stretch, *batch)
+    for i in range(4):
+        alone = coefficients(stack.groups, stack.stretch, *(x[i] for x in batch))
+        assert np.allclose(stiffness[i], alone[0], rtol=1e-13, atol=1e-13 * np.abs(alone[0]).max())
+        assert np.allclose(inertia[i], alone[1], rtol=1e-13, atol=1e-13 * np.abs(alone[1]).max())
+    assert stack.stretch, "the foam core stretches: the normal-strain terms are in the batch"
+
+
+def test_every_derivative_at_once_is_each_alone():
+    """``LayerwiseLaminate.derivatives`` (one pass for every parameter) gives the rows of
+    ``derivative`` one at a time, which the central-difference test checks."""
+    stack = LayerwiseLaminate.of(sandwich().laminate("al_bottom"))
+    kinds = [(p.kind, p.target) for p in PARAMETERS]
+    stiffness, inertia = stack.derivatives(kinds)
+    for i, kind in enumerate(kinds):
+        ds, di = stack.derivative(*kind)
+        assert np.allclose(stiffness[i], ds, rtol=1e-14, atol=1e-14 * np.abs(ds).max())
+        assert np.allclose(inertia[i], di, rtol=1e-14, atol=1e-14 * max(np.abs(di).max(), 1e-300))
