@@ -18,7 +18,7 @@ import numpy as np
 
 from .solver.attachments import PointMass, Suspension
 from .errors import NotApplicableError, SpecError
-from .laminates.layerwise import soft_layers
+from .laminates.layerwise import LayerwiseLaminate, soft_layers
 from .model import SpecimenModel
 from .specimen import Parameter
 from .validation import check_keys, number
@@ -143,6 +143,16 @@ class Layerwise(Effect):
                 if soft:
                     found.setdefault(layer.material.name, layer in specimen.layers)
         return [n for n, own in found.items() if own], [n for n, own in found.items() if not own]
+
+    def single_shear_layer(self, model: SpecimenModel) -> bool:
+        """Every configuration's stack is one shear group with no stretching layer (a
+        single homogeneous layer, say): the layerwise theory is then the first-order
+        shear plate with rotary inertia, ``thick_plate``, to round-off
+        (``tests/fem/test_layerwise.py``), and switching to it adds nothing."""
+        options, specimen = model.options, model.specimen
+        stacks = [LayerwiseLaminate.of(specimen.laminate(c), options.layer_groups, options.core_stretch)
+                  for c in specimen.configurations]
+        return all(stack.n_groups == 1 and not stack.stretch for stack in stacks)
 
     def _on(self, model, free=()):
         own, added = self._soft(model)

@@ -817,9 +817,13 @@ def _layerwise_instead(state: FitResult, selected, kinds, measurements: Measurem
     it loses to the single shear layer and is not refitted again (``_held_back``).  blind19
     (a hybrid with a sensor and turned plies): transverse_shear + point_mass + orientation
     reached the floor's misfit with a property 4.9 std off; the oracle's single-shear-layer
-    model is 3.1 std off, its layerwise model 2.1."""
+    model is 3.1 std off, its layerwise model 2.1.  Not where the layerwise theory is the
+    single shear layer itself (``Layerwise.single_shear_layer``: a single homogeneous plate
+    in every configuration): there it is the same model, and a criterion within the margin
+    would add it to the selection for nothing."""
     names = {c.kind for c in selected}
-    if "layerwise" not in kinds or "layerwise" in names or not names & set(REFINES["layerwise"]):
+    if "layerwise" not in kinds or "layerwise" in names or not names & set(REFINES["layerwise"]) \
+            or effect("layerwise").single_shear_layer(state.model):
         return None
     say(f"trying layerwise in place of {' + '.join(sorted(names & set(REFINES['layerwise'])))} "
         "(the more complete theory, from the selection's end)")

@@ -213,3 +213,32 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(monkeyp
                           dropped=("point_mass",))
     assert [c.kind for c in diagnosis.selected] == ["layerwise"]
     assert "point_mass taken out" in diagnosis.verdict
+
+
+def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeypatch, example_spec):
+    """A single homogeneous plate (one configuration, one layer) has one shear group and
+    no stretching layer: its layerwise theory is ``thick_plate`` itself (equal to
+    round-off, ``tests/fem/test_layerwise.py``), so the selection's end does not refit it
+    in place of the single shear layer (a real-like spruce plate's diagnosis used to end
+    "thick_plate + point_mass + layerwise" at a BIC gain of -0.08).  The bundled example's
+    bonded configurations stack several materials: there it is another model."""
+    from fem.effects import effect
+    from fem.spec import parse_spec
+    from identify.diagnosis.diagnose import _layerwise_instead
+
+    single = parse_spec({"specimen": {"name": "board", "length_mm": 580.0, "width_mm": 213.0,
+                                      "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
+                         "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.8, "G12_GPa": 0.62, "nu12": 0.4,
+                                                  "density_kg_m3": 440, "identify": True}},
+                         "configurations": [{"name": "original"}]}, "<test>")
+    layerwise = effect("layerwise")
+    assert layerwise.single_shear_layer(single)
+    assert not layerwise.single_shear_layer(example_spec)
+
+    def refitted(*args, **kwargs):
+        raise AssertionError("layerwise refitted in place of the single shear layer it is")
+
+    monkeypatch.setattr(diagnose_module, "add_effect", refitted)
+    state = SimpleNamespace(model=single.with_options(transverse_shear=True, rotary_inertia=True))
+    selected = [SimpleNamespace(kind="thick_plate")]
+    assert _layerwise_instead(state, selected, ["thick_plate", "layerwise"], None, None, print) is None
