@@ -873,9 +873,7 @@ def released(result: FitResult, measurements: Measurements, baseline: FitResult,
         return with_held_scatter(result, held)
     still = [p for p in held if p not in now_free]
     note = f"{', '.join(p.name for p in now_free)} freed again (held in the thin-plate fit): now determined"
-    kept = tuple(w for w in freed.warnings
-                 if " held at the spec's " not in w or any(w.startswith(p.name + " ") for p in still))
-    return with_held_scatter(replace(freed, warnings=kept + (note,)), still)
+    return with_held_scatter(replace(freed, warnings=freed.warnings + (note,)), still)
 
 
 def with_held_scatter(result: FitResult, held: list[Parameter]) -> FitResult:
