@@ -117,7 +117,7 @@ def run_fit(args) -> int:
         _say(f"{pairs} pairs of unlabelled modes lie within {100 * NEAR_MODES:g} % of each other: after the fit "
              f"converges, checking their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode "
              "list); a 'label' column for close modes makes it unnecessary")
-    result = fit(model, measurements, args.effect or (), progress=_progress)
+    result = fit(model, measurements, args.effect or (), progress=_progress, workers=None)
     if args.report:
         _say(f"report written to {write_report(result, args.report)}/")
     print(to_json(result.to_dict()) if args.json else result.report())

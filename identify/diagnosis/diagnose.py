@@ -46,8 +46,8 @@ from ..reporting import html_report as h
 from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from .compare import Comparison, compare
-from ..fitting.driver import (EFFECT_ITERATIONS, PRUNE_FACTOR, AddedEffect, Prepared, add_effect, better_start,
-                              continued, ended_worse, frees_any, held_shear_moduli, matched_peaks,
+from ..fitting.driver import (EFFECT_ITERATIONS, PARALLEL_FROM_S, PRUNE_FACTOR, AddedEffect, Prepared, add_effect,
+                              better_start, continued, ended_worse, frees_any, held_shear_moduli, matched_peaks,
                               point_mass_hints, point_mass_starts, prepare_effect, rematched, released,
                               restarted_from_spec, shear_moduli_in, spec_start, with_determined_shear)
 from ..measurements import Measurements
@@ -98,9 +98,8 @@ REFINES = {"layerwise": ("transverse_shear", "thick_plate")}
 #: model of the bond line's own shear, was never tried.
 FAR_FROM_NOISE = 25.0
 #: Candidate refits run in parallel processes when there are at least this many in a round
-#: and the baseline fit took at least ``PARALLEL_FROM_S`` (starting a worker costs ~1 s).
+#: and the baseline fit took at least ``fitting.driver.PARALLEL_FROM_S``.
 PARALLEL_FROM = 3
-PARALLEL_FROM_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -583,8 +582,20 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
                      if c.selectable and c.scaled_gain > MIN_GAIN]
         below = max(explained) if explained else None
         jobs = [_job(state, r, measurements, nominal, hints, below) for r in ready[i:i + (n_workers if pool else 1)]]
-        out += [_candidate(state, a) for a in (pool.map(_add, jobs) if pool else map(_add, jobs))]
+        out += [_candidate(state, a) for a in _added(jobs, pool)]
     return out
+
+
+def _added(jobs: list[dict], pool) -> list:
+    """The refits of ``jobs`` (``_add``), in the pool when there is one.  A point mass is
+    refitted here, its starts' refits in the pool beside the other jobs: its refit is
+    several independent ones, and as one job it kept one process busy while the other
+    waited (a long spruce plate's second round: 128 s beside a 15 s candidate)."""
+    if pool is None:
+        return [_add(job) for job in jobs]
+    pending = {i: pool.submit(_add, job) for i, job in enumerate(jobs) if job["kind"] != "point_mass"}
+    here = {i: _add({**job, "pool": pool}) for i, job in enumerate(jobs) if job["kind"] == "point_mass"}
+    return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
 
 
 def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] | None = None,
@@ -692,7 +703,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = rematched(best.fit, peak_list, state, FINAL_OPTIONS) if rematch else \
+            polished = rematched(best.fit, peak_list, state, FINAL_OPTIONS, pool) if rematch else \
                 continued(best.fit, peak_list, FINAL_OPTIONS)
             polished, notes = with_determined_shear(polished, peak_list, nominal, FINAL_OPTIONS)
             # The layer properties the thin-plate fit held are freed where the effect now

@@ -2,8 +2,13 @@
 parameters are estimated together with the layer properties."""
 from __future__ import annotations
 
+import concurrent.futures as cf
 import math
+import multiprocessing as mp
+import os
 import time
+from concurrent.futures import Executor
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
@@ -35,6 +40,9 @@ from ..engine.updating import FitOptions, update
 
 #: Iterations of a refit with an effect (from the fit without it).
 EFFECT_ITERATIONS = 40
+#: Independent refits run in parallel processes only after a baseline fit of at least
+#: this long [s]: starting a worker costs about 1 s.
+PARALLEL_FROM_S = 0.5
 #: Point-mass starts: the residual scan's best position and a 3 x 3 grid over its quarter
 #: of the plate, ranked by the share of the misfit the scan gives a mass there; the best
 #: ``POINT_MASS_STARTS`` are ranked again by one linearised step each, and the best
@@ -123,7 +131,7 @@ DISTORTED = 3.0
 
 def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str] = (), *,
         parameters=None, options: FitOptions | None = None,
-        progress: Callable[[Iteration | str], None] | None = None) -> FitResult:
+        progress: Callable[[Iteration | str], None] | None = None, workers: int | None = 1) -> FitResult:
     """Identify E1, E2, G12, nu12 of every identified material of ``model`` (or the given
     ``parameters``) from the measured frequencies of all configurations at once.
 
@@ -137,7 +145,9 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
     states the known inputs' std, the result carries the uncertainty budget and its std
     includes them.
     When materials have ``identify_damping``, the result's ``damping`` holds their loss
-    factors, found after the stiffness from the measured damping ratios.
+    factors, found after the stiffness from the measured damping ratios.  ``workers``:
+    processes for the independent refits of the effects (1: all here, the default; None:
+    two where it pays, as the command line does; ``independent_refits``).
     """
     if isinstance(effects, str):
         raise LayerIdError(f"effects = {effects!r}: give a list of effect kinds, e.g. [{effects!r}]")
@@ -147,7 +157,7 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
         return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress,
-                                                         parameters=parameters, options=options)))
+                                                         parameters=parameters, options=options, workers=workers)))
     return with_damping(with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress)))
 
 
@@ -199,7 +209,8 @@ def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
     return measurements if measurements.ranked else fit.measurements
 
 
-def rematched(fit: FitResult, measurements: Measurements, like: FitResult, options: FitOptions) -> FitResult:
+def rematched(fit: FitResult, measurements: Measurements, like: FitResult, options: FitOptions,
+              pool: Executor | None = None) -> FitResult:
     """A fit made on ``matched_peaks(like, measurements)`` refitted on the peak list
     ``measurements`` itself, the peaks matched again; ranked measurements: ``fit`` as it
     is.  Two ways, the one that matches every peak at less cost kept (``matching_cost``
@@ -210,12 +221,14 @@ def rematched(fit: FitResult, measurements: Measurements, like: FitResult, optio
     spruce plate the thin plate's matching kept 26 of 33 peaks, the lowest two left out
     and some paired wrongly; with transverse shear matched again from it, 26 peaks at
     0.40 % RMS; afresh, all 33 at 0.50 % with the rolling shear modulus G23 within 1 %
-    of the truth, from where the point-mass screen found the sensor."""
+    of the truth, from where the point-mass screen found the sensor.  ``pool``: the two
+    refits run side by side (they are independent: the same answer, in about half the
+    time on two cores)."""
     if measurements.ranked:
         return fit
-    again = continued(fit, measurements, options, like=like)  # a peak list's final fit checks the pairing in full
-    fresh = fit_layers(fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of,
-                       explain=False)
+    jobs = [dict(fit=fit, measurements=measurements, options=options, like=like),
+            dict(fit=fit, measurements=measurements, options=options, like=None)]
+    again, fresh = pool.map(_matched_again, jobs) if pool is not None else map(_matched_again, jobs)
     tolerance = min(model_error(again), model_error(fresh))
     costs = [matching_cost(f, measurements, tolerance) for f in (again, fresh)]
     if not costs[1] < costs[0]:
@@ -226,9 +239,18 @@ def rematched(fit: FitResult, measurements: Measurements, like: FitResult, optio
     return replace(fresh, warnings=fresh.warnings + (note,))
 
 
+def _matched_again(job: dict) -> FitResult:
+    """One way of ``rematched`` (module level: runs in a worker process): from ``like``'s
+    matching with the pairing checked in full, or (``like`` None) matched afresh."""
+    fit, measurements, options, like = job["fit"], job["measurements"], job["options"], job["like"]
+    if like is not None:
+        return continued(fit, measurements, options, like=like)  # a peak list's final fit checks the pairing in full
+    return fit_layers(fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of, explain=False)
+
+
 def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
                      progress: Callable[[str], None] | None = None, *, parameters=None,
-                     options: FitOptions | None = None) -> FitResult:
+                     options: FitOptions | None = None, workers: int | None = 1) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
     baseline fit's layer properties (``comparison.fitted`` of a ``compare``, fitted here
     when not given), one
@@ -241,11 +263,14 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
     determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
     not an iteration.  ``parameters``: the layer parameters of the baseline fit (default
     every identified material's); ``options``: of every fit (default: the baseline's
-    ``FitOptions()``, the refits' ``EFFECT_ITERATIONS`` iterations).
+    ``FitOptions()``, the refits' ``EFFECT_ITERATIONS`` iterations); ``workers``: processes
+    for the refits that are independent of each other (a point mass's starts, a peak
+    list's two matchings; ``independent_refits``).
     """
     if comparison is not None and parameters is not None:
         raise LayerIdError("fit_with_effects: give either parameters (the baseline is fitted with them) or a "
                            "comparison (its fit is the baseline), not both")
+    started = time.perf_counter()
     if comparison is None:
         baseline = fit_holding_bounds(model, measurements, parameters, options)
         hints = point_mass_hints(baseline)
@@ -253,6 +278,31 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         baseline = comparison.fitted
         hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
                                   comparison.node_xy)
+    worth_it = ("point_mass" in kinds or not measurements.ranked) and (
+        comparison is not None or time.perf_counter() - started >= PARALLEL_FROM_S)
+    with independent_refits(workers, worth_it) as pool:
+        return _fit_with_effects(model, measurements, kinds, baseline, hints, progress, options, pool)
+
+
+@contextmanager
+def independent_refits(workers: int | None, worth_it: bool):
+    """A pool of ``workers`` processes for refits that do not depend on each other (None:
+    two, where the cores allow and the work is ``worth_it``: a baseline fit of at least
+    ``PARALLEL_FROM_S``; 1: none, all here).  Workers are spawned and import the main
+    module: a script that asks for them needs the ``if __name__ == "__main__":`` guard."""
+    n = (min(2, os.cpu_count() or 1) if worth_it else 1) if workers is None else max(1, workers)
+    if n == 1:
+        yield None
+        return
+    pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
+    try:
+        yield pool
+    finally:
+        pool.shutdown()
+
+
+def _fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], baseline: FitResult,
+                      hints, progress, options, pool) -> FitResult:
     respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
     state, notes = baseline, []
     for number, kind in enumerate(kinds):
@@ -260,10 +310,10 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         settle = True if number == len(kinds) - 1 and data is measurements else "quick"
         hints = hints if state is baseline else point_mass_hints(state)
         added = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
-                           options=options)
+                           options=options, pool=pool)
         if restarted_from_spec([kind], state, baseline, respec):
             again = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
-                               options=options, prepared=prepare_effect(state, kind, hints, respec))
+                               options=options, prepared=prepare_effect(state, kind, hints, respec), pool=pool)
             added = better_start(added, again)
         if added.result is None:
             advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
@@ -271,7 +321,8 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
                       and added.precheck.singular else "")
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
-        state = rematched(added.result, measurements, state, options or FitOptions(max_iterations=EFFECT_ITERATIONS))
+        state = rematched(added.result, measurements, state, options or FitOptions(max_iterations=EFFECT_ITERATIONS),
+                          pool)
     result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, options, settle=True)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
     result = with_causes(released(result, measurements, baseline, model.specimen,
@@ -547,7 +598,8 @@ def _describe_start(start) -> str:
 def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(), *,
                settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
                skip_singular: bool = True, options: FitOptions | None = None,
-               prune_below: float | None = None, prepared: Prepared | None = None) -> AddedEffect:
+               prune_below: float | None = None, prepared: Prepared | None = None,
+               pool: Executor | None = None) -> AddedEffect:
     """``state`` (a finished fit, its effects on) refitted with effect ``kind`` switched on
     and its parameters free too.  First one evaluation with the effect (``prepare_effect``,
     unless ``prepared`` is given): it decides which transverse shear moduli to free and,
@@ -557,18 +609,20 @@ def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal:
     pairing check at the solution (True: in full, "quick": ``repair``); ``options``: of the
     refit (default ``EFFECT_ITERATIONS`` iterations); ``prune_below``: a reduction of the
     weighted sum of squares another candidate achieved: a refit whose bound does not come
-    within ``PRUNE_FACTOR`` of it is not run."""
+    within ``PRUNE_FACTOR`` of it is not run; ``pool``: where a point mass's refits from
+    its several starts run side by side."""
     options = options or FitOptions(max_iterations=EFFECT_ITERATIONS)
     started = time.perf_counter()
     ready = prepared or prepare_effect(state, kind, hints)
     if isinstance(ready, AddedEffect):
         return replace(ready, seconds=time.perf_counter() - started)
-    added = _refit(state, ready, measurements, nominal, hints, settle, progress, skip_singular, options, prune_below)
+    added = _refit(state, ready, measurements, nominal, hints, settle, progress, skip_singular, options, prune_below,
+                   pool)
     return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
 
 
 def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progress, skip_singular, options,
-           prune_below) -> AddedEffect:
+           prune_below, pool=None) -> AddedEffect:
     kind, new, check, notes = ready.kind, list(ready.added), ready.precheck, list(ready.notes)
     if check.singular and skip_singular:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}")
@@ -584,7 +638,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
     try:
         if kind == "point_mass":
             result, rivals = _point_mass(state, measurements, hints, base + shear_moduli_in(new), effect_of, settle,
-                                         progress, options)
+                                         progress, options, pool)
             notes += rivals
         else:
             result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
@@ -914,14 +968,16 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
     return tuple(sorted(starts, key=lambda start: -share(start))[:POINT_MASS_STARTS])
 
 
-def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options):
+def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options,
+                pool: Executor | None = None):
     """The point mass from several starts: each ranked by the misfit one linearised
     Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``; a bare peak
     list, which has no mode numbers to linearise with, keeps the scan's order), the best
     ``POINT_MASS_CONTINUED`` at distinct positions fitted to convergence (rivals need
     finished fits), and the best start of the screen over the whole plate
-    (``point_mass_screen``) where it is at another position; the lowest misfit kept.
-    Returns (the best fit, notes on rivals that fit about as well)."""
+    (``point_mass_screen``) where it is at another position; the lowest misfit kept.  With
+    a ``pool`` the starts' refits run side by side (they are independent).  Returns (the
+    best fit, notes on rivals that fit about as well)."""
     starts = tuple(hints) if hints else point_mass_starts(state.model, ())
     ranked = []
     for hint in starts:
@@ -956,17 +1012,18 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
         progress(f"point_mass: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
                  f"{len(chosen)} fitted")
 
-    def refit(on):
-        return fit_layers(on.model, measurements, base + list(on.free), options, effect_of=effect_of, like=state,
-                          explain=False, settle=settle, pairings=state.pairings), on
+    def job(on) -> dict:
+        return dict(model=on.model, measurements=measurements, parameters=base + list(on.free), options=options,
+                    effect_of=effect_of, like=state, explain=False, settle=settle, pairings=state.pairings)
 
-    trials = [refit(on) for on in chosen]
+    jobs = [job(on) for on in chosen]
+    trials = list(zip(pool.map(_fitted, jobs) if pool is not None else map(_fitted, jobs), chosen, strict=True))
     result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
     if ended_worse(result, state):
         # Every start ended above the fit the mass is added to: once more from the mass
         # all but gone at the best one's start, from where the refit can only descend.
         gone = replace(on, model=on.model.with_values({mass: VANISHING_MASS * plate_mass(state.model.specimen)}))
-        trials.append(refit(gone))
+        trials.append((_fitted(job(gone)), gone))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
     rivals = [t for t, o in trials if t is not result and t.finished
               and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
@@ -977,6 +1034,11 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
         notes.append(f"point_mass: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
                      "parameters are not unique with these modes; measure more modes to separate them")
     return result, notes
+
+
+def _fitted(job: dict) -> FitResult:
+    """``fit_layers(**job)`` (module level: runs in a worker process)."""
+    return fit_layers(**job)
 
 
 def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
