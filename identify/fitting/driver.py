@@ -1037,8 +1037,10 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
 
 
 def _fitted(job: dict) -> FitResult:
-    """``fit_layers(**job)`` (module level: runs in a worker process)."""
-    return fit_layers(**job)
+    """``fit_layers`` of ``job``'s model and measurements with its other keywords (module
+    level: runs in a worker process)."""
+    rest = {k: v for k, v in job.items() if k not in ("model", "measurements")}
+    return fit_layers(job["model"], job["measurements"], **rest)
 
 
 def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
