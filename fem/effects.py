@@ -36,11 +36,28 @@ class SwitchedOn:
 
 
 class Effect:
-    """Base class of effects.  ``keys`` lists the spec table keys ``fixed`` accepts."""
+    """Base class of effects.  ``keys`` lists the spec table keys ``fixed`` accepts.
+
+    An effect also declares how a diagnosis treats it (``identify.diagnosis``): the
+    physics it ``covers`` (an effect that is others together, e.g. the Mindlin plate),
+    the effects it ``refines`` (tried only where one of those pays), whether it
+    ``frees_shear`` moduli (G13, G23: restarts, continuation and the held-moduli rule
+    apply), whether it ``restarts_from_spec`` when the thin-plate fit it would start from
+    is degenerate, and the ``sign`` an implausible estimate of it is reported as."""
 
     kind = ""
     description = ""
     keys: tuple[str, ...] = ()
+    covers: frozenset[str] = frozenset()
+    refines: tuple[str, ...] = ()
+    frees_shear = False
+    restarts_from_spec = False
+    sign = "read it as a sign of what is missing"
+
+    @property
+    def physics(self) -> frozenset[str]:
+        """The effects this one is the same physics as (``covers``), or itself."""
+        return self.covers or frozenset({self.kind})
 
     def fixed(self, model: SpecimenModel, table: dict) -> SwitchedOn:
         """The model with the effect on, its parameters fixed by the spec's table."""
@@ -91,6 +108,14 @@ class TransverseShear(Effect):
     description = ("first-order shear deformation; free: G13, G23 of the identified materials (G12 where not given, "
                    "stated)")
     options = {"transverse_shear": True}
+    frees_shear = True
+    #: Refitted from the spec's values too when the thin-plate fit is degenerate
+    #: (``identify.fitting.driver.spec_start``): the whole of the thin plate's misfit is
+    #: the shear's to explain, and its moduli are what the thin plate did to them (blind
+    #: cross-ply and hybrid plates with a/h of 15-20: 15-17 % misfit left with a ply's E2
+    #: and nu12 at their bounds, from where the shear refit stopped at 1.3 % or 8.6 %
+    #: against a floor of 0.07 % or 0.37 %).
+    restarts_from_spec = True
 
     @staticmethod
     def shear_parameters(model) -> list[Parameter]:
@@ -126,12 +151,21 @@ class ThickPlate(TransverseShear):
     description = ("Mindlin plate: transverse shear and rotary inertia together; free: G13, G23 of the identified "
                    "materials")
     options = {"transverse_shear": True, "rotary_inertia": True}
+    covers = frozenset({"transverse_shear", "rotary_inertia"})
 
 
 class Layerwise(Effect):
     kind = "layerwise"
     description = ("layerwise (zig-zag) shear: each soft layer (foam or honeycomb core, bond line) shears on its "
                    "own; free: G13, G23 of the identified materials and of the soft specimen layers")
+    #: Shear and the full inertia of its displacement field besides its soft layers' own
+    #: shear; it frees the same shear moduli.
+    covers = frozenset({"layerwise", "transverse_shear", "rotary_inertia"})
+    #: It refines transverse shear where a layer is much softer in shear than its
+    #: neighbours (elsewhere it does not apply), and one of its solves costs 6-18 of the
+    #: single-layer model's: tried in a round only where one of these paid (or is selected).
+    refines = ("transverse_shear", "thick_plate")
+    frees_shear = True
 
     def _soft(self, model):
         """(soft specimen layers' materials, soft added layers' materials), by name."""
@@ -202,6 +236,8 @@ class PointMassEffect(Effect):
     kind = "point_mass"
     description = ("a mass at a point (an accelerometer, a glue blob): mass and position; base_mm, the side of the "
                    "sensor's square footprint, spreads it over that")
+    sign = ("the misfit grows with the mode number like shear, or a sensor heavier than plausible: transverse "
+            "shear, or a mass measured and given in the spec?")
     keys = ("mass_g", "x_mm", "y_mm", "label", "base_mm")
 
     def fixed(self, model, table):
@@ -235,6 +271,7 @@ class PointMassEffect(Effect):
 class SuspensionEffect(Effect):
     kind = "suspension"
     description = "out-of-plane springs where the plate is suspended: stiffness"
+    sign = "the lowest modes are off: the suspension, or a missing shear effect?"
     keys = ("stiffness_N_m", "points_mm")
     #: Default support points when none are given: near the four corners (10 % in).
     DEFAULT_INSET = 0.1
@@ -281,6 +318,7 @@ class SuspensionEffect(Effect):
 class Orientation(Effect):
     kind = "orientation"
     description = "material axes of a layer turned from the plate edges: angle"
+    sign = "the twisting modes are off: a turned layer, or shear coupling?"
     keys = ("layer", "angle_deg")
     #: Frequencies are even in the angle, so the search starts off zero.
     START_DEG = 3.0
@@ -318,6 +356,7 @@ class Orientation(Effect):
 class Adhesive(Effect):
     kind = "adhesive"
     description = "bond-line thickness of each bonded configuration off nominal"
+    sign = "the bonded configurations are off: the bond line's shear (layerwise)?"
     keys = ("thickness_mm",)
 
     @staticmethod
@@ -342,6 +381,8 @@ class Adhesive(Effect):
 class Thickness(Effect):
     kind = "thickness"
     description = "specimen layer thicknesses off nominal"
+    sign = ("the misfit wants the neutral axis or the bending stiffness distribution to move: transverse shear "
+            "or a layerwise effect?")
     keys = ("layer", "thickness_mm")
 
     def fixed(self, model, table):

@@ -15,7 +15,7 @@ of the augmented sensitivity matrix (``precheck``): a singular candidate is repo
 identifiable and never iterated.  An estimate that is physically unlikely
 (``plausibility``), or whose refit ends singular (``Candidate.singular``), is never
 selected whatever its gain, nor may it keep another candidate from being refitted: it is
-reported as a sign of what is missing (``SIGNS``; ``docs/diagnosis.md`` states every rule
+reported as a sign of what is missing (``Effect.sign``; ``docs/diagnosis.md`` states every rule
 and threshold).  Implausible estimates are also ranked behind plausible rivals whose
 criterion is within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
 parameters, the one with more of the physics every plate has (``thick_plate`` over
@@ -72,11 +72,6 @@ CANDIDATE_OPTIONS = FitOptions(max_iterations=20, stall_chi2=0.1)
 #: 0.01 per step (three in a row) where a weakly determined direction only creeps (its std
 #: then says so).
 FINAL_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS, stall_chi2=0.01)
-#: Effects that are the same physics as a set of others: ``thick_plate`` is shear with
-#: rotary inertia, and the layerwise model has both besides its soft layers' own shear (the
-#: full inertia of its displacement field; it frees the same shear moduli).
-SAME_AS = {"thick_plate": frozenset({"transverse_shear", "rotary_inertia"}),
-           "layerwise": frozenset({"layerwise", "transverse_shear", "rotary_inertia"})}
 #: A candidate that is another one with physics every real plate has besides (rotary
 #: inertia: thick_plate against transverse_shear; a soft layer's own shear: layerwise
 #: against both), with no more free parameters, is preferred unless the lesser one's
@@ -85,13 +80,9 @@ SAME_AS = {"thick_plate": frozenset({"transverse_shear", "rotary_inertia"}),
 #: its error is taken up by the moduli (3-D cross-ply reference: G13 23 % low without
 #: rotary inertia; on a soft bond line, G12 2 % = 4 std off with a single shear layer).
 COMPLETE_MARGIN = 6.0
-#: Effects that refine others: tried in a round only when one of those paid for itself in
-#: it (or is selected already).  The layerwise model refines transverse shear where a layer
-#: is much softer in shear than its neighbours (elsewhere it does not apply), and one of its
-#: solves costs 6-18 of the single-layer model's.
-REFINES = {"layerwise": ("transverse_shear", "thick_plate")}
-#: ... or, when nothing paid in the round, what they refine explained some misfit and the
-#: misfit is still this many times the scatter (reduced chi^2; 25: an RMS five times the
+#: A refinement (``Effect.refines``) is tried in a round only when what it refines paid for
+#: itself in it (or is selected already), or, when nothing paid in the round, what it
+#: refines explained some misfit and the misfit is still this many times the scatter (reduced chi^2; 25: an RMS five times the
 #: scatter): the selection must not stop with the more complete theory untried.  On a
 #: blind hybrid with a 0.25 mm, 1 GPa bond line (21 x the floor, reduced chi^2 742) every
 #: single-layer candidate stalled at 1.7-1.9 % (gain / c 3-8) and layerwise, the only
@@ -146,7 +137,7 @@ class Candidate:
     def selectable(self) -> bool:
         """Can be selected: finished, plausible and identifiable at its solution.  An
         implausible or singular estimate is never an answer, whatever its BIC gain: it is
-        reported as a sign of what is missing (``SIGNS``)."""
+        reported as a sign of what is missing (``Effect.sign``)."""
         return self.eligible and self.plausible and not self.singular
 
     @property
@@ -340,7 +331,7 @@ class Diagnosis:
                 if not c.fit:
                     lines.append(f"  {'':17s} {c.error}")
             if step.skipped:
-                refined = {r for k in step.skipped for r in REFINES[k]}
+                refined = {r for k in step.skipped for r in effect(k).refines}
                 lines.append(f"  not tried: {', '.join(step.skipped)} (refines {' or '.join(sorted(refined))}, "
                              "which did not pay)")
             lines.append(f"  -> {step.reason}")
@@ -364,15 +355,6 @@ class Diagnosis:
         return "\n".join(lines) + "\n\n" + self.comparison.report()
 
 
-#: What an implausible or singular estimate that would pay for itself is a sign of (it is
-#: reported, never selected): the misfit's pattern is real, the effect is the wrong one.
-SIGNS = {"thickness": "the misfit wants the neutral axis or the bending stiffness distribution to move: transverse "
-                      "shear or a layerwise effect?",
-         "point_mass": "the misfit grows with the mode number like shear, or a sensor heavier than plausible: "
-                       "transverse shear, or a mass measured and given in the spec?",
-         "orientation": "the twisting modes are off: a turned layer, or shear coupling?",
-         "suspension": "the lowest modes are off: the suspension, or a missing shear effect?",
-         "adhesive": "the bonded configurations are off: the bond line's shear (layerwise)?"}
 
 
 def _signs(ordered, best) -> str:
@@ -384,14 +366,14 @@ def _signs(ordered, best) -> str:
         if c.eligible and not c.selectable and c.fit.statistics.sum_squares < floor and c.scaled_gain > MIN_GAIN:
             why = "implausible" if not c.plausible else "singular at its solution"
             out.append(f"{c.kind} would pay (gain / c = {c.scaled_gain:.1f}) but is {why}, not taken: "
-                       + SIGNS.get(c.kind, "read it as a sign of what is missing"))
+                       + effect(c.kind).sign)
     return ("; " + "; ".join(out)) if out else ""
 
 
 def _canonical(kinds) -> frozenset:
     out = set()
     for k in kinds:
-        out |= SAME_AS.get(k, {k})
+        out |= effect(k).physics
     return frozenset(out)
 
 
@@ -401,7 +383,7 @@ def _refine(kind: str, kinds, selected, candidates, state: FitResult) -> bool:
     the noise level: the refinement may be the more complete physics, ``COMPLETE_MARGIN``),
     or explained some misfit while nothing paid and the misfit is ``FAR_FROM_NOISE`` (the
     round would stop with the more complete theory untried)."""
-    refined = set(REFINES[kind])
+    refined = set(effect(kind).refines)
     if not refined & set(kinds) or refined & set(selected):
         return True
     if any(c.scaled_gain > MIN_GAIN for c in candidates if c.kind in refined):
@@ -417,7 +399,7 @@ def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int
     out = {}
     for kind in refined:
         mine = next((c for c in candidates if c.kind == kind and c.fit is not None), None)
-        base = [c for c in candidates if c.kind in REFINES[kind] and c.fit is not None]
+        base = [c for c in candidates if c.kind in effect(kind).refines and c.fit is not None]
         if mine is not None and base:
             best = min(base, key=lambda c: c.fit.statistics.sum_squares)
             out[kind] = (number, best.fit.statistics.sum_squares - mine.fit.statistics.sum_squares, best.kind)
@@ -447,7 +429,7 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
 def _refined_start(kind: str, candidates) -> FitResult | None:
     """The fit a refinement's refit starts from: the lowest-criterion finished candidate
     among the effects ``kind`` refines (None: from the round's start)."""
-    refined = [c for c in candidates if c.kind in REFINES[kind] and c.selectable]
+    refined = [c for c in candidates if c.kind in effect(kind).refines and c.selectable]
     return min(refined, key=lambda c: c.bic).fit if refined else None
 
 
@@ -643,7 +625,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
 
             names = [c.kind for c in selected]
-            candidates = run([k for k in trying if k not in REFINES])
+            candidates = run([k for k in trying if not effect(k).refines])
             candidates = _leader_freed_again(candidates, held_shear_moduli(state, [c.added for c in selected]),
                                              state, measurements, nominal, hints, say)
             restart = restarted_from_spec(trying, state, baseline, respec)
@@ -652,8 +634,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 again = {c.kind: c for c in run(restart, {k: respec for k in restart})}
                 candidates = [_candidate(state, better_start(c.added, again[c.kind].added)) if c.kind in again
                               else c for c in candidates]
-            refining = [k for k in trying if k in REFINES and _refine(k, kinds, names, candidates, state)]
-            skipped = [k for k in trying if k in REFINES and k not in refining]
+            refining = [k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state)]
+            skipped = [k for k in trying if effect(k).refines and k not in refining]
             held = _held_back(refining, margins, state, candidates)
             refining = [k for k in refining if k not in held]
             if refining:
@@ -833,10 +815,10 @@ def _layerwise_instead(state: FitResult, selected, kinds, measurements: Measurem
     in every configuration): there it is the same model, and a criterion within the margin
     would add it to the selection for nothing."""
     names = {c.kind for c in selected}
-    if "layerwise" not in kinds or "layerwise" in names or not names & set(REFINES["layerwise"]) \
+    if "layerwise" not in kinds or "layerwise" in names or not names & set(effect("layerwise").refines) \
             or effect("layerwise").single_shear_layer(state.model):
         return None
-    say(f"trying layerwise in place of {' + '.join(sorted(names & set(REFINES['layerwise'])))} "
+    say(f"trying layerwise in place of {' + '.join(sorted(names & set(effect('layerwise').refines)))} "
         "(the more complete theory, from the selection's end)")
     candidate = _candidate(state, add_effect(state, "layerwise", measurements, nominal, options=CANDIDATE_OPTIONS))
     if candidate.fit is None or not candidate.selectable:

@@ -76,8 +76,6 @@ UD_NU23 = 0.45
 #: from G12 / 16).  The starts with G23 != G13 are for unidirectional plies (and wood) only
 #: (``_shear_starts``).
 SHEAR_STARTS = (TRANSVERSELY_ISOTROPIC, (1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
-#: The effects that free transverse shear moduli.
-SHEAR_EFFECTS = ("transverse_shear", "thick_plate", "layerwise")
 #: The last start of a failed shear refit is the thin-plate limit: shear moduli so stiff
 #: that the shear theory's frequencies lie within this share of the measurements' scatter
 #: of the fit it is added to (``vanishing_shear_start``), from where every accepted step
@@ -97,12 +95,6 @@ CONTINUATION_ITERATIONS = 6
 PRUNE_FACTOR = 2.0
 #: Two effect estimates whose chi^2 differ by less than this (about 2 std) are rivals.
 RIVAL_CHI2 = 4.0
-#: Effects refitted from the spec's values too when the thin-plate fit they would start
-#: from is degenerate (``spec_start``): the whole of the thin plate's misfit is theirs to
-#: explain, and its moduli are what it did to them (blind cross-ply and hybrid plates with
-#: a/h of 15-20: 15-17 % misfit left with a ply's E2 and nu12 at their bounds, from where
-#: the shear refit stopped at 1.3 % or 8.6 % against a floor of 0.07 % or 0.37 %).
-RESTARTED_FROM_SPEC = ("transverse_shear", "thick_plate")
 #: The thin-plate fit a diagnosis starts from holds the layer properties that run to their
 #: bounds at the spec's values and is repeated, at most this many times: with physics
 #: missing, the weakly determined ones (a ply's nu12, the E2 of a cross-ply's middle
@@ -376,7 +368,7 @@ def spec_start(model: SpecimenModel, measurements: Measurements, baseline: FitRe
     thin-plate fit of them) is degenerate: not converged, a layer property at a bound, or
     one ``DISTORTED`` times off the spec's value.  An effect that explains the misfit then
     starts better from the user's values than from what the thin plate did to them
-    (``RESTARTED_FROM_SPEC``); None otherwise."""
+    (``Effect.restarts_from_spec``); None otherwise."""
     distorted = [p for p in baseline.parameters if p.kind in MATERIAL_PARAMETERS
                  and _off_by(baseline.value(p), model.value(p), DISTORTED)]
     if baseline.status is not FitStatus.NOT_CONVERGED and not at_bounds(baseline) and not distorted:
@@ -387,9 +379,9 @@ def spec_start(model: SpecimenModel, measurements: Measurements, baseline: FitRe
 
 def restarted_from_spec(kinds, state: FitResult, baseline: FitResult, respec: FitResult | None) -> list[str]:
     """Of ``kinds`` added to ``state``, those refitted from the spec's values too
-    (``respec``, from ``spec_start``): the ``RESTARTED_FROM_SPEC`` ones, added to the
+    (``respec``, from ``spec_start``): those that ``restarts_from_spec``, added to the
     thin-plate fit ``baseline`` itself when it was degenerate."""
-    return [k for k in kinds if k in RESTARTED_FROM_SPEC] if state is baseline and respec is not None else []
+    return [k for k in kinds if effect(k).restarts_from_spec] if state is baseline and respec is not None else []
 
 
 def better_start(first: AddedEffect, second: AddedEffect) -> AddedEffect:
@@ -643,7 +635,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
         else:
             result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
                                 explain=False, settle=settle, pairings=ready.pairings or state.pairings)
-            if kind in SHEAR_EFFECTS:
+            if effect(kind).frees_shear:
                 result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
                                                     options)
                 notes += restarted

@@ -242,3 +242,41 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     state = SimpleNamespace(model=single.with_options(transverse_shear=True, rotary_inertia=True))
     selected = [SimpleNamespace(kind="thick_plate")]
     assert _layerwise_instead(state, selected, ["thick_plate", "layerwise"], None, None, print) is None
+
+
+def test_a_user_registered_effect_takes_part_in_a_diagnosis(paper_model):
+    """An effect a user registers is a candidate like a built-in one: a cable clip of
+    unknown mass at a known place (30, 40) mm, planted at 2 g in the paper plate's data (3
+    configurations x 6 labelled modes, 1e-4 scatter), is selected by ``diagnose`` among
+    it and the suspension, and its mass comes back within 3 std; the effect's own
+    declarations (``Effect.refines``, ``covers``, ``sign``...) are the defaults."""
+    import numpy as np
+
+    from fem.effects import REGISTRY, Effect, SwitchedOn, register
+    from fem.specimen import Parameter
+
+    mass = Parameter("mass", "clip")
+
+    def clipped(model, kg):
+        return model.with_attachments(model.specimen.attachments + (PointMass(kg, 0.030, 0.040, "clip"),))
+
+    class CableClip(Effect):
+        kind = "cable_clip_test"
+        description = "a cable clip of unknown mass at (30, 40) mm"
+
+        def fixed(self, model, table):
+            return SwitchedOn(self.kind, clipped(model, 2e-3))
+
+        def free(self, model, hint=None):
+            return [SwitchedOn(self.kind, clipped(model, 0.5e-3), (mass,), "clip mass free")]
+
+    data = synthetic_measurements(clipped(paper_model, 2e-3), modes=6, noise_rel=1e-4, seed=3, labels="all")
+    try:
+        register(CableClip())
+        result = diagnose_module.diagnose(paper_model, data, ["cable_clip_test", "suspension"])
+    finally:
+        REGISTRY.pop("cable_clip_test", None)
+    assert [c.kind for c in result.selected] == ["cable_clip_test"], result.report()
+    final = result.final
+    std = float(final.uncertainty.std[list(final.parameters).index(mass)])
+    assert np.isfinite(std) and abs(final.value(mass) - 2e-3) < 3 * std, (final.value(mass), std)
