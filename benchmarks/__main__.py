@@ -14,7 +14,7 @@ import os
 import platform
 import resource
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 from fem.io import tool_version, write_text
@@ -79,7 +79,7 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
     names = {module.__name__.split(".")[-1] for _, module in SECTIONS}
     if only is not None and not only <= names:
         raise SystemExit(f"--only {' '.join(sorted(only - names))}: no such benchmark; allowed: {', '.join(sorted(names))}")
-    start = f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC on {_machine()}"
+    start = f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC on {_machine()}"
     previous = page.read_text() if only is not None and page.exists() else ""
     kept = _sections(previous)
     parts = []
@@ -88,10 +88,10 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
             parts.append(kept[heading])
             continue
         block = _measured(module)
-        parts.append(f"## {heading}\n\n```\n{block}\n```\n\nMeasured {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC "
+        parts.append(f"## {heading}\n\n```\n{block}\n```\n\nMeasured {datetime.now(UTC):%Y-%m-%d %H:%M} UTC "
                      f"on {_machine()}.\n")
     if only is None:
-        runs = f"- started: {start}\n- finished: {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC on {_machine()}\n"
+        runs = f"- started: {start}\n- finished: {datetime.now(UTC):%Y-%m-%d %H:%M} UTC on {_machine()}\n"
     else:  # the last full run's times stay, for the sections kept from it
         runs = "".join(line + "\n" for line in previous.splitlines() if line.startswith(("- started:", "- finished:")))
         runs += f"- re-measured with --only {' '.join(sorted(only))}: {start}\n"

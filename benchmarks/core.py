@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.model import ModelOptions, SpecimenModel, solve_laminate
 from fem.solver.assembly import unit_matrices
 from fem.solver.mesh import PlateMesh
-from fem.model import ModelOptions, SpecimenModel, solve_laminate
 from fem.solver.sensitivity import ModalEnergies
 
 from .common import best_time, paper_spec

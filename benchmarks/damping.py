@@ -5,8 +5,8 @@ by content), as ``fit`` runs it; the complex eigenproblem a large loss factor ad
 timed beside it."""
 import time
 
-from fem.solver.complex_modes import complex_loss_factors
 from fem.model import solve_laminate
+from fem.solver.complex_modes import complex_loss_factors
 from identify.fitting.damping import identify_damping
 from identify.fitting.driver import fit_layers
 from studies import damping as study

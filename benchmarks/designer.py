@@ -21,8 +21,8 @@ from designer.candidates import candidates
 from designer.check import check
 from designer.parallel import executor
 from designer.problem import Problem
-from designer.search.relaxation import information_loss
 from designer.search.ranking import ORIGINAL, recommend, stacked_rows
+from designer.search.relaxation import information_loss
 from fem.design_space import parse_design
 from fem.model import solve_laminate
 

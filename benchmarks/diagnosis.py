@@ -6,12 +6,12 @@ reference (178 s before the forward selection).  Solutions are cached by content
 cache is cleared before each timed call."""
 import time
 
-from fem.solver.attachments import PointMass
 from fem.model import solve_laminate
+from fem.solver.attachments import PointMass
 from fem.spec import load_spec
 from identify.diagnosis.diagnose import diagnose
-from identify.fitting.driver import fit
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+from identify.fitting.driver import fit
 from identify.measurements import load_measurements
 from identify.recordings.synthetic import synthetic_measurements
 from studies import hidden_effect

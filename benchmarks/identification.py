@@ -15,11 +15,11 @@ import numpy as np
 import pandas as pd
 
 from fem.model import solve_laminate
-from identify.fitting.driver import fit
-from identify.recordings.peaks import extract_peaks
-from identify.measurements import Measurements
-from identify.recordings.synthetic import synthetic_measurements
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+from identify.fitting.driver import fit
+from identify.measurements import Measurements
+from identify.recordings.peaks import extract_peaks
+from identify.recordings.synthetic import synthetic_measurements
 from studies import long_plates
 from studies.common import start_model, true_model
 

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from identify.recordings.peaks import extract_peaks
 from identify.examples import COATED_PLATE
+from identify.recordings.peaks import extract_peaks
 from identify.recordings.tap_quirks import real_like_plate, write_rounded_csv
 from identify.recordings.tap_simulation import Modes, Session, TapOptions, write_csv
 

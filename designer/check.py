@@ -9,11 +9,11 @@ from fem.limits import CLOSE_MODES_WARNING, Limits
 from fem.model import SpecimenModel
 from fem.solver.sensitivity import Verdict
 
+from .problem import Problem, Solved, solve_points, unmeasurable
+from .progress import Progress
 from .scores.damping import DampingScores, damping_scores
 from .scores.design import Design
 from .scores.poisson import PoissonPlate, poisson_plate
-from .problem import Problem, Solved, solve_points, unmeasurable
-from .progress import Progress
 from .sheet import TestSheet, test_sheet
 
 

@@ -70,10 +70,10 @@ def run_recommend(args) -> int:
     """Ranked designs with scores, predicted std and the frequencies to expect."""
     _not_the_input(args.spec, args.write_spec)
     from .candidates import candidates
-    from .scores.damping import damping_scores
     from .parallel import executor
-    from .search.refine import refine
+    from .scores.damping import damping_scores
     from .search.ranking import recommend
+    from .search.refine import refine
     from .spec_file import write_spec
 
     problem = _problem(args)

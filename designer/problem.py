@@ -10,14 +10,14 @@ import numpy as np
 
 from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
-from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, one_blas_thread, solve_laminate
+from fem.solver.mesh import PlateMesh
 from fem.solver.sensitivity import normalised
 from fem.specimen import Configuration, Parameter, Specimen
 
 from .parallel import chunked, run_chunks
-from .scores.prior import Prior
 from .progress import Progress
+from .scores.prior import Prior
 
 #: Solved configurations kept in this process (a few kB each: no mode shapes).
 CACHE_SIZE = 8192
@@ -106,8 +106,8 @@ class Problem:
         return sum(layer.thickness for layer in self.specimen.layers)
 
     @classmethod
-    def of(cls, model: "SpecimenModel | Problem", modes: int | None = None, criterion: str | None = None,
-           prior_range: float | None = None, store=None) -> "Problem":
+    def of(cls, model: SpecimenModel | Problem, modes: int | None = None, criterion: str | None = None,
+           prior_range: float | None = None, store=None) -> Problem:
         """The planning problem of a model (its ``[design]`` table, or the defaults);
         ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion,
         ``prior_range`` its ``prior_range_rel``, ``store`` the disk store of solves."""
@@ -136,7 +136,7 @@ class Problem:
     def options(self) -> ModelOptions:
         return self.model.options
 
-    def with_options(self, **changes) -> "Problem":
+    def with_options(self, **changes) -> Problem:
         return replace(self, model=self.model.with_options(**changes))
 
     @cached_property
@@ -182,7 +182,7 @@ class Problem:
         return _solution(self.specimen, self.options, self.mesh, self.solved_modes,
                          configuration_at(self, configuration), attachments)
 
-    def at(self, values: dict[Parameter, float]) -> "Problem":
+    def at(self, values: dict[Parameter, float]) -> Problem:
         """The same problem with the identified parameters at other values (SI)."""
         return replace(self, model=self.model.with_values(values))
 
@@ -192,7 +192,7 @@ class Problem:
         None when ``[design] prior_range_rel`` is 0 (scores at the nominal values only)."""
         return Prior.of(self) if self.space.prior_range > 0 else None
 
-    def points(self) -> list["Problem"]:
+    def points(self) -> list[Problem]:
         """The problems a design is scored at: the nominal one, then each prior sample."""
         return [self] if self.prior is None else list(self.prior.problems)
 

@@ -18,7 +18,7 @@ class Progress:
     stream: TextIO | None = None
     show_after: float = SHOW_AFTER
 
-    def bar(self, total: int, label: str) -> "Bar":
+    def bar(self, total: int, label: str) -> Bar:
         return Bar(self, total, label)
 
 
@@ -33,7 +33,7 @@ class Bar:
         self.start = self.last = time.perf_counter()
         self.drawn = False
 
-    def __enter__(self) -> "Bar":
+    def __enter__(self) -> Bar:
         return self
 
     def __exit__(self, *exc) -> None:

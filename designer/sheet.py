@@ -38,13 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.solver.assembly import UnitMatrices
-from fem.solver.attachments import PointMass, point_operators
 from fem.io import html_pre
 from fem.limits import CLOSE_MODES_WARNING
+from fem.plotting import new_figure, save_figure
+from fem.solver.assembly import UnitMatrices
+from fem.solver.attachments import PointMass, point_operators
 from fem.solver.mode_shapes import deflection_operator
 from fem.solver.threads import one_blas_thread
-from fem.plotting import new_figure, save_figure
 
 from .problem import Problem, Solved
 from .scores.prior import prior_factors

@@ -31,8 +31,8 @@ from fem.spec import parse_spec
 from fem.specimen import Configuration
 from fem.stock import STOCK, stock_name
 
-from .scores.design import Design
 from .problem import Problem
+from .scores.design import Design
 
 GPA, MM = 1e9, 1e-3
 

@@ -33,9 +33,9 @@ from fem.specimen import Configuration
 from fem.validation import did_you_mean
 
 from .candidates import outer_face, with_plate_thickness
-from .scores.design import Design
 from .problem import Problem, unmeasurable
 from .progress import Progress
+from .scores.design import Design
 
 KINDS = {
     "thickness": "added plate thickness [mm]",

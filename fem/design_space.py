@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 
 from .errors import DesignError
 from .laminates.laminate import Layer
-from .limits import Limits
 from .laminates.material import Material
+from .limits import Limits
 from .stock import (
     DEFAULT_ADHESIVE,
     STOCK,

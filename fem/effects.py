@@ -16,10 +16,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .solver.attachments import PointMass, Suspension
 from .errors import NotApplicableError, SpecError
 from .laminates.layerwise import LayerwiseLaminate, soft_layers
 from .model import SpecimenModel
+from .solver.attachments import PointMass, Suspension
 from .specimen import Parameter
 from .validation import check_keys, number
 

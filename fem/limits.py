@@ -62,7 +62,7 @@ class Limits:
     #: which of the two limits are the defaults relative to the specimen ("mass", "thickness")
     defaults: tuple[str, ...] = ()
 
-    def with_defaults(self, specimen_mass: float, specimen_thickness: float) -> "Limits":
+    def with_defaults(self, specimen_mass: float, specimen_thickness: float) -> Limits:
         """The limits with the mass and thickness limits not given set to the defaults
         relative to the specimen (``DEFAULT_MASS_RATIO``, ``DEFAULT_THICKNESS_RATIO``)."""
         mass, thickness, defaults = self.max_added_mass, self.max_added_thickness, list(self.defaults)

@@ -7,9 +7,6 @@ from functools import cached_property
 
 import numpy as np
 
-from .solver.assembly import UnitMatrices, unit_matrices
-from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
-from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .design_space import DesignSpace
 from .elements import ShearDifferencePlate
 from .errors import ModelError, OptionsError
@@ -18,10 +15,11 @@ from .laminates.laminate import Laminate
 from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
 from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
+from .solver.assembly import UnitMatrices, unit_matrices
+from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
+from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
-from .solver.solve_cache import SOLVE_CACHE_BYTES, bytes_bounded_cache
-from .solver.threads import one_blas_thread
 from .solver.mode_shapes import beam_coefficients, in_plane, label_of
 from .solver.sensitivity import (
     ModalEnergies,
@@ -29,6 +27,8 @@ from .solver.sensitivity import (
     frequency_derivatives,
     normalised,
 )
+from .solver.solve_cache import SOLVE_CACHE_BYTES, bytes_bounded_cache
+from .solver.threads import one_blas_thread
 from .specimen import Parameter, Specimen
 from .validation import whole
 
@@ -190,7 +190,7 @@ def system_coefficients(laminate: Laminate, transverse_shear: bool,
     return coefficients, laminate.inertia * np.array(inertia_terms)
 
 
-def _solution_bytes(solution: "LaminateSolution") -> int:
+def _solution_bytes(solution: LaminateSolution) -> int:
     """What a cached solve holds [bytes]: its mode shapes and frequencies (the unit
     matrices are shared by every solve on the mesh and cached apart; the modal energies
     computed later are (coefficients x modes), kilobytes), plus a small allowance."""
@@ -288,21 +288,21 @@ class SpecimenModel:
         """A parameter's current value (SI)."""
         return self.specimen.value(parameter)
 
-    def with_specimen(self, specimen: Specimen) -> "SpecimenModel":
+    def with_specimen(self, specimen: Specimen) -> SpecimenModel:
         return replace(self, specimen=specimen)
 
-    def with_values(self, values: dict[Parameter, float]) -> "SpecimenModel":
+    def with_values(self, values: dict[Parameter, float]) -> SpecimenModel:
         """The same model with parameter values replaced (SI; materials validated again)."""
         return replace(self, specimen=self.specimen.with_values(values))
 
-    def with_options(self, **changes) -> "SpecimenModel":
+    def with_options(self, **changes) -> SpecimenModel:
         """The same specimen with model options changed, e.g. ``with_options(modes=8)``."""
         return replace(self, options=replace(self.options, **changes))
 
-    def with_configurations(self, configurations) -> "SpecimenModel":
+    def with_configurations(self, configurations) -> SpecimenModel:
         return replace(self, specimen=self.specimen.with_configurations(configurations))
 
-    def with_attachments(self, attachments) -> "SpecimenModel":
+    def with_attachments(self, attachments) -> SpecimenModel:
         return replace(self, specimen=self.specimen.with_attachments(attachments))
 
     def solve(self, configuration: str) -> LaminateSolution:

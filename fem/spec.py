@@ -17,8 +17,8 @@ from .effects import apply_fixed
 from .errors import SpecError
 from .inputs import InputStd
 from .laminates.laminate import Layer
-from .laminates.material import DENSITY_RANGE, LOSS_FACTORS, MAX_LOSS_FACTOR, MODULUS_RANGE, Material
 from .laminates.layerwise import GROUPINGS
+from .laminates.material import DENSITY_RANGE, LOSS_FACTORS, MAX_LOSS_FACTOR, MODULUS_RANGE, Material
 from .model import DIVISIONS_RANGE, MAX_MODES, THEORIES, ModelOptions, SpecimenModel
 from .specimen import Configuration, Specimen
 from .stock import STOCK, stock_name

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, check_attachment
 from .errors import SpecError
 from .laminates.laminate import Laminate, Layer
 from .laminates.material import MATERIAL_PARAMETERS, Material
+from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, check_attachment
 
 LAYER_PARAMETERS = ("thickness", "angle")
 KINDS = MATERIAL_PARAMETERS + LAYER_PARAMETERS + ATTACHMENT_PARAMETERS
@@ -115,7 +115,7 @@ class Specimen:
                 return getattr(layer, parameter.kind)
         raise SpecError(f"parameter {parameter.name}: no layer labelled {parameter.target!r}")
 
-    def with_values(self, values: dict[Parameter, float]) -> "Specimen":
+    def with_values(self, values: dict[Parameter, float]) -> Specimen:
         """A copy with parameter values replaced (materials validated again)."""
         materials = dict(self.materials)
         changes: dict[str, dict[str, float]] = {}
@@ -135,12 +135,12 @@ class Specimen:
         attachments = tuple(replace(a, **attachment_changes.get(a.label, {})) for a in self.attachments)
         return replace(self._with_layers(materials, layer_changes), attachments=attachments)
 
-    def with_materials(self, materials) -> "Specimen":
+    def with_materials(self, materials) -> Specimen:
         """A copy with these materials (``Material`` objects) put in every layer that uses
         a material of the same name."""
         return self._with_layers({**self.materials, **{m.name: m for m in materials}}, {})
 
-    def _with_layers(self, materials: dict, layer_changes: dict) -> "Specimen":
+    def _with_layers(self, materials: dict, layer_changes: dict) -> Specimen:
         """Every layer (specimen and additions) with its material taken from ``materials``
         by name and its ``layer_changes`` (label -> field -> value) applied."""
         def stack(layers):
@@ -150,10 +150,10 @@ class Specimen:
         configurations = tuple(replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations)
         return replace(self, layers=stack(self.layers), configurations=configurations)
 
-    def with_configurations(self, configurations) -> "Specimen":
+    def with_configurations(self, configurations) -> Specimen:
         return replace(self, configurations=tuple(configurations))
 
-    def with_attachments(self, attachments) -> "Specimen":
+    def with_attachments(self, attachments) -> Specimen:
         """A copy with these attachments (validated)."""
         return replace(self, attachments=tuple(attachments))
 

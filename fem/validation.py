@@ -10,7 +10,7 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
-from typing import Iterable
+from collections.abc import Iterable
 
 from .errors import LayerIdError, SpecError
 

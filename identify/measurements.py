@@ -22,8 +22,8 @@ import numpy as np
 import pandas as pd
 
 from fem.errors import MeasurementError
-from fem.solver.mode_shapes import pattern
 from fem.model import SpecimenModel
+from fem.solver.mode_shapes import pattern
 from fem.validation import suggestion
 
 REQUIRED = ("configuration", "frequency_hz")
@@ -52,7 +52,7 @@ class Measurements:
         """Every row has its mode number (else a peak list the fit matches itself)."""
         return bool((self.table["mode"] != UNRANKED).all())
 
-    def rows(self, index) -> "Measurements":
+    def rows(self, index) -> Measurements:
         """The measurements of these rows (positions), renumbered."""
         return Measurements(self.table.iloc[list(index)].reset_index(drop=True), self.source)
 

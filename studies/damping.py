@@ -22,11 +22,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from fem.solver.complex_modes import complex_loss_factors
-from fem.solver.damping import ratio_from_loss
 from fem.laminates.laminate import Layer
 from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel
+from fem.solver.complex_modes import complex_loss_factors
+from fem.solver.damping import ratio_from_loss
 from fem.specimen import Configuration, Specimen
 from identify.fitting.damping import identify_damping
 from identify.fitting.driver import fit
@@ -131,6 +131,7 @@ def tap_chain(folder, seed: int = 1, hits: int = 5) -> TapChain:
     from fem.solver.mode_shapes import deflection_operator
     from identify.recordings.peaks import extract_peaks
     from identify.recordings.tap_simulation import Modes, Session
+
     from .tap_test import EXCITATION, SENSOR, SENSOR_MASS
 
     sensor = [PointMass(SENSOR_MASS, *SENSOR, "accelerometer")]

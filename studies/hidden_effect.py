@@ -44,14 +44,14 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import linear_sum_assignment
 
-from fem.solver.attachments import PointMass, point_operators
 from fem.model import SpecimenModel
+from fem.solver.attachments import PointMass, point_operators
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.diagnose import Diagnosis, diagnose
 from identify.measurements import Measurements, parse_measurements
-from identify.reporting.plots import plot_before_after
 from identify.recordings.synthetic import synthetic_measurements
+from identify.reporting.plots import plot_before_after
 
 from .common import parse_args, report_folder, start_model, true_model, write_text
 

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from identify.fitting.driver import fit
 from identify.measurements import Measurements
 from identify.recordings.synthetic import synthetic_measurements
-from identify.fitting.driver import fit
 
 from .common import report_folder, true_model, write_text
 

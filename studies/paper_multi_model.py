@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identify.fitting.driver import fit
 from identify.engine.parameters import display
-from identify.reporting.report import write_report
 from identify.engine.result import FitResult
+from identify.fitting.driver import fit
 from identify.recordings.synthetic import synthetic_measurements
+from identify.reporting.report import write_report
 
 from .common import (
     dependency_plot,

@@ -10,12 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from identify.engine.result import FitResult
+from identify.engine.updating import FitOptions
 from identify.fitting.driver import fit
+from identify.recordings.synthetic import synthetic_measurements
 from identify.reporting.plots import plot_convergence
 from identify.reporting.report import write_report
-from identify.engine.result import FitResult
-from identify.recordings.synthetic import synthetic_measurements
-from identify.engine.updating import FitOptions
 
 from .common import (
     dependency_plot,

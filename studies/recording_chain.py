@@ -19,14 +19,14 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 import pandas as pd
 
-from fem.solver.attachments import PointMass
 from fem.errors import MeasurementError
+from fem.solver.attachments import PointMass
 from identify.diagnosis.diagnose import diagnose
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements

@@ -19,13 +19,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from fem.model import SpecimenModel
 from fem.solver.attachments import PointMass
 from fem.solver.mode_shapes import deflection_operator
-from fem.model import SpecimenModel
+from identify.engine.result import FitResult
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from identify.recordings.peaks import extract_peaks
-from identify.engine.result import FitResult
 from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 from .common import parse_args, report_folder, start_model, true_model, write_text

@@ -85,8 +85,9 @@ def test_predict_modes_out_of_range(capsys, modes):
 
 
 def test_peaks_out_onto_a_folder(tmp_path, capsys):
-    from identify.recordings.tap_simulation import Modes, Session, write_csv
     import numpy as np
+
+    from identify.recordings.tap_simulation import Modes, Session, write_csv
 
     hit = Session(Modes(np.array([150.0]), np.array([0.01]), np.array([1.0])), n_hits=1, seed=1).hits()[0]
     write_csv(hit, tmp_path / "hit.csv")

@@ -21,8 +21,8 @@ from fem.io import REPORT_MARK
 from fem.model import ModelOptions
 from fem.spec import load_spec, parse_spec
 from identify.cli import main as identify_layers
-from identify.measurements import parse_measurements
 from identify.engine.updating import FitOptions
+from identify.measurements import parse_measurements
 
 from .walk import check_report, run, write_files
 

@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 from fem.errors import LayerIdError
 from fem.spec import load_spec, parse_spec
-from identify.examples import COATED_PLATE
 from identify.engine.matching import align, match
+from identify.examples import COATED_PLATE
 from identify.measurements import parse_measurements
 from identify.recordings.readers import read_csv, read_uff, read_wav
 

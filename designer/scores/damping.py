@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.numbers import finite_or_none
-from fem.solver.damping import close_groups, first_order_loss_factors, loss_columns
 from fem.laminates.material import LOSS_FACTORS
 from fem.model import SpecimenModel
+from fem.numbers import finite_or_none
+from fem.solver.damping import close_groups, first_order_loss_factors, loss_columns
 from fem.solver.sensitivity import Verdict, condition_verdict
 
 #: Loss factor assumed for an identified material the spec gives none for (a polymer

@@ -64,7 +64,7 @@ class Design:
     targets_default: bool = True
 
     @classmethod
-    def of(cls, problem: Problem, solved: list[Solved], prior: list[list[Solved]] | None = None) -> "Design":
+    def of(cls, problem: Problem, solved: list[Solved], prior: list[list[Solved]] | None = None) -> Design:
         """The set ``solved`` at the nominal values; ``prior``: the same configurations
         solved at each prior sample (``problem.prior``), for the robust scores."""
         measured = tuple(problem.measured(s) for s in solved)

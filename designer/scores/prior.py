@@ -58,7 +58,7 @@ class Prior:
     problems: tuple
 
     @classmethod
-    def of(cls, problem) -> "Prior":
+    def of(cls, problem) -> Prior:
         space = problem.space
         values = physical(problem, problem.values * prior_factors(len(problem.parameters), space.prior_samples,
                                                                     space.prior_range))

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.solver.sensitivity import Verdict, condition_verdict as verdict
+from fem.solver.sensitivity import Verdict
+from fem.solver.sensitivity import condition_verdict as verdict
 
 #: Relative std above which a parameter is flagged weakly identifiable (10 %).
 WEAK_STD_REL = 0.1

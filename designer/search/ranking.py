@@ -21,14 +21,14 @@ from fem.model import SpecimenModel
 from fem.specimen import Configuration
 
 from ..candidates import candidates
-from ..scores.design import Design, score_design
-from .methods import METHODS
-from .mirror import collapse, is_mirror_symmetric
-from ..scores.poisson import PoissonPlate, poisson_plate
 from ..problem import Problem, Solved, solve_points, unmeasurable
 from ..progress import Bar, Progress
-from .relaxation import information_loss, relax, swap_search
+from ..scores.design import Design, score_design
+from ..scores.poisson import PoissonPlate, poisson_plate
 from ..scores.scoring import loss, singular_values
+from .methods import METHODS
+from .mirror import collapse, is_mirror_symmetric
+from .relaxation import information_loss, relax, swap_search
 
 #: Sets up to which the search is exhaustive (a few seconds of batched SVDs).
 EXHAUSTIVE_LIMIT = 50_000

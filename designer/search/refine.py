@@ -24,8 +24,8 @@ from fem.limits import added_mass, added_thickness
 from fem.specimen import Configuration
 
 from ..candidates import outer_face, with_plate_thickness
-from ..scores.design import Design, score_design
 from ..problem import Problem
+from ..scores.design import Design, score_design
 
 #: Relative thickness change [-] at which the continuous search stops (1 %: a plate is
 #: ground to about 0.01 mm, and the result is snapped to stock anyway), and evaluations

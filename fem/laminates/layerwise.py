@@ -72,13 +72,13 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from ..solver.assembly import UnitMatrices
 from ..elements.layerwise_plate import LayerwisePlate, basis_pairs
 from ..errors import ModelError
+from ..solver.assembly import UnitMatrices
+from ..solver.mesh import PlateMesh
 from .laminate import COEFFICIENTS, Laminate
 from .laminate_shear import COMPLEX_STEP, rotated_shear_moduli
 from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
-from ..solver.mesh import PlateMesh
 
 #: Grouping rules of the layers into shear groups.
 GROUPINGS = ("auto", "blocks", "layers")

@@ -152,6 +152,6 @@ class Material:
             return self.transverse_shear_moduli[SHEAR_MODULI.index(parameter)]
         return getattr(self, parameter)
 
-    def with_values(self, **values: float) -> "Material":
+    def with_values(self, **values: float) -> Material:
         """A copy with some parameters replaced (validated again)."""
         return replace(self, **values)

@@ -21,7 +21,6 @@ from ..elements.hermite_plate import EnergyQuadrature, ProjectionQuadrature
 from ..laminates.laminate import VOIGT_PAIRS
 from .mesh import PlateMesh
 
-
 #: Columns (elements x fields) integrated at once: the strains at the quadrature points of
 #: a chunk take (quadrature points x strains x columns) floats, ~40 MB for a shear mesh.
 GATHERED_COLUMNS = 20_000

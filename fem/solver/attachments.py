@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .assembly import UnitMatrices
 from ..elements.hermite_plate import _hermite_1d
 from ..errors import SpecError
+from .assembly import UnitMatrices
 
 ATTACHMENT_PARAMETERS = ("mass", "x", "y", "stiffness")
 

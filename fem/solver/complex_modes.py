@@ -20,11 +20,11 @@ import numpy as np
 import scipy.sparse.linalg as spla
 from scipy.optimize import linear_sum_assignment
 
-from .attachments import attachment_data
 from ..errors import ModelError
 from ..laminates.laminate import Laminate, plane_stress_stiffness, transformation
 from ..laminates.laminate_shear import rotated_shear_moduli, shear_stiffness
 from ..model import LaminateSolution, SpecimenModel, one_blas_thread
+from .attachments import attachment_data
 
 #: A complex mode is the damped version of a real one when their MAC exceeds this.
 PAIRING_MAC = 0.9

@@ -108,7 +108,7 @@ class PlateMesh:
 
     @classmethod
     def with_element_size(cls, length: float, width: float, divisions: int,
-                          edge_size: float | None = None, bases=()) -> "PlateMesh":
+                          edge_size: float | None = None, bases=()) -> PlateMesh:
         """``divisions`` elements along the longer side, a matching count along the other;
         with ``edge_size`` [m], graded towards the four edges (``_spacing``); each of
         ``bases`` ((x0, x1, y0, y1) [m], a sensor's footprint) divided into

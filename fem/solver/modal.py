@@ -8,8 +8,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from .assembly import UnitMatrices
 from ..errors import ModelError
+from .assembly import UnitMatrices
 
 #: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
 RIGID_LEAK = 1e-9

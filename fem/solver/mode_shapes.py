@@ -22,8 +22,8 @@ from functools import lru_cache
 import numpy as np
 import scipy.sparse as sp
 
-from .assembly import UnitMatrices
 from ..elements.hermite_plate import _hermite_1d
+from .assembly import UnitMatrices
 
 #: Beam functions per direction (0 .. ORDER - 1 nodes): enough for modes with up to 9
 #: nodal lines each way, i.e. the first 40 or so modes of a plate.

@@ -32,7 +32,6 @@ from .attachments import projected_attachments
 from .modal import Modes
 from .sensitivity import ModalEnergies
 
-
 #: Basis directions whose mass is below this share of the largest are dropped: they repeat
 #: others (the modes of two nearby points) or lie in the mass matrix's null space.
 INDEPENDENT = 1e-10
@@ -93,7 +92,7 @@ class Reanalysis:
     mass: np.ndarray         # (n_i, r, r) V^T M_j V
 
     @classmethod
-    def of(cls, model: SpecimenModel, configuration: str, extra: np.ndarray | None = None) -> "Reanalysis":
+    def of(cls, model: SpecimenModel, configuration: str, extra: np.ndarray | None = None) -> Reanalysis:
         """The reanalysis of ``configuration`` on ``model``'s full solve (cached), its basis
         enlarged by the ``extra`` fields (n_dofs, k), e.g. the modes at another point on
         the same mesh and theory: the basis then spans the modes between the two too.  The

@@ -27,7 +27,7 @@ class ModalEnergies:
     inertia: np.ndarray
 
     @classmethod
-    def of(cls, units: UnitMatrices, modes: Modes) -> "ModalEnergies":
+    def of(cls, units: UnitMatrices, modes: Modes) -> ModalEnergies:
         return cls(*units.quadratic_forms(modes.shapes))
 
 

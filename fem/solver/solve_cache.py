@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import wraps
-from typing import Callable
 
 #: The budget of the modal-solve cache [bytes]: about 50 solves of a long plate with
 #: shear, thousands of a thin one.  What a fit reuses is recent (a trial's sensitivities,

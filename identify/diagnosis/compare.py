@@ -10,17 +10,17 @@ import pandas as pd
 
 from fem.model import SpecimenModel
 
-from ..reporting import html_report as h
-from ..fitting.driver import fit_holding_bounds
-from ..measurements import Measurements
 from ..engine.objective import Objective, solving_model
-from ..fitting.patterns import PATTERN_SHARE, Pattern, residual_patterns
 from ..engine.peak_lists import matched_at
+from ..engine.result import FitResult
+from ..engine.statistics import FitStatistics
+from ..fitting.driver import fit_holding_bounds
+from ..fitting.patterns import PATTERN_SHARE, Pattern, residual_patterns
+from ..measurements import Measurements
+from ..reporting import html_report as h
 from ..reporting.report import shown_residuals
 from ..reporting.residuals import residual_table
-from ..engine.result import FitResult
 from ..reporting.rounding import percent
-from ..engine.statistics import FitStatistics
 
 
 @dataclass(frozen=True)

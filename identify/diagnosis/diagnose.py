@@ -32,32 +32,51 @@ import math
 import multiprocessing as mp
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import pandas as pd
 
 from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
-from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
 from fem.numbers import finite_or_none
+from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
 
-from ..reporting import html_report as h
-from ..fitting.budget import with_budget
-from ..fitting.causes import with_causes
-from .compare import Comparison, compare
-from ..fitting.driver import (EFFECT_ITERATIONS, PARALLEL_FROM_S, PRUNE_FACTOR, AddedEffect, Prepared, add_effect,
-                              better_start, continued, ended_worse, frees_any, held_shear_moduli, matched_peaks,
-                              point_mass_hints, point_mass_starts, prepare_effect, rematched, released,
-                              restarted_from_spec, shear_moduli_in, spec_start, with_determined_shear)
-from ..measurements import Measurements
 from ..engine.parameters import UNITS, display, json_key
-from ..fitting.plausibility import plausible_first
-from ..fitting.precheck import SINGULAR_GROWTH, Precheck
 from ..engine.result import FitResult, FitStatus
-from ..reporting.rounding import percent, status_line, with_std
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions
+from ..fitting.budget import with_budget
+from ..fitting.causes import with_causes
+from ..fitting.driver import (
+    EFFECT_ITERATIONS,
+    PARALLEL_FROM_S,
+    PRUNE_FACTOR,
+    AddedEffect,
+    Prepared,
+    add_effect,
+    better_start,
+    continued,
+    ended_worse,
+    frees_any,
+    held_shear_moduli,
+    matched_peaks,
+    point_mass_hints,
+    point_mass_starts,
+    prepare_effect,
+    released,
+    rematched,
+    restarted_from_spec,
+    shear_moduli_in,
+    spec_start,
+    with_determined_shear,
+)
+from ..fitting.plausibility import plausible_first
+from ..fitting.precheck import SINGULAR_GROWTH, Precheck
+from ..measurements import Measurements
+from ..reporting import html_report as h
+from ..reporting.rounding import percent, status_line, with_std
+from .compare import Comparison, compare
 
 #: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
 #: strong" evidence, 2 ln B > 10).

@@ -15,7 +15,8 @@ materials together changes no frequency; the answer is oriented like the start v
 from __future__ import annotations
 
 import itertools
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 

@@ -16,9 +16,9 @@ from fem.solver.reduced_basis import OutsideBasis, Reanalysis
 from fem.specimen import Parameter, Specimen
 
 from ..measurements import Measurements
+from . import ties
 from .pairing import ModePairing
 from .parameters import ParameterSpace
-from . import ties
 from .statistics import FitStatistics, weighted_residuals
 
 #: Singular values of the Jacobian below this fraction of the largest span its null
@@ -179,7 +179,7 @@ class TrialScreen:
     cost: float
 
     @classmethod
-    def of(cls, objective: Objective, current: Evaluation, rejected: Evaluation) -> "TrialScreen":
+    def of(cls, objective: Objective, current: Evaluation, rejected: Evaluation) -> TrialScreen:
         """The screen of the iteration at ``current`` whose trial ``rejected`` raised the misfit."""
         return cls(RitzObjective(objective, current, rejected), current, objective.cost(current))
 

@@ -61,7 +61,7 @@ class ModePairing:
     note: str = ""
 
     @classmethod
-    def initial(cls, configuration: str, solution, measured_modes, labels) -> "ModePairing":
+    def initial(cls, configuration: str, solution, measured_modes, labels) -> ModePairing:
         """By nodal pattern where a label is given: a labelled mode goes to the nearest-ranked
         model mode that holds its pattern (``label_shares`` at least ``LABEL_SHARE``, never an
         in-plane mode; an optimal assignment, ties to the higher affinity).  Near-degenerate
@@ -98,7 +98,7 @@ class ModePairing:
                 if unmatched else "")
         return cls(configuration, indices, modes.shapes[:, indices], note=note)
 
-    def track(self, modes: Modes, weight: sp.spmatrix) -> "ModePairing":
+    def track(self, modes: Modes, weight: sp.spmatrix) -> ModePairing:
         """The pairing for new model modes, following the previous paired shapes by MAC."""
         mac = mac_matrix(self.shapes, modes.shapes, weight)
         rows, cols = linear_sum_assignment(-mac)

@@ -45,7 +45,7 @@ class ParameterSpace:
     upper: tuple[float, ...] = ()
 
     @classmethod
-    def of(cls, parameters, specimen: Specimen) -> "ParameterSpace":
+    def of(cls, parameters, specimen: Specimen) -> ParameterSpace:
         scale = {"x": specimen.length, "y": specimen.width}
         materials = specimen.materials
         bounds = [materials[p.target].bound(p.kind) if p.target in materials else (-np.inf, np.inf)

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .matching import Match
 from ..measurements import Measurements
+from .matching import Match
 
 
 @dataclass(frozen=True)

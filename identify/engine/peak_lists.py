@@ -16,22 +16,22 @@ reported.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable
 
 import numpy as np
 
 from fem.model import SpecimenModel
 from fem.specimen import Parameter
 
-from .matching import Match, align, label_permits, match
 from ..measurements import Measurements
-from .peak_assignment import PeakAssignment, peak_table
-from .result import FitResult, FitStatus, Iteration
-from .statistics import ASSUMED_SCATTER_REL
+from .matching import Match, align, label_permits, match
 from .objective import solving_model
 from .parameters import display
+from .peak_assignment import PeakAssignment, peak_table
 from .peak_screen import SCREEN_TOLERANCE, screen
+from .result import FitResult, FitStatus, Iteration
+from .statistics import ASSUMED_SCATTER_REL
 from .updating import FitOptions, update
 
 #: Model modes solved beyond the number of peaks of a configuration (spurious peaks and

@@ -36,8 +36,8 @@ from fem.solver.reduced_basis import Reanalysis
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
-from .matching import START_TOLERANCE, Match, match
 from . import ties
+from .matching import START_TOLERANCE, Match, match
 from .parameters import ParameterSpace
 
 #: Basis modes per model mode of the screen's reduced model (Ritz error 0.01-0.04 % at

@@ -10,7 +10,7 @@ refitted from, and the check repeated.
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from .peak_assignment import PeakAssignment
 
 
-class FitStatus(str, Enum):
+class FitStatus(str, Enum):  # noqa: UP042 (StrEnum would change str() of a member to its value)
     """How an identification ended.  Only ``CONVERGED`` means the result may be used as
     it stands (exit status 0)."""
 
@@ -83,11 +83,11 @@ class FitResult:
     jacobian: np.ndarray | None = None
     effect_of: dict = field(default_factory=dict)
     effect_notes: tuple[tuple[str, str], ...] = ()
-    baseline: "FitResult | None" = None
-    peaks: "PeakAssignment | None" = None
+    baseline: FitResult | None = None
+    peaks: PeakAssignment | None = None
     causes: tuple = ()
-    budget: "Budget | None" = None
-    damping: "DampingResult | None" = None
+    budget: Budget | None = None
+    damping: DampingResult | None = None
     stop: Stop | None = None
 
     @property

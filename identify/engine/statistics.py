@@ -45,7 +45,7 @@ class FitStatistics:
     scatter_known: bool
 
     @classmethod
-    def of(cls, model_hz: np.ndarray, measurements: Measurements, k: int) -> "FitStatistics":
+    def of(cls, model_hz: np.ndarray, measurements: Measurements, k: int) -> FitStatistics:
         """The statistics of model frequencies paired row by row with ``measurements``."""
         r = weighted_residuals(model_hz, measurements)
         rel = np.asarray(model_hz) / measurements.table["frequency_hz"].to_numpy() - 1

@@ -28,7 +28,7 @@ class Tied(Parameter):
         return f"{self.target}.{self.kind} ({others})" if others else f"{self.target}.{self.kind}"
 
     @classmethod
-    def scale(cls, leader: Parameter, followers: list[Parameter], specimen: Specimen) -> "Tied":
+    def scale(cls, leader: Parameter, followers: list[Parameter], specimen: Specimen) -> Tied:
         """The leader with ``followers`` kept at their present ratios to it."""
         value = specimen.value(leader)
         return cls(leader.kind, leader.target, tuple((f, specimen.value(f) / value) for f in followers))

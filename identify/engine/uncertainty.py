@@ -54,7 +54,7 @@ class Uncertainty:
     def verdict(self) -> Verdict:
         return condition_verdict(self.condition_number)
 
-    def with_covariance(self, extra: np.ndarray) -> "Uncertainty":
+    def with_covariance(self, extra: np.ndarray) -> Uncertainty:
         """The uncertainty with a further independent covariance added (the known
         inputs' part of an uncertainty budget)."""
         if not np.all(np.isfinite(self.std)):
@@ -63,7 +63,7 @@ class Uncertainty:
         std = np.sqrt(np.diag(covariance))
         return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std))
 
-    def with_twins(self, values: np.ndarray, twins, parameters) -> "Uncertainty":
+    def with_twins(self, values: np.ndarray, twins, parameters) -> Uncertainty:
         """The uncertainty widened by twin solutions (other mode pairings that fit within
         the scatter): the pairing is then unknown, so the estimate is a mixture of the
         solutions weighted by exp(-delta chi^2 / 2) (the best weighs 1), whose spread about
@@ -84,7 +84,7 @@ class Uncertainty:
         return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std),
                        flags=flags, warnings=warnings)
 
-    def with_merged_peaks(self, objective, evaluation, lone) -> tuple["Uncertainty", list[str]]:
+    def with_merged_peaks(self, objective, evaluation, lone) -> tuple[Uncertainty, list[str]]:
         """The uncertainty widened for measured peaks that may be two modes merged: each
         ``lone`` (``ambiguity.LoneMode``) is a peak paired with one model mode while the
         close neighbour beside it has no peak.  The peak then lies anywhere between the
@@ -122,7 +122,7 @@ class Uncertainty:
                        flags=flags), notes
 
     @classmethod
-    def at(cls, objective, evaluation, statistics: FitStatistics) -> "Uncertainty":
+    def at(cls, objective, evaluation, statistics: FitStatistics) -> Uncertainty:
         """The linearised uncertainty of ``evaluation``'s parameters, with the scatter
         ``statistics`` gives (stated, inflated or estimated)."""
         from .objective import relative_sensitivity

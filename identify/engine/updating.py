@@ -8,27 +8,41 @@ size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import numpy as np
 from scipy.stats import chi2 as chi2_distribution
 
+from fem import validation
 from fem.errors import MeasurementError, OptionsError
 from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.solver.sensitivity import Verdict
 from fem.specimen import Parameter
-from fem import validation
 
-from .ambiguity import lone_close_modes, settle_pairings
-from .repair import quick_repair
 from ..measurements import Measurements
+from .ambiguity import lone_close_modes, settle_pairings
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, TrialScreen
 from .parameters import UNITS, display
+from .repair import quick_repair
 from .result import FitResult, FitStatus, Iteration
 from .statistics import CHI2_TEST_LEVEL, FitStatistics
-from .stopping import (ADMISSIBLE_HALVINGS, BOUND_TOLERANCE, DAMPING_FACTOR, EXACT_RMS, FIRST_DAMPING, FLAT_STEP,
-                       ROUNDOFF_COST, STALL_ITERATIONS, STALLED, STEP_PER_STD, TINY_STEP, UNDAMPED, UNDETERMINED_Z, Stop)
+from .stopping import (
+    ADMISSIBLE_HALVINGS,
+    BOUND_TOLERANCE,
+    DAMPING_FACTOR,
+    EXACT_RMS,
+    FIRST_DAMPING,
+    FLAT_STEP,
+    ROUNDOFF_COST,
+    STALL_ITERATIONS,
+    STALLED,
+    STEP_PER_STD,
+    TINY_STEP,
+    UNDAMPED,
+    UNDETERMINED_Z,
+    Stop,
+)
 from .uncertainty import Uncertainty
 
 

@@ -25,9 +25,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..engine.objective import solving_model
-from .patterns import PATTERN_SHARE, residual_patterns
 from ..engine.result import FitResult, FitStatus
 from ..engine.statistics import weighted_residuals
+from .patterns import PATTERN_SHARE, residual_patterns
 
 #: Known factors between a frequency in Hz and a slip of unit: what each would mean.
 UNIT_SLIPS = {1000.0: "kHz read as Hz, or a length in mm typed as m", 1e-3: "Hz read as kHz, or metres typed as mm",

@@ -36,15 +36,15 @@ import pandas as pd
 from scipy import stats
 from scipy.optimize import lsq_linear
 
+from fem.laminates.material import MAX_LOSS_FACTOR
+from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import close_groups, known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
-from fem.laminates.material import MAX_LOSS_FACTOR
-from fem.model import SpecimenModel
 from fem.solver.sensitivity import Verdict, condition_verdict
 
-from ..measurements import Measurements
 from ..engine.statistics import CHI2_TEST_LEVEL
+from ..measurements import Measurements
 
 #: Damping scatter assumed when the measurements give no damping_std: 3 % of the damping
 #: ratio (repeated tap tests of free plates; half-power and curve-fit estimates agree to

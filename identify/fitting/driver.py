@@ -7,10 +7,10 @@ import math
 import multiprocessing as mp
 import os
 import time
+from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -21,22 +21,22 @@ from fem.laminates.material import MATERIAL_PARAMETERS, SHEAR_MODULI
 from fem.model import SpecimenModel
 from fem.specimen import Parameter, Specimen
 
-from ..measurements import Measurements
 from ..engine.objective import solving_model
 from ..engine.parameters import UNITS, display
-from .patterns import residual_patterns
 from ..engine.peak_lists import fit_peak_list, matching_cost, model_error
+from ..engine.result import FitResult, FitStatus, Iteration
+from ..engine.statistics import ASSUMED_SCATTER_REL
+from ..engine.ties import Tied, plain
+from ..engine.updating import FitOptions, update
+from ..measurements import Measurements
 from .budget import with_budget
 from .causes import with_causes
 from .damping import identify_damping
-from ..engine.result import FitResult, FitStatus, Iteration
+from .patterns import residual_patterns
 from .plausibility import implausible, plate_mass
 from .point_mass_screen import PointMassScreen
 from .precheck import Precheck, Sensitivities, precheck
 from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
-from ..engine.statistics import ASSUMED_SCATTER_REL
-from ..engine.ties import Tied, plain
-from ..engine.updating import FitOptions, update
 
 #: Iterations of a refit with an effect (from the fit without it).
 EFFECT_ITERATIONS = 40

@@ -27,7 +27,6 @@ from fem.model import SpecimenModel
 
 from ..measurements import Measurements
 
-
 #: A signature explaining more than this share of the misfit is reported as present.
 PATTERN_SHARE = 0.5
 #: A signature whose part outside the fit's Jacobian is below this fraction of it is

@@ -62,7 +62,7 @@ class PointMassScreen:
         self.specimen = state.model.specimen
 
     @classmethod
-    def of(cls, state: FitResult) -> "PointMassScreen | None":
+    def of(cls, state: FitResult) -> PointMassScreen | None:
         """The screen of ``state``; None where it does not apply (a layerwise model, no
         Jacobian or pairing)."""
         if state.jacobian is None or state.pairings is None or len(state.jacobian) != len(state.measurements):

@@ -20,11 +20,11 @@ from fem.model import SpecimenModel
 from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict, condition_verdict
 from fem.specimen import Parameter
 
-from ..measurements import Measurements
 from ..engine.objective import Objective, relative_sensitivity
 from ..engine.statistics import ASSUMED_SCATTER_REL
 from ..engine.ties import Tied
 from ..engine.uncertainty import condition_number, describe_combination
+from ..measurements import Measurements
 
 #: The augmented matrix is singular when its condition number exceeds the paper's limit
 #: (``SINGULAR_ABOVE``, 1e7) and this many times the layer parameters' own (a baseline that
@@ -47,7 +47,7 @@ class Sensitivities:
 
     @classmethod
     def at_start(cls, model: SpecimenModel, measurements: Measurements, parameters,
-                 pairings: dict | None = None) -> "Sensitivities":
+                 pairings: dict | None = None) -> Sensitivities:
         """At the model's values, the modes paired afresh or followed from ``pairings``."""
         objective = Objective(model, measurements, list(parameters))
         values = objective.space.clip(np.array([model.value(p) for p in parameters], dtype=float))

@@ -24,8 +24,8 @@ import numpy as np
 from fem.laminates.material import SHEAR_MODULI
 from fem.specimen import Parameter, Specimen
 
-from .precheck import Sensitivities
 from ..engine.ties import Tied
+from .precheck import Sensitivities
 
 #: G13 and G23 of a material are freed separately when each is predicted within 30 % (1
 #: std): determined to better than a factor 1.35 either way; otherwise one scale.

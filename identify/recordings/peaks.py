@@ -81,8 +81,8 @@ from scipy.special import gammaln
 
 from fem.errors import MeasurementError
 from fem.io import write_text
-from fem.solver.threads import one_blas_thread
 from fem.plotting import new_figure, save_figure
+from fem.solver.threads import one_blas_thread
 
 from . import frf as frf_module
 from .frf import AveragedFRF, Rejection, correct_for_window

@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from fem.model import SpecimenModel
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import ratio_from_loss
-from fem.model import SpecimenModel
 
 from ..measurements import Measurements, parse_measurements
 

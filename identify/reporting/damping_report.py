@@ -5,21 +5,20 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from typing import TYPE_CHECKING
-
+from fem.laminates.material import LOSS_FACTORS
 from fem.numbers import finite_or_none
 from fem.solver.damping import loss_from_ratio, loss_slope
-from fem.laminates.material import LOSS_FACTORS
 
 if TYPE_CHECKING:
     from ..fitting.damping import DampingResult
 
 
-def material_entries(damping: "DampingResult", model) -> dict[str, dict]:
+def material_entries(damping: DampingResult, model) -> dict[str, dict]:
     """Material name -> {eta_E1: value, ..., "std": {eta_E1: std, ...}, "flags": {...}}:
     the identified loss factors (a shared ``eta`` under each of the three keys) and the
     known ones the spec gives (no std).  Not identifiable: value and std null."""
@@ -42,7 +41,7 @@ def material_entries(damping: "DampingResult", model) -> dict[str, dict]:
     return out
 
 
-def merge_into(document: dict, damping: "DampingResult | None", model) -> dict:
+def merge_into(document: dict, damping: DampingResult | None, model) -> dict:
     """The fit JSON with the loss factors added under ``"materials"`` and the
     ``"damping"`` block (null when no damping was identified)."""
     document["damping"] = None if damping is None else damping.to_dict()
@@ -57,7 +56,7 @@ def merge_into(document: dict, damping: "DampingResult | None", model) -> dict:
     return document
 
 
-def parameter_rows(damping: "DampingResult") -> pd.DataFrame:
+def parameter_rows(damping: DampingResult) -> pd.DataFrame:
     """parameters.csv rows of the identified loss factors (blank value and std when not
     identifiable)."""
     rows = []
@@ -71,7 +70,7 @@ def parameter_rows(damping: "DampingResult") -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def text_section(damping: "DampingResult") -> list[str]:
+def text_section(damping: DampingResult) -> list[str]:
     """The text report's damping section."""
     lines = ["", f"== damping: {damping.status} ({damping.method.replace('_', ' ')}) ==", f"   {damping.message}",
              f"  damped modes used      {len(damping.residuals)}",
@@ -94,7 +93,7 @@ def text_section(damping: "DampingResult") -> list[str]:
     return lines
 
 
-def plot_damping(damping: "DampingResult", path: Path) -> Path:
+def plot_damping(damping: DampingResult, path: Path) -> Path:
     """Measured (error bars: 1 std) and model modal loss factors per configuration."""
     from fem.plotting import new_figure, save_figure
 

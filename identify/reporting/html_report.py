@@ -8,11 +8,12 @@ import base64
 import hashlib
 import html
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from fem.io import tool_version
+
 from .rounding import status_line
 
 if TYPE_CHECKING:  # annotations only: a data frame is handed in
@@ -60,7 +61,7 @@ def provenance(title: str, specimen: str, spec: str, measurements: str | None) -
         if path:
             digest = file_digest(path)
             rows[name] = f"{path}" + (f" (SHA-256 {digest})" if digest else "")
-    rows["date"] = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+    rows["date"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     rows["tool"] = f"layer-id {tool_version()} (Python {sys.version.split()[0]})"
     rows["command"] = " ".join(Path(sys.argv[0]).name.split() + sys.argv[1:]) if sys.argv else ""
     return rows

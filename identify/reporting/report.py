@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import html
 import math
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -14,14 +14,13 @@ import pandas as pd
 from fem.io import report_folder, to_json, write_text
 from fem.numbers import finite_or_none
 
-from . import damping_report
-from .html_report import blank_missing
 from ..engine.parameters import UNITS, display, json_key
-from .rounding import percent, status_line, with_std
-
+from . import damping_report
 from . import html_report as h
+from .html_report import blank_missing
 from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
 from .residuals import before_after_table, fit_residuals
+from .rounding import percent, status_line, with_std
 
 
 def parameter_table(result) -> pd.DataFrame:

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..measurements import Measurements
 from ..engine.objective import solving_model
 from ..engine.peak_assignment import peak_table
+from ..measurements import Measurements
 
 
 def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:

@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 from designer.cli import main
-from fem.io import REPORT_MARK
 from designer.progress import Bar, Progress
+from fem.io import REPORT_MARK
 
 from .conftest import PAPER_TOML
 

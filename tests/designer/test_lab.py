@@ -8,8 +8,8 @@ import pytest
 from designer.candidates import candidates
 from designer.check import check
 from designer.cli import main
-from designer.search.mirror import is_mirror_symmetric, mirror_key, set_key
 from designer.problem import Problem
+from designer.search.mirror import is_mirror_symmetric, mirror_key, set_key
 from designer.search.ranking import recommend
 from fem.errors import DesignError
 from fem.limits import DEFAULT_MASS_RATIO, DEFAULT_THICKNESS_RATIO

@@ -7,8 +7,8 @@ import pytest
 from designer.candidates import plate_configuration, with_plate_thickness
 from designer.scores.design import Design
 from designer.scores.poisson import poisson_plate
-from designer.search.refine import refine, thickness_range
 from designer.search.ranking import ORIGINAL
+from designer.search.refine import refine, thickness_range
 from fem.laminates.laminate import Layer
 from fem.laminates.material import Material
 from fem.model import ModelOptions, SpecimenModel

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from designer.check import check
-from designer.scores.design import Design
 from designer.problem import Problem, solve_points
+from designer.scores.design import Design
 from designer.scores.prior import NU_MARGIN, latin_hypercube, physical
 from designer.search.ranking import recommend
 from fem.spec import parse_spec

@@ -8,8 +8,8 @@ import pytest
 from designer.candidates import candidates
 from designer.check import check
 from designer.problem import Problem
-from designer.search.relaxation import information_loss
 from designer.search.ranking import ORIGINAL, recommend, stacked_rows
+from designer.search.relaxation import information_loss
 from designer.sweep import sweep
 from fem.errors import DesignError
 from fem.model import SpecimenModel

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.solver.attachments import point_operators
 from fem.model import SpecimenModel
+from fem.solver.attachments import point_operators
 from fem.spec import parse_spec
 
 FOLDER = Path(__file__).parent.parent / "data" / "solid3d"

@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from fem.solver import mesh as mesh_module
-from fem.solver.attachments import PointMass, Suspension
 from fem.errors import SpecError
 from fem.model import ModelOptions, SpecimenModel
+from fem.solver import mesh as mesh_module
+from fem.solver.attachments import PointMass, Suspension
 from fem.specimen import Parameter
 
 OPTIONS = ModelOptions(modes=6, divisions=8)

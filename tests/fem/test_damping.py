@@ -7,9 +7,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from fem.errors import SpecError
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import first_order_loss_factors, loss_columns
-from fem.errors import SpecError
 from fem.spec import parse_spec
 from identify.examples import COATED_PLATE
 

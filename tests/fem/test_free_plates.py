@@ -5,10 +5,10 @@ import pytest
 
 from fem.laminates.laminate import Laminate, Layer
 from fem.laminates.material import Material
-from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, plate_frequency_parameter, solve_laminate
+from fem.solver.mesh import PlateMesh
 from fem.specimen import Parameter
-from tests.conftest import FREE_PLATES, PAPER, GPA
+from tests.conftest import FREE_PLATES, GPA, PAPER
 
 
 def iso(E, nu, rho, name="iso"):

@@ -21,8 +21,8 @@ from fem.laminates.layerwise import (
     unit_matrices,
 )
 from fem.laminates.material import Material
-from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, solve_laminate
+from fem.solver.mesh import PlateMesh
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from tests.fem.test_layerwise_sensitivity import (

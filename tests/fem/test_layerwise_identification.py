@@ -11,9 +11,9 @@ import pytest
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.diagnose import diagnose
+from identify.engine.uncertainty import WEAK_REL_STD
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
-from identify.engine.uncertainty import WEAK_REL_STD
 from tests.fem import solid3d
 
 pytestmark = pytest.mark.skipif(not solid3d.available("foam_sandwich"),

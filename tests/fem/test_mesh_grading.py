@@ -14,9 +14,9 @@ import pytest
 
 from fem import load_spec
 from fem.elements import HermitePlate
+from fem.model import solve_laminate
 from fem.solver.assembly import unit_matrices
 from fem.solver.attachments import point_operators
-from fem.model import solve_laminate
 from fem.solver.mesh import PlateMesh, _spacing
 from fem.solver.mode_shapes import deflection_operator
 from identify.examples import COATED_PLATE

@@ -3,8 +3,8 @@ not depend on the mesh or the plate theory, and patterns parsed from a lab's lab
 import numpy as np
 import pytest
 
-from fem.solver.mode_shapes import ORDER, _beta, _gauss, affinity, beam_functions, label_of, pattern
 from fem.model import ModelOptions, SpecimenModel
+from fem.solver.mode_shapes import ORDER, _beta, _gauss, affinity, beam_functions, label_of, pattern
 
 
 def test_beam_functions_are_the_free_free_modes():

@@ -4,8 +4,8 @@ whose mass and position are parameters too; and the screens' reach on a long spr
 import numpy as np
 import pytest
 
-from fem.solver.reduced_basis import Reanalysis
 from fem.solver.attachments import PointMass
+from fem.solver.reduced_basis import Reanalysis
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 

@@ -7,12 +7,12 @@ import pytest
 import scipy.linalg as sla
 from scipy.optimize import brentq
 
-from fem.solver.assembly import unit_matrices
 from fem.elements import ShearDifferencePlate
 from fem.laminates.laminate import Laminate, Layer
 from fem.laminates.material import Material
-from fem.solver.mesh import PlateMesh
 from fem.model import ModelOptions, SpecimenModel, solve_laminate
+from fem.solver.assembly import unit_matrices
+from fem.solver.mesh import PlateMesh
 from tests.conftest import FREE_PLATES
 
 

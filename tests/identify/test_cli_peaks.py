@@ -4,10 +4,10 @@ import json
 import numpy as np
 import pandas as pd
 
+from fem.spec import load_spec
 from identify.cli import main
 from identify.examples import COATED_PLATE
 from identify.measurements import load_measurements
-from fem.spec import load_spec
 from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 #: Three modes of a plate-like spectrum, a node of the third near the sensor.

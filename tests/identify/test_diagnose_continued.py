@@ -5,9 +5,9 @@ import importlib
 import tomllib
 
 from fem.spec import parse_spec
+from identify.engine.updating import FitOptions
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
-from identify.engine.updating import FitOptions
 
 from ..walk import SPEC
 

@@ -8,14 +8,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fem.solver.attachments import PointMass, Suspension
 from fem.effects import effect
 from fem.errors import LayerIdError
+from fem.solver.attachments import PointMass, Suspension
 from fem.specimen import Parameter
-from identify.engine import ties
+from identify import fit
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import diagnose
-from identify import fit
+from identify.engine import ties
 from identify.fitting.driver import add_effect, prepare_effect
 from identify.fitting.plausibility import MAX_MASS_SHARE, SENSOR_MASS_MAX, implausible, plate_mass
 from identify.recordings.synthetic import synthetic_measurements

@@ -9,11 +9,11 @@ import pytest
 
 from fem.solver.attachments import PointMass
 from fem.solver.sensitivity import condition_verdict
-from identify.diagnosis.compare import compare
 from identify.diagnosis import diagnose as diagnose_module
+from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
-from identify.fitting.driver import AddedEffect, add_effect, point_mass_hints
 from identify.engine.result import FitStatus
+from identify.fitting.driver import AddedEffect, add_effect, point_mass_hints
 from identify.fitting.precheck import Precheck
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model

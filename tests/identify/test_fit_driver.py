@@ -6,8 +6,8 @@ from fem.errors import LayerIdError
 from fem.spec import load_spec
 from fem.specimen import Parameter
 from identify import FitOptions, fit, load_measurements
-from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
 from identify.engine.stopping import Stop
+from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
 
 STEEL = [Parameter(kind, "steel") for kind in ("E1", "E2", "G12")]
 

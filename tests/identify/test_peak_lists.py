@@ -4,11 +4,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from identify.fitting.driver import fit
 from identify.engine.matching import GATE, align, match
+from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
-from identify.reporting.report import fit_residuals
 from identify.recordings.synthetic import synthetic_measurements
+from identify.reporting.report import fit_residuals
 
 #: Peaks a recording adds: a suspension mode below the first elastic one (original), a
 #: peak between modes 3 and 4 (brass_bottom: 458.6 / 644.9 Hz), one above the eighth mode

@@ -262,8 +262,15 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
     cuts, every cut half-way between two picked peaks, each fitted a quarter of its width
     beyond both cuts (beyond the band's edges too, down to the first line above 0 Hz),
     orders within their bounds."""
-    from identify.recordings.peaks import (MAX_ORDER, MIN_ORDER, PICK_DB, SUB_BAND_OVERLAP, WEAK_DB, picked_peaks,
-                                           sub_bands)
+    from identify.recordings.peaks import (
+        MAX_ORDER,
+        MIN_ORDER,
+        PICK_DB,
+        SUB_BAND_OVERLAP,
+        WEAK_DB,
+        picked_peaks,
+        sub_bands,
+    )
     from identify.recordings.tap_quirks import real_like_plate
 
     hits = Session(real_like_plate(), n_hits=2, seed=1, options=TapOptions(pulse_ms=0.35, noise_rel=3e-5)).hits()

@@ -9,8 +9,14 @@ import pytest
 
 from fem.laminates.material import Material
 from fem.specimen import Parameter
-from identify.fitting.driver import (SHEAR_STARTS, TRANSVERSELY_ISOTROPIC, UD_NU23, _class_shear, _shear_starts,
-                                     _shear_values)
+from identify.fitting.driver import (
+    SHEAR_STARTS,
+    TRANSVERSELY_ISOTROPIC,
+    UD_NU23,
+    _class_shear,
+    _shear_starts,
+    _shear_values,
+)
 
 CARBON = Material("carbon_ud", 140e9, 9e9, 5e9, 0.3, 1600.0)          # E1 / E2 = 15.6: a unidirectional ply
 FABRIC = Material("carbon_fabric", 60e9, 58e9, 4.5e9, 0.05, 1500.0)   # a balanced weave

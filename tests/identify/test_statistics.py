@@ -6,13 +6,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fem.laminates.laminate import Layer
 from fem.laminates.material import Material
 from fem.specimen import Configuration, Parameter, Specimen
-from fem.laminates.laminate import Layer
-from identify.fitting.patterns import ScoreTest
-from identify.measurements import Measurements
 from identify.engine.statistics import CHI2_WARNING, FitStatistics
 from identify.engine.uncertainty import WEAK_REL_STD, parameter_flags
+from identify.fitting.patterns import ScoreTest
+from identify.measurements import Measurements
 
 
 def measurements(frequencies, std=None) -> Measurements:

@@ -5,10 +5,10 @@ import pytest
 from fem.errors import MeasurementError
 from fem.model import ModelOptions, SpecimenModel
 from fem.specimen import Parameter
-from identify.fitting.driver import fit
 from identify.engine.pairing import ModePairing, mac_matrix
-from identify.recordings.synthetic import synthetic_measurements
 from identify.engine.updating import FitOptions
+from identify.fitting.driver import fit
+from identify.recordings.synthetic import synthetic_measurements
 
 
 @pytest.fixture(scope="module")

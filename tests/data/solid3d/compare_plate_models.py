@@ -34,8 +34,8 @@ from scipy.optimize import linear_sum_assignment
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[2]))
 
-from fem.solver.attachments import point_operators  # noqa: E402
 from fem.model import ModelOptions, SpecimenModel  # noqa: E402
+from fem.solver.attachments import point_operators  # noqa: E402
 from fem.spec import parse_spec  # noqa: E402
 
 MODELS = {
