@@ -35,14 +35,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-import pandas as pd
-
 from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
 
-from ..engine.parameters import UNITS, display, json_key
+from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions
@@ -74,8 +72,7 @@ from ..fitting.driver import (
 from ..fitting.plausibility import plausible_first
 from ..fitting.precheck import SINGULAR_GROWTH, Precheck
 from ..measurements import Measurements
-from ..reporting import html_report as h
-from ..reporting.rounding import percent, status_line, with_std
+from ..reporting.diagnosis_report import diagnosis_text, diagnosis_view
 from .compare import Comparison, compare
 
 #: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
@@ -175,25 +172,28 @@ class Candidate:
     def effect_std(self) -> dict[str, float | None]:
         return _values(self.fit, self.added.added, std=True) if self.fit else {}
 
+    @property
+    def status(self) -> str:
+        """The refit's status word, or why there is none (``not_applicable``,
+        ``not_identifiable``, ``not_refitted``: pruned, or ``failed``)."""
+        if self.fit is not None:
+            return self.fit.status.value
+        if not self.added.applicable:
+            return "not_applicable"
+        if self.precheck is not None and self.precheck.singular:
+            return "not_identifiable"
+        return "not_refitted" if self.added.pruned else "failed"
+
     def to_dict(self) -> dict:
         check = self.precheck
         return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
                 "bic_gain": finite_or_none(self.gain), "gain_over_c": finite_or_none(self.scaled_gain),
-                "status": self.fit.status.value if self.fit else _not_fitted(self),
+                "status": self.status,
                 "parameters": self.effect_values(), "std": self.effect_std(),
                 "plausible": self.plausible, "implausible": list(self.added.implausible),
                 "condition_number": finite_or_none(check.condition_number) if check else None,
                 "seconds": finite_or_none(self.added.seconds),
                 "note": " ".join(x for x in (self.note, self.error) if x)}
-
-
-def _not_fitted(c: Candidate) -> str:
-    """Why a candidate has no refit: its status word."""
-    if not c.added.applicable:
-        return "not_applicable"
-    if c.precheck is not None and c.precheck.singular:
-        return "not_identifiable"
-    return "not_refitted" if c.added.pruned else "failed"
 
 
 def _key(p) -> str:
@@ -311,67 +311,12 @@ class Diagnosis:
         }
 
     def _repr_html_(self) -> str:
-        """The notebook view: the verdict, every round's candidates and the comparison's
-        tables, drawn by the HTML report's code."""
-        rounds = [(f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
-                   h.table(pd.DataFrame([{"effect": c.kind, "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
-                                          "BIC gain": finite_or_none(c.gain),
-                                          "status": c.fit.status.value if c.fit else _not_fitted(c),
-                                          "parameters": ", ".join(f"{k} = {v:.4g}"
-                                                                  for k, v in c.effect_values().items()),
-                                          "note": " ".join(x for x in (c.note, c.error) if x)}
-                                         for c in s.candidates]), "{:.4g}") + h.paragraph(f"-> {s.reason}"))
-                  for s in self.steps]
-        good = self.explained
-        return h.view("Diagnosis", ("explained" if good else "not explained", self.verdict, good),
-                      rounds + self.comparison.sections())
+        """The notebook view (``reporting.diagnosis_report.diagnosis_view``)."""
+        return diagnosis_view(self)
 
     def report(self) -> str:
-        base = self.baseline.statistics
-        lines = ["== diagnosis ==", "", self.verdict, "",
-                 f"baseline: RMS relative error {100 * self.baseline.rms_rel_error:.4f} %, "
-                 f"reduced chi^2 {base.reduced_chi2:.3g}"]
-        if self.at_noise_level:
-            lines += ["no effect was refitted: the residual patterns below (a score test) show what each would "
-                      "explain"]
-        for step in self.steps:
-            start = " + ".join(step.selected_before) or "the baseline"
-            took = f", {step.seconds:.0f} s" if math.isfinite(step.seconds) else ""
-            lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %{took})",
-                      f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s} {'refit s':>7s}  "
-                      "status / parameters"]
-            for c in step.candidates:
-                values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
-                gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
-                status = c.fit.status.value if c.fit else _not_fitted(c).replace("_", " ")
-                mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
-                lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain} {c.added.seconds:7.0f}  {status}  "
-                             f"{values}{mark}".rstrip())
-                if not c.fit:
-                    lines.append(f"  {'':17s} {c.error}")
-            if step.skipped:
-                refined = {r for k in step.skipped for r in effect(k).refines}
-                lines.append(f"  not tried: {', '.join(step.skipped)} (refines {' or '.join(sorted(refined))}, "
-                             "which did not pay)")
-            lines.append(f"  -> {step.reason}")
-        final = self.final
-        if final is not None:
-            lines += ["", f"refit with {' + '.join(c.kind for c in self.selected)}",
-                      f"  {status_line(final.status.value, final.message)}",
-                      f"  RMS relative error {percent(final.rms_rel_error, 3)}"]
-            added = [p for p in final.parameters if p not in self.baseline.parameters]
-            for p in added:
-                shown = with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])
-                lines.append(f"  {p.name:40s} {shown}")
-            notes = [text for _, text in final.effect_notes]
-            lines += [f"  - {text}" for text in notes]
-        if self.above_start:
-            lines += ["", "refits that ended above the fit they were added to (where its effect vanishes each is "
-                          "that fit, so the refit failed: a start, or on a peak list a matching made for the fit "
-                          f"without the effect): {', '.join(self.above_start)}"]
-        if math.isfinite(self.seconds):
-            lines += ["", f"({self.seconds:.1f} s)"]
-        return "\n".join(lines) + "\n\n" + self.comparison.report()
+        """The text report (``reporting.diagnosis_report.diagnosis_text``)."""
+        return diagnosis_text(self)
 
 
 
