@@ -78,15 +78,20 @@ def test_peak_list_residual_rows_are_null_not_nan(files):
                                              ("peaks", "--report"), ("kHz", "--json")])
 @pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_compare(files, tmp_path, measured, output):
+    """A valid input is compared, whatever its fit's status: exit 0 or 1, never the
+    error exit 2 (the kHz file fits the wrong plate and says so, it is not an error)."""
     argv = ["compare", files.spec, files.measurements[measured]] + ([output] if output == "--json" else [])
-    walk(identify_layers, argv, tmp_path, report=output == "--report")
+    result = walk(identify_layers, argv, tmp_path, report=output == "--report")
+    assert result.code in (0, 1), result.err[-1500:]
 
 
 @pytest.mark.parametrize("measured,output", [("peaks", "--report"), ("labelled", "--json")])
 def test_diagnose(files, tmp_path, measured, output):
+    """A valid input is diagnosed: exit 0 or 1, never the error exit 2."""
     argv = ["diagnose", files.spec, files.measurements[measured], "--effects", "rotary_inertia,adhesive"]
     argv += ["--json"] if output == "--json" else []
-    walk(identify_layers, argv, tmp_path, report=output == "--report")
+    result = walk(identify_layers, argv, tmp_path, report=output == "--report")
+    assert result.code in (0, 1), result.err[-1500:]
 
 
 @pytest.mark.parametrize("output", ["text", "--json", "--report"])
