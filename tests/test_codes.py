@@ -57,3 +57,28 @@ def test_the_codes_render_as_before(paper_specimen):
     for value in (0.3, 0.995 * limit):
         flagged = any(f.startswith("at bound") for f in parameter_flags(nu12, value, 0.01, paper_specimen))
         assert at_limit(nu12, value, paper_specimen) == flagged == (value > 0.9 * limit)
+
+
+#: Names under which the project keeps text meant for people.
+MESSAGES = ("w", "warning", "warnings", "message", "note", "notes", "flag", "flags", "reason", "error")
+
+
+def test_no_message_is_searched_for_a_phrase():
+    """No module outside ``identify/reporting`` tests a warning, note, message, flag or
+    reason for a phrase (``"..." in w``, ``w.startswith("...")``): what a decision needs
+    is a field or a code of the result, so that rewording a message changes no answer."""
+    def message(node) -> bool:
+        name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+        return name in MESSAGES
+
+    found = []
+    for path, tree in _modules():
+        for node in ast.walk(tree):
+            contains = (isinstance(node, ast.Compare) and _text(node.left)
+                        and any(isinstance(op, (ast.In, ast.NotIn)) for op in node.ops)
+                        and any(message(c) for c in node.comparators))
+            prefixed = (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                        and node.func.attr in ("startswith", "endswith") and message(node.func.value))
+            if contains or prefixed:
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert found == []
