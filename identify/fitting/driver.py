@@ -587,6 +587,34 @@ def _describe_start(start) -> str:
     return f"G13 = {f13:.3g} G12, G23 = {f23:.3g} G12"
 
 
+@dataclass(frozen=True)
+class Refit:
+    """What the refits of one effect on top of ``state`` share: the data they fit
+    (``measurements``), the spec's specimen their estimates are judged against
+    (``nominal``), the iteration ``options``, the pairing check at the solution
+    (``settle``: True in full, "quick" ``repair``, False none), which effect each
+    parameter belongs to (``effect_of``) and where independent refits may run side by
+    side (``pool``).  Each refit starts from the state's peak matching."""
+
+    state: FitResult
+    measurements: Measurements
+    nominal: Specimen
+    options: FitOptions
+    settle: bool | str
+    effect_of: dict
+    pool: Executor | None = None
+
+    def job(self, model: SpecimenModel, parameters, pairings: dict) -> dict:
+        """The arguments of one refit of ``model`` with ``parameters`` free, its modes
+        followed from ``pairings`` (``_fitted``: it may run in a worker process)."""
+        return dict(model=model, measurements=self.measurements, parameters=list(parameters), options=self.options,
+                    effect_of=self.effect_of, like=self.state, explain=False, settle=self.settle, pairings=pairings)
+
+    def fit(self, model: SpecimenModel, parameters, pairings: dict) -> FitResult:
+        """One refit (``job``), here."""
+        return _fitted(self.job(model, parameters, pairings))
+
+
 def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(), *,
                settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
                skip_singular: bool = True, options: FitOptions | None = None,
@@ -625,25 +653,21 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
                                  f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
     base = list(ready.base)
     effect_of = {**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
+    refit = Refit(state, measurements, nominal, options, settle, effect_of, pool)
     if progress:
         progress(f"fitting with {kind}")
     try:
         if kind == "point_mass":
-            result, rivals = _point_mass(state, measurements, hints, base + shear_moduli_in(new), effect_of, settle,
-                                         progress, options, pool)
+            result, rivals = _point_mass(refit, hints, base + shear_moduli_in(new), progress)
             notes += rivals
         else:
-            result = fit_layers(ready.model, measurements, base + new, options, effect_of=effect_of, like=state,
-                                explain=False, settle=settle, pairings=ready.pairings or state.pairings)
+            result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
             if effect(kind).frees_shear:
-                result, new, restarted = _restarted(state, ready, result, new, measurements, base, effect_of, settle,
-                                                    options)
+                result, new, restarted = _restarted(refit, ready, result, new, base)
                 notes += restarted
-            result, restarted = _other_starts(state, ready, result, measurements, base + new, effect_of, settle,
-                                              options)
+            result, restarted = _other_starts(refit, ready, result, base + new)
             notes += restarted
-        result, new, held, ran_out = _held_shear(state, ready, result, new, measurements, nominal, base, effect_of,
-                                                 settle, options)
+        result, new, held, ran_out = _held_shear(refit, ready, result, new, base)
         notes += held
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
@@ -686,11 +710,12 @@ def ended_worse(result: FitResult, state: FitResult) -> bool:
     return not result.statistics.sum_squares <= state.statistics.sum_squares + slack
 
 
-def _restarted(state, ready: Prepared, result, new, measurements, base, effect_of, settle, options):
+def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> tuple[FitResult, list, list]:
     """A transverse-shear refit that ended worse than ``state`` is a failed start, not a
     result: the other ``SHEAR_STARTS`` and the thin-plate limit (``vanishing_shear_start``,
     from where every step can only lower the misfit) are tried, the lowest misfit kept.
     Returns (result, parameters, notes)."""
+    state, measurements, effect_of = refit.state, refit.measurements, refit.effect_of
     shear = shear_moduli_in(new)
     if not shear or not ended_worse(result, state):
         return result, new, []
@@ -702,12 +727,11 @@ def _restarted(state, ready: Prepared, result, new, measurements, base, effect_o
             yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
         model, factor = vanishing_shear_start(state, ready.model, shear, measurements, parameters, effect_of)
         model, reached = shear_continuation(state, model, shear, factor, measurements, parameters, effect_of,
-                                            options)
+                                            refit.options)
         yield model, (f"the thin-plate limit (G13 = G23 = {factor:.3g} G12), the shear moduli lowered step by step "
                       f"while the misfit fell (to {reached:.3g} G12)")
 
-    best, where, count = _first_not_worse(state, ready, result, starts(), measurements, parameters, effect_of,
-                                          settle, options)
+    best, where, count = _first_not_worse(refit, ready, result, starts(), parameters)
     note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
             f"restarted {count} time(s), kept {where or 'the screened start'}")
     return best, new, [note]
@@ -766,31 +790,30 @@ def shear_continuation(state: FitResult, model: SpecimenModel, shear, factor: fl
     return current.model, factor
 
 
-def _first_not_worse(state, ready: Prepared, result, starts, measurements, parameters, effect_of, settle, options):
+def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, parameters):
     """``result`` (a failed refit) refitted from each of ``starts`` ((model, description)
     pairs) in turn until one ends no worse than ``state``; returns (the lowest misfit, its
     start's description or "" for ``result``, the number of refits)."""
+    state = refit.state
     tried = [(result, "")]
     for model, where in starts:
-        tried.append((fit_layers(model, measurements, parameters, options, effect_of=effect_of, like=state,
-                                 explain=False, settle=settle, pairings=ready.pairings or state.pairings), where))
+        tried.append((refit.fit(model, parameters, ready.pairings or state.pairings), where))
         if not ended_worse(tried[-1][0], state):
             break
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
     return best, where, len(tried) - 1
 
 
-def _other_starts(state, ready: Prepared, result, measurements, parameters, effect_of, settle, options):
+def _other_starts(refit: Refit, ready: Prepared, result: FitResult, parameters) -> tuple[FitResult, list]:
     """A refit that ended worse than ``state`` (``ended_worse``) is refitted from the effect's
     other starts (``Prepared.others``) until one is not; the lowest misfit kept.  blind19
     (a hybrid whose sensor was not yet placed): the orientation from -3 deg diverged to
     4.6 % RMS, where from +3 deg it had reached 0.29 % (study run 5).  Returns (result,
     notes)."""
-    if not ready.others or not ended_worse(result, state):
+    if not ready.others or not ended_worse(result, refit.state):
         return result, []
     starts = ((m, _described(ready.added, m)) for m in ready.others)
-    best, where, count = _first_not_worse(state, ready, result, starts, measurements, parameters, effect_of, settle,
-                                          options)
+    best, where, count = _first_not_worse(refit, ready, result, starts, parameters)
     if not where:
         return result, [f"the refit ended worse than without {ready.kind}; from {count} other start(s) too"]
     return best, [f"the refit from the screened start ended worse than without {ready.kind} (RMS "
@@ -798,7 +821,7 @@ def _other_starts(state, ready: Prepared, result, measurements, parameters, effe
                   f"RMS {100 * best.statistics.rms_rel_error:.3g} %"]
 
 
-def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base, effect_of, settle, options):
+def _held_shear(refit: Refit, ready: Prepared, result: FitResult, new, base) -> tuple[FitResult, list, list, tuple]:
     """Freed shear moduli that ended implausible (at a bound, or beyond
     ``plausibility.MAX_SHEAR_RATIO`` x G12) are ones the data do not see (a thin skin's
     G13/G23 in a sandwich): they are held at the spec's values or, where it gives none, at
@@ -815,6 +838,7 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
     ``state`` while the free refit does not is undone: the data do see those moduli, and
     the free, implausible estimate is kept as a sign (cases in docs/diagnosis.md).
     Returns (result, parameters, notes, the plain shear moduli held)."""
+    state, nominal = refit.state, refit.nominal
     first_hz = float(state.measurements.table["frequency_hz"].min())
     held: list[str] = []
     removed: list[Parameter] = []
@@ -831,8 +855,7 @@ def _held_shear(state, ready: Prepared, result, new, measurements, nominal, base
         specimen = result.model.specimen
         for material in wandered:
             specimen = specimen.with_materials([_class_shear(specimen.materials[material], nominal.materials[material])])
-        result = fit_layers(result.model.with_specimen(specimen), measurements, base + new, options,
-                            effect_of=effect_of, like=state, explain=False, settle=settle, pairings=result.pairings)
+        result = refit.fit(result.model.with_specimen(specimen), base + new, result.pairings)
     if not held:
         return result, new, [], ()
     if ended_worse(result, state) and not ended_worse(free, state):
@@ -960,16 +983,16 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
     return tuple(sorted(starts, key=lambda start: -share(start))[:POINT_MASS_STARTS])
 
 
-def _point_mass(state: FitResult, measurements: Measurements, hints, base, effect_of, settle, progress, options,
-                pool: Executor | None = None):
+def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
     """The point mass from several starts: each ranked by the misfit one linearised
     Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``; a bare peak
     list, which has no mode numbers to linearise with, keeps the scan's order), the best
     ``POINT_MASS_CONTINUED`` at distinct positions fitted to convergence (rivals need
     finished fits), and the best start of the screen over the whole plate
     (``point_mass_screen``) where it is at another position; the lowest misfit kept.  With
-    a ``pool`` the starts' refits run side by side (they are independent).  Returns (the
-    best fit, notes on rivals that fit about as well)."""
+    the refit's pool the starts' refits run side by side (they are independent).  Returns
+    (the best fit, notes on rivals that fit about as well)."""
+    state, measurements, pool = refit.state, refit.measurements, refit.pool
     starts = tuple(hints) if hints else point_mass_starts(state.model, ())
     ranked = []
     for hint in starts:
@@ -1005,8 +1028,7 @@ def _point_mass(state: FitResult, measurements: Measurements, hints, base, effec
                  f"{len(chosen)} fitted")
 
     def job(on) -> dict:
-        return dict(model=on.model, measurements=measurements, parameters=base + list(on.free), options=options,
-                    effect_of=effect_of, like=state, explain=False, settle=settle, pairings=state.pairings)
+        return refit.job(on.model, base + list(on.free), state.pairings)
 
     jobs = [job(on) for on in chosen]
     trials = list(zip(pool.map(_fitted, jobs) if pool is not None else map(_fitted, jobs), chosen, strict=True))

@@ -12,7 +12,7 @@ from identify import fit
 from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.diagnose import Candidate
 from identify.engine.updating import FitOptions
-from identify.fitting.driver import AddedEffect, _held_shear, prepare_effect
+from identify.fitting.driver import AddedEffect, Refit, _held_shear, prepare_effect
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
@@ -36,8 +36,8 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
     g12 = state.model.value(Parameter("G12", "steel"))
     prepared = replace(prepared, model=prepared.model.with_values({steel[0]: 0.25 * g12, steel[1]: 0.25 * g12}))
     ran_out = replace(state, model=prepared.model.with_values({steel[0]: 100 * g12}))
-    result, new, notes, held = _held_shear(state, prepared, ran_out, list(prepared.added), data, model.specimen,
-                                           list(prepared.base), state.effect_of, "quick", FitOptions(max_iterations=20))
+    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
+    result, new, notes, held = _held_shear(refit, prepared, ran_out, list(prepared.added), list(prepared.base))
     assert held == steel
     assert not any(p.target == "steel" for p in new if p.kind in ("G13", "G23"))
     assert len(notes) == 1 and "steel" in notes[0] and "the ply class's relation" in notes[0]
