@@ -636,14 +636,14 @@ def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal:
     ready = prepared or prepare_effect(state, kind, hints)
     if isinstance(ready, AddedEffect):
         return replace(ready, seconds=time.perf_counter() - started)
-    added = _refit(state, ready, measurements, nominal, hints, settle, progress, skip_singular, options, prune_below,
-                   pool)
+    refit = Refit(state, measurements, nominal, options, settle, state.effect_of, pool)
+    added = _refit(refit, ready, hints, progress, skip_singular, prune_below)
     return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
 
 
-def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progress, skip_singular, options,
-           prune_below, pool=None) -> AddedEffect:
-    kind, new, check, notes = ready.kind, list(ready.added), ready.precheck, list(ready.notes)
+def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, prune_below) -> AddedEffect:
+    """``add_effect``'s refit of the prepared effect, unless it is singular or pruned."""
+    state, kind, new, check, notes = refit.state, ready.kind, list(ready.added), ready.precheck, list(ready.notes)
     if check.singular and skip_singular:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}")
     if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
@@ -652,8 +652,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
                                  f"(linearised{', residual scan' if kind == 'point_mass' else ''}), less than 1/"
                                  f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
     base = list(ready.base)
-    effect_of = {**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
-    refit = Refit(state, measurements, nominal, options, settle, effect_of, pool)
+    refit = replace(refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}})
     if progress:
         progress(f"fitting with {kind}")
     try:
@@ -672,7 +671,7 @@ def _refit(state, ready: Prepared, measurements, nominal, hints, settle, progres
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
-    reasons = implausible(new, result.specimen, nominal, first_hz, state.model.input_std)
+    reasons = implausible(new, result.specimen, refit.nominal, first_hz, state.model.input_std)
     notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
     return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
                        tuple(notes), reasons, held=ran_out)
