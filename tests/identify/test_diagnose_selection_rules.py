@@ -219,9 +219,10 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     """A single homogeneous plate (one configuration, one layer) has one shear group and
     no stretching layer: its layerwise theory is ``thick_plate`` itself (equal to
     round-off, ``tests/fem/test_layerwise.py``), so the selection's end does not refit it
-    in place of the single shear layer (a real-like spruce plate's diagnosis used to end
-    "thick_plate + point_mass + layerwise" at a BIC gain of -0.08).  The bundled example's
-    bonded configurations stack several materials: there it is another model."""
+    in place of the single shear layer.  The bundled example's bonded configurations stack
+    several materials: there it is another model.  (A single wood layer is not such a
+    plate: its rolling shear modulus G23 is below a tenth of G13, so the layerwise model
+    lets it stretch through its thickness, E3 = E2, which the single shear layer does not.)"""
     from fem.effects import effect
     from fem.spec import parse_spec
     from identify.diagnosis.diagnose import _layerwise_instead
