@@ -12,7 +12,7 @@ from fem.solver.attachments import PointMass
 from fem.specimen import Parameter
 from identify import fit
 from identify.engine.updating import FitOptions
-from identify.fitting.driver import _other_starts, add_effect, prepare_effect
+from identify.fitting.driver import Refit, _other_starts, add_effect, prepare_effect
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
@@ -70,11 +70,11 @@ def test_a_refit_that_ends_worse_than_its_state_is_refitted_from_the_other_start
     data, model, state = turned_core
     prepared = prepare_effect(state, "orientation")
     diverged = replace(state, statistics=replace(state.statistics, sum_squares=2 * state.statistics.sum_squares))
-    result, notes = _other_starts(state, prepared, diverged, data, list(prepared.base + prepared.added),
-                                  state.effect_of, "quick", FitOptions(max_iterations=20))
+    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
+    result, notes = _other_starts(refit, prepared, diverged, list(prepared.base + prepared.added))
     assert result.statistics.sum_squares <= state.statistics.sum_squares
     assert len(notes) == 1 and "refitted from layer1.angle = 3 deg" in notes[0]
-    kept, none = _other_starts(state, prepared, state, data, [], state.effect_of, "quick", FitOptions())
+    kept, none = _other_starts(replace(refit, options=FitOptions()), prepared, state, [])
     assert kept is state and none == []  # not worse: nothing refitted
 
 
