@@ -62,16 +62,15 @@ class RitzModes:
 
 @dataclass(frozen=True)
 class RitzSolution(LaminateSolution):
-    """A ``LaminateSolution`` whose modes are Ritz pairs (``RitzModes``): ``coordinates``
-    (r, m) in the basis, expanded to full shapes when read; ``projected``: the basis's
-    unit matrices, from which the modal energies (and so the sensitivities) follow."""
+    """A ``LaminateSolution`` whose modes are Ritz pairs (``RitzModes``: coordinates in
+    the basis, expanded to full shapes when read); ``projected``: the basis's unit
+    matrices, from which the modal energies (and so the sensitivities) follow."""
 
-    coordinates: np.ndarray | None = None
     projected: tuple[np.ndarray, np.ndarray] | None = None
 
     @cached_property
     def energies(self) -> ModalEnergies:
-        y = self.coordinates
+        y = self.modes.coordinates
         stiffness, mass = self.projected
         return ModalEnergies(np.einsum("ri,crs,si->ci", y, stiffness, y, optimize=True),
                              np.einsum("ri,crs,si->ci", y, mass, y, optimize=True))
@@ -163,7 +162,7 @@ class Reanalysis:
         eigenvalues, coordinates = eigenvalues[self._elastic], coordinates[:, self._elastic]
         return RitzSolution(specimen.laminate(self.configuration), base.units,
                             RitzModes(eigenvalues, self.basis, coordinates), base.inertia_terms, base.transverse_shear,
-                            specimen.attachments, stack, coordinates=coordinates, projected=(self.stiffness, self.mass))
+                            specimen.attachments, stack, projected=(self.stiffness, self.mass))
 
 
 def _weights(base: LaminateSolution, laminate, stack: LayerwiseLaminate | None) -> tuple[np.ndarray, np.ndarray]:

@@ -27,9 +27,7 @@ explained.
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import math
-import multiprocessing as mp
 import os
 import time
 from collections.abc import Callable
@@ -68,6 +66,7 @@ from ..fitting.driver import (
     shear_moduli_in,
     spec_start,
     with_determined_shear,
+    worker_pool,
 )
 from ..fitting.plausibility import plausible_first
 from ..fitting.precheck import SINGULAR_GROWTH, Precheck
@@ -98,8 +97,9 @@ FINAL_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS, stall_chi2=0.01)
 COMPLETE_MARGIN = 6.0
 #: A refinement (``Effect.refines``) is tried in a round only when what it refines paid for
 #: itself in it (or is selected already), or, when nothing paid in the round, what it
-#: refines explained some misfit and the misfit is still this many times the scatter (reduced chi^2; 25: an RMS five times the
-#: scatter): the selection must not stop with the more complete theory untried.  On a
+#: refines explained some misfit and the misfit is still this many times the scatter
+#: (reduced chi^2; 25: an RMS five times the scatter): the selection must not stop with
+#: the more complete theory untried.  On a
 #: blind hybrid with a 0.25 mm, 1 GPa bond line (21 x the floor, reduced chi^2 742) every
 #: single-layer candidate stalled at 1.7-1.9 % (gain / c 3-8) and layerwise, the only
 #: model of the bond line's own shear, was never tried.
@@ -581,7 +581,7 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 if state is baseline else point_mass_hints(state)
             n_workers = _workers(workers, len(trying), baseline_seconds)
             if n_workers > 1 and pool is None:
-                pool = cf.ProcessPoolExecutor(max_workers=n_workers, mp_context=mp.get_context("spawn"))
+                pool = worker_pool(n_workers)
 
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
                 say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023

@@ -286,11 +286,18 @@ def independent_refits(workers: int | None, worth_it: bool):
     if n == 1:
         yield None
         return
-    pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
+    pool = worker_pool(n)
     try:
         yield pool
     finally:
         pool.shutdown()
+
+
+def worker_pool(n: int) -> cf.ProcessPoolExecutor:
+    """``n`` spawned worker processes for refits and candidates (the diagnosis's and
+    ``independent_refits``'); they import the main module, so a script that asks for them
+    needs the ``if __name__ == "__main__":`` guard."""
+    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
 
 
 def _fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], baseline: FitResult,
