@@ -47,7 +47,13 @@ def _model_and_measurements(args):
     model = _model(args)
     if args.measurements is None:
         _say(f"(no MEASUREMENTS given: using the bundled example {COATED_PLATE_MEASURED.name})")
-    return model, load_measurements(args.measurements or COATED_PLATE_MEASURED, model)
+    measurements = load_measurements(args.measurements or COATED_PLATE_MEASURED, model)
+    if args.shapes:
+        from .measured_shapes import load_shapes
+
+        measurements = load_shapes(args.shapes, model, measurements)
+        _say(f"{len(measurements.shapes.shapes)} measured mode shapes: peaks are paired by their shapes (MAC)")
+    return model, measurements
 
 
 def _progress(item) -> None:
@@ -112,7 +118,7 @@ def run_fit(args) -> int:
     else:
         _say(f"identifying {len(model.specimen.material_parameters())} parameters from {len(measurements)} "
              "frequencies")
-    pairs = ambiguous_pair_count(measurements.table)
+    pairs = ambiguous_pair_count(measurements.table, measurements.pinned)
     if pairs > MAX_REFITS:
         _say(f"{pairs} pairs of unlabelled modes lie within {100 * NEAR_MODES:g} % of each other: after the fit "
              f"converges, checking their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode "
@@ -208,6 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
         add_common_arguments(p)
         p.add_argument("measurements", nargs="?", help="measured frequencies (CSV); default: the bundled example's")
         p.add_argument("--report", metavar="DIR", help="write a report folder (text, JSON, CSV, plots)")
+        p.add_argument("--shapes", metavar="CSV",
+                       help="measured mode shapes (configuration, frequency_hz, x_mm, y_mm, amplitude[, amplitude_imag]): "
+                            "peaks are paired with model modes by MAC, and the report maps where the shapes disagree")
         p.set_defaults(run=run)
         if name == "fit":
             p.add_argument("--effect", action="append", metavar="KIND",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import csv
 import io
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,14 +34,43 @@ MAX_MODE = 60
 
 
 @dataclass(frozen=True)
+class ModeShape:
+    """One measured mode's shape: the deflection at points of the plate (roving hammer,
+    laser vibrometer), any common scale and sign.  ``xy`` [m] from the plate's corner at
+    the origin, x along its length; ``amplitude`` complex, one per point."""
+
+    configuration: str
+    frequency_hz: float
+    xy: np.ndarray
+    amplitude: np.ndarray
+
+
+@dataclass(frozen=True)
+class MeasuredShapes:
+    """The shapes measured for some peaks, each named by its peak's frequency."""
+
+    shapes: tuple[ModeShape, ...]
+    source: str = "<shapes>"
+
+    def of(self, configuration: str, frequency_hz: float) -> ModeShape | None:
+        """The shape measured at this peak (its frequency as the measurements hold it), or None."""
+        for shape in self.shapes:
+            if shape.configuration == configuration and abs(shape.frequency_hz - frequency_hz) <= 1e-9 * frequency_hz:
+                return shape
+        return None
+
+
+@dataclass(frozen=True)
 class Measurements:
     """A validated table: one row per measured frequency, sorted by configuration
     (spec order) and mode (peak lists: by frequency).  Columns: configuration, mode
     (``UNRANKED`` in a peak list), frequency_hz, std_hz (NaN when not given), label
-    (empty when not given), damping_ratio and damping_std (NaN when not given)."""
+    (empty when not given), damping_ratio and damping_std (NaN when not given); the
+    measured mode shapes of some rows, when given (``shapes``)."""
 
     table: pd.DataFrame
     source: str = "<measurements>"
+    shapes: MeasuredShapes | None = None
 
     @property
     def has_std(self) -> bool:
@@ -54,7 +83,7 @@ class Measurements:
 
     def rows(self, index) -> Measurements:
         """The measurements of these rows (positions), renumbered."""
-        return Measurements(self.table.iloc[list(index)].reset_index(drop=True), self.source)
+        return replace(self, table=self.table.iloc[list(index)].reset_index(drop=True))
 
     @property
     def configurations(self) -> list[str]:
@@ -65,6 +94,18 @@ class Measurements:
 
     def __len__(self) -> int:
         return len(self.table)
+
+    @property
+    def pinned(self) -> np.ndarray:
+        """Per row: its mode is pinned by a label or a measured shape, not by frequency alone."""
+        return np.array([bool(label) or shape is not None
+                         for label, shape in zip(self.table["label"], self.shapes_of(self.table))], dtype=bool)
+
+    def shapes_of(self, rows: pd.DataFrame) -> list[ModeShape | None]:
+        """The measured shape of each of these rows (None where there is none)."""
+        if self.shapes is None:
+            return [None] * len(rows)
+        return [self.shapes.of(c, f) for c, f in zip(rows["configuration"], rows["frequency_hz"])]
 
 
 def _fail(source: str, message: str) -> MeasurementError:
@@ -183,10 +224,11 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
     return Measurements(frame[columns], source)
 
 
-def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
-    """Read a measurement CSV and validate it against the model's configurations."""
+def read_table(path: str | Path, what: str) -> pd.DataFrame:
+    """A UTF-8 CSV file as a data frame (``#`` comments skipped), or a one-line error
+    naming the file (``what``: "measurement file", "shape file", ...)."""
     path = Path(path)
-    where = f"measurement file {str(path)!r}"
+    where = f"{what} {str(path)!r}"
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -200,10 +242,14 @@ def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
                                "UTF-8 CSV") from None
     _check_field_counts(text, where)
     try:
-        frame = pd.read_csv(io.StringIO(text), skipinitialspace=True, comment="#", index_col=False)
+        return pd.read_csv(io.StringIO(text), skipinitialspace=True, comment="#", index_col=False)
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise MeasurementError(f"{where} is not a readable CSV: {exc}") from None
-    return parse_measurements(frame, model, str(path))
+
+
+def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
+    """Read a measurement CSV and validate it against the model's configurations."""
+    return parse_measurements(read_table(path, "measurement file"), model, str(path))
 
 
 def _check_field_counts(text: str, where: str) -> None:
@@ -212,7 +258,7 @@ def _check_field_counts(text: str, where: str) -> None:
     rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), 1)
             if row and not row[0].lstrip().startswith("#")]
     if not rows:
-        raise MeasurementError(f"{where} is empty: give a header line and one row per measured frequency")
+        raise MeasurementError(f"{where} is empty: give a header line and one row per measured value")
     width = len(rows[0][1])
     for n, row in rows[1:]:
         if len(row) > width:

@@ -54,29 +54,31 @@ MAX_REFIT_ITERATIONS = 30
 SETTLE_ROUNDS = 4
 
 
-def _adjacent_unlabelled(table) -> list[tuple[int, int, float, bool]]:
+def _adjacent_unlabelled(table, pinned=None) -> list[tuple[int, int, float, bool]]:
     """(row, next row, relative gap, consecutive ranks) of every two adjacent measured
-    modes of a configuration that both have no label (labels are "" when not given)."""
+    modes of a configuration that neither a label nor a measured shape pins (``pinned``
+    per row; None: the labels alone, "" where not given)."""
     out = []
     configuration = table["configuration"].to_numpy()
-    f, label, mode = (table[c].to_numpy() for c in ("frequency_hz", "label", "mode"))
+    f, mode = table["frequency_hz"].to_numpy(), table["mode"].to_numpy()
+    pinned = table["label"].to_numpy() != "" if pinned is None else pinned
     for name in dict.fromkeys(configuration):
         rows = np.flatnonzero(configuration == name)
         out += [(int(a), int(b), f[b] / f[a] - 1, bool(mode[b] == mode[a] + 1))
-                for a, b in zip(rows[:-1], rows[1:]) if label[a] == "" and label[b] == ""]
+                for a, b in zip(rows[:-1], rows[1:]) if not pinned[a] and not pinned[b]]
     return out
 
 
-def ambiguous_pair_count(table) -> int:
-    """Adjacent unlabelled measured modes of a configuration closer than ``NEAR_MODES``:
+def ambiguous_pair_count(table, pinned=None) -> int:
+    """Adjacent unpinned measured modes of a configuration closer than ``NEAR_MODES``:
     the pairs the search after the fit may refit (from the measurement table alone)."""
-    return sum(gap < NEAR_MODES for _, _, gap, _ in _adjacent_unlabelled(table))
+    return sum(gap < NEAR_MODES for _, _, gap, _ in _adjacent_unlabelled(table, pinned))
 
 
 def close_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Rows of adjacent measured modes (consecutive ranks) closer than ``CLOSE_MODES`` with
     no labels."""
-    return [(a, b) for a, b, gap, consecutive in _adjacent_unlabelled(objective.measurements.table)
+    return [(a, b) for a, b, gap, consecutive in _adjacent_unlabelled(objective.measurements.table, objective.measurements.pinned)
             if consecutive and gap < CLOSE_MODES]
 
 
@@ -84,7 +86,7 @@ def near_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Adjacent unlabelled measured modes from ``CLOSE_MODES`` to ``NEAR_MODES`` apart: a
     start model off by a few per cent can have them the other way round (a CFRP plate's
     pair 1.2 % apart was), and the fit may then settle on a twin."""
-    return [(a, b) for a, b, gap, _ in _adjacent_unlabelled(objective.measurements.table)
+    return [(a, b) for a, b, gap, _ in _adjacent_unlabelled(objective.measurements.table, objective.measurements.pinned)
             if CLOSE_MODES <= gap < NEAR_MODES]
 
 
@@ -119,6 +121,8 @@ def mirror_symmetric(objective: Objective) -> bool:
     sp = objective.model.specimen
     if abs(sp.length - sp.width) > 1e-9 * sp.length:
         return False
+    if objective.measurements.shapes is not None:
+        return False  # shapes measured at points tell x from y
     for label in objective.measurements.table["label"]:
         shape = pattern(label) if label else None
         if shape is not None and abs(float(np.sum(shape * shape.T))) < 1 - 1e-9:
@@ -189,14 +193,14 @@ def lone_close_modes(objective: Objective, e: Evaluation) -> list[LoneMode]:
     ``CLOSE_MODES``, is paired with nothing: one peak where two modes lie (a pair merged
     in the spectrum, or one of them at a node of the sensor), which frequencies alone
     cannot assign."""
-    table = objective.measurements.table
+    pinned = objective.measurements.pinned
     model = objective.solved.with_specimen(e.model.specimen)
     out = []
     for name, rows in objective.rows.items():
         f = model.solve(name).frequencies_hz
         used = set(e.pairings[name].indices.tolist())
         for row, j in zip(rows, e.pairings[name].indices):
-            if table["label"].iloc[row]:
+            if pinned[row]:
                 continue
             for other in (j - 1, j + 1):
                 if 0 <= other < len(f) and other not in used and abs(f[other] / f[j] - 1) < CLOSE_MODES:
@@ -228,12 +232,12 @@ def beneficial_swaps(objective: Objective, e: Evaluation) -> list[tuple[int, int
     """Adjacent unlabelled measured modes of a configuration whose model partners, swapped,
     lower the misfit at ``e``: equal and opposite residuals, the sign of a pair paired the
     wrong way round."""
-    table = objective.measurements.table
+    pinned = objective.measurements.pinned
     measured, sigma, model = objective.measured_hz, objective.sigma, e.model_hz
     out = []
     for rows in objective.rows.values():
         for a, b in zip(rows[:-1], rows[1:]):
-            if table["label"].iloc[a] or table["label"].iloc[b]:
+            if pinned[a] or pinned[b]:
                 continue
             now = ((model[a] - measured[a]) / sigma[a]) ** 2 + ((model[b] - measured[b]) / sigma[b]) ** 2
             swapped_cost = ((model[b] - measured[a]) / sigma[a]) ** 2 + ((model[a] - measured[b]) / sigma[b]) ** 2

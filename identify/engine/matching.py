@@ -8,7 +8,8 @@ costs ``GATE^2`` (so it is matched only within about ``GATE`` sigma of a mode), 
 left out costs nothing (missing modes are common).  The optimal one-to-one assignment
 with these leave-out options is a linear assignment problem (scipy's).
 
-A labelled peak may only match modes that show its nodal pattern (``fem.solver.mode_shapes``).
+A labelled peak may only match modes that show its nodal pattern, a peak with a measured
+shape only modes that resemble it (``pairing.permits``).
 
 At the start the model may be off by tens of percent in stiffness; what survives such
 an error is the spectrum's shape.  ``align`` therefore first finds, per configuration,
@@ -22,12 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.solver.mode_shapes import LABEL_SHARE, label_shares
-
 from .statistics import ASSUMED_SCATTER_REL
 
 #: A peak further than this many sigma from every mode is left out as spurious.
 GATE = 3.0
+#: The same for a peak whose measured shape resembles a model mode (``pairing.permits``):
+#: a spurious peak (suspension, cable, electrical noise) has no plate mode's shape, so
+#: such a peak is a mode, and is left out only when far from every mode it may be.
+SHAPE_GATE = 10.0
 #: How far the start model may be off in the spectrum's shape after the scale alignment
 #: (relative): mode ratios of a start within the usual handbook range agree to a few %.
 START_TOLERANCE = 0.03
@@ -57,11 +60,12 @@ def _sigma(peaks_hz: np.ndarray, std_hz: np.ndarray | None) -> np.ndarray:
 
 
 def match(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray, tolerance: float,
-          allowed: np.ndarray | None = None) -> Match:
+          allowed: np.ndarray | None = None, gate: np.ndarray | None = None) -> Match:
     """The cheapest assignment of peaks to model modes with leave-out options.
 
     tolerance: relative error the model may still have; allowed: (peaks, modes) bool, the
-    matches labels permit (None: all).
+    matches labels and shapes permit (None: all); gate: per peak, how many sigma from
+    every mode it is left out (None: ``GATE``).
     """
     n, m = len(peaks_hz), len(model_hz)
     sigma2 = _sigma(peaks_hz, std_hz)[:, None] ** 2 + (tolerance * model_hz[None, :]) ** 2
@@ -70,7 +74,7 @@ def match(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
         cost = np.where(allowed, cost, FORBIDDEN)
     # Columns: the m modes, then one leave-out slot per peak (cost GATE^2 for its own peak only).
     leave = np.full((n, n), FORBIDDEN)
-    np.fill_diagonal(leave, GATE**2)
+    np.fill_diagonal(leave, _gates(n, gate) ** 2)
     full = np.hstack([np.minimum(cost, FORBIDDEN), leave])
     rows, cols = linear_sum_assignment(full)
     modes = np.where(cols < m, cols, -1)[np.argsort(rows)]
@@ -78,8 +82,12 @@ def match(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
     return Match(modes, total)
 
 
+def _gates(n: int, gate: np.ndarray | None) -> np.ndarray:
+    return np.full(n, GATE) if gate is None else np.asarray(gate, dtype=float)
+
+
 def _relaxed_costs(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
-                   allowed: np.ndarray | None) -> np.ndarray:
+                   allowed: np.ndarray | None, gate: np.ndarray | None) -> np.ndarray:
     """A lower bound of ``match``'s cost at every scale of ``SCALES``: each peak takes its
     cheapest mode or its leave-out, as if two peaks could share a mode."""
     scaled = SCALES[:, None] * model_hz[None, :]  # (scales, modes)
@@ -87,42 +95,28 @@ def _relaxed_costs(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np
     cost = (peaks_hz[None, :, None] - scaled[:, None, :]) ** 2 / sigma2
     if allowed is not None:
         cost = np.where(allowed[None], cost, FORBIDDEN)
-    return np.minimum(cost.min(axis=2, initial=FORBIDDEN), GATE**2).sum(axis=1)
+    return np.minimum(cost.min(axis=2, initial=FORBIDDEN), _gates(len(peaks_hz), gate) ** 2).sum(axis=1)
 
 
 def align(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
-          allowed: np.ndarray | None = None) -> Match:
+          allowed: np.ndarray | None = None, gate: np.ndarray | None = None) -> Match:
     """The match of the peaks to the model's frequencies scaled by the factor that fits
     them best (``SCALES``), at ``START_TOLERANCE``; ties go to the factor nearest 1.
 
     The scales are tried cheapest lower bound first (:func:`_relaxed_costs`) and the
     scan stops where the bound exceeds the best cost found: the same optimum as trying
     every scale, with a few assignments instead of thousands."""
-    bound = np.round(_relaxed_costs(peaks_hz, std_hz, model_hz, allowed), 9)
+    bound = np.round(_relaxed_costs(peaks_hz, std_hz, model_hz, allowed, gate), 9)
     distance = np.abs(np.log(SCALES))
     best = None
     for i in np.lexsort((distance, bound)):
         if best is not None and (bound[i], distance[i]) >= best[0]:
             break
-        trial = match(peaks_hz, std_hz, SCALES[i] * model_hz, START_TOLERANCE, allowed)
+        trial = match(peaks_hz, std_hz, SCALES[i] * model_hz, START_TOLERANCE, allowed, gate)
         key = (round(trial.cost, 9), distance[i])
         if best is None or key < best[0]:
             best = (key, Match(trial.modes, trial.cost, float(SCALES[i])))
     return best[1]
 
 
-def label_permits(labels, solution) -> np.ndarray | None:
-    """(peaks, modes): which of the solution's modes each peak's label allows: those
-    holding its pattern (``LABEL_SHARE``: a member of a mixed pair carries either term;
-    never an in-plane mode), every mode for a peak without a label; None when no peak
-    has a label."""
-    if not any(labels):
-        return None
-    out = np.ones((len(labels), len(solution.labels)), dtype=bool)
-    for i, label in enumerate(labels):
-        if label:
-            out[i] = label_shares(solution.shape_coefficients, solution.labels, label) >= LABEL_SHARE
-    return out
-
-
-__all__ = ["Match", "match", "align", "label_permits", "GATE"]
+__all__ = ["Match", "match", "align", "GATE", "SHAPE_GATE"]

@@ -83,7 +83,8 @@ class Objective:
             previous = None if pairings is None else pairings[name].shapes
             if previous is None or (track and previous.shape[0] != solution.modes.shapes.shape[0]):
                 # Afresh; also when the pairing to follow is of another model (another plate theory).
-                pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist())
+                pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist(),
+                                              self.measurements.shapes_of(group))
             elif not track:
                 indices = pairings[name].indices
                 pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])

@@ -25,8 +25,9 @@ from fem.model import SpecimenModel
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
-from .matching import Match, align, label_permits, match
+from .matching import GATE, SHAPE_GATE, Match, align, match
 from .objective import solving_model
+from .pairing import permits
 from .parameters import display
 from .peak_assignment import PeakAssignment, peak_table
 from .peak_screen import SCREEN_TOLERANCE, screen
@@ -54,7 +55,7 @@ MODULI = ("E1", "E2", "G12", "G13", "G23")
 def _by_rank(peaks: Measurements) -> Measurements:
     """The peaks as if each configuration's were its modes 1, 2, ... (before any matching)."""
     table = peaks.table.assign(mode=peaks.table.groupby("configuration").cumcount() + 1)
-    return Measurements(table, peaks.source)
+    return replace(peaks, table=table)
 
 
 def _options(options: FitOptions, peaks: Measurements, ranked: Measurements) -> FitOptions:
@@ -82,10 +83,13 @@ def _match_all(solver: SpecimenModel, peaks: Measurements, tolerance: float | No
         rows = peaks.of(name)
         solution = solver.solve(name)
         std = rows["std_hz"].to_numpy() if peaks.has_std else None
-        allowed = label_permits(rows["label"].tolist(), solution)
+        shapes = peaks.shapes_of(rows)
+        allowed = permits(solution, rows["label"].tolist(), shapes)[0]
+        shaped = [s is not None and not allowed[i].all() for i, s in enumerate(shapes)]
+        gate = np.where(shaped, SHAPE_GATE, GATE)
         f = rows["frequency_hz"].to_numpy()
-        out[name] = (align(f, std, solution.frequencies_hz, allowed) if tolerance is None
-                     else match(f, std, solution.frequencies_hz, tolerance, allowed))
+        out[name] = (align(f, std, solution.frequencies_hz, allowed, gate) if tolerance is None
+                     else match(f, std, solution.frequencies_hz, tolerance, allowed, gate))
     return out
 
 
@@ -98,7 +102,7 @@ def _ranked(peaks: Measurements, matches: dict[str, Match]) -> Measurements:
     order = {name: i for i, name in enumerate(peaks.configurations)}
     kept["_order"] = kept["configuration"].map(order)
     kept = kept.sort_values(["_order", "mode"]).drop(columns="_order").reset_index(drop=True)
-    return Measurements(kept, peaks.source)
+    return replace(peaks, table=kept)
 
 
 def _signature(matches: dict[str, Match]) -> dict:

@@ -171,9 +171,9 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
     """The start of a peak-list fit by the screen (module docstring), from the ``solver``
     model (the fit's mesh and modes) with the ``scaled`` start polished as one more
     candidate; None where the screen does not run (no stiffness parameter, more than
-    ``MAX_DIMENSIONS`` of them, a layerwise model, labelled peaks: labels already pin
-    the pairing)."""
-    if any(peaks.table["label"]):  # "" where none is given
+    ``MAX_DIMENSIONS`` of them, a layerwise model, peaks with labels or measured shapes:
+    they already pin the pairing)."""
+    if peaks.pinned.any():
         return None
     screened = sum(p.kind in SCREENED_KINDS for p in parameters)
     if not 0 < screened <= MAX_DIMENSIONS:

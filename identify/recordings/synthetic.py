@@ -1,14 +1,42 @@
 """Virtual experiments: measurements computed by the model itself (paper section 2.2)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
 from fem.model import SpecimenModel
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import ratio_from_loss
+from fem.solver.mode_shapes import deflection_operator
 
-from ..measurements import Measurements, parse_measurements
+from ..measurements import MeasuredShapes, Measurements, ModeShape, parse_measurements
+
+#: A roving-hammer grid keeps this fraction of the plate's size clear of each edge (the
+#: hammer cannot hit the very edge squarely).
+GRID_MARGIN = 0.05
+
+
+def grid_points(length: float, width: float, grid: tuple[int, int]) -> np.ndarray:
+    """(nx * ny, 2) points [m] of an evenly spaced roving-hammer grid, ``GRID_MARGIN`` in
+    from the edges, x fastest."""
+    x = np.linspace(GRID_MARGIN * length, (1 - GRID_MARGIN) * length, grid[0])
+    y = np.linspace(GRID_MARGIN * width, (1 - GRID_MARGIN) * width, grid[1])
+    xx, yy = np.meshgrid(x, y)
+    return np.column_stack([xx.ravel(), yy.ravel()])
+
+
+def _measured_shape(solution, mode: int, xy: np.ndarray, rng, noise_rel: float, hammer_std: float) -> np.ndarray:
+    """A mode's deflection at the grid as a roving-hammer test gives it: each hit lands
+    ``hammer_std`` [m] (std per direction) off its grid point, the response carries noise
+    of ``noise_rel`` of the largest amplitude (real and imaginary part each), and the
+    scale and sign are arbitrary."""
+    hit = xy + hammer_std * rng.standard_normal(xy.shape)
+    hit = np.clip(hit, 0.0, [solution.units.mesh.length, solution.units.mesh.width])
+    w = deflection_operator(solution.units, hit[:, 0], hit[:, 1]) @ solution.modes.shapes[:, mode]
+    noise = noise_rel * np.abs(w).max() * (rng.standard_normal(len(w)) + 1j * rng.standard_normal(len(w)))
+    return rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 2.0) * (w + noise)
 
 
 def synthetic_measurements(
@@ -19,6 +47,9 @@ def synthetic_measurements(
     labels: str = "none",
     configurations: list[str] | None = None,
     damping_std_rel: float | None = None,
+    shape_grid: tuple[int, int] | None = None,
+    shape_noise_rel: float = 0.0,
+    hammer_std_mm: float = 0.0,
 ) -> Measurements:
     """The first ``modes`` elastic frequencies of every configuration of ``truth`` (the
     model that generates the data: its specimen, mesh and effects).
@@ -29,11 +60,14 @@ def synthetic_measurements(
     damping_std_rel: when given, each mode's damping ratio from the complex eigenproblem of
     the materials' loss factors (``fem.solver.complex_modes``), with Gaussian noise of this
     relative std (also written as ``damping_std`` when > 0).
+    shape_grid: when given (nx, ny), every mode's shape measured on that roving-hammer
+    grid (``grid_points``, ``_measured_shape``: ``shape_noise_rel``, ``hammer_std_mm``).
     """
     solver = truth.with_options(modes=max(modes, truth.options.modes))
     specimen = truth.specimen
     rng = np.random.default_rng(seed)
-    rows = []
+    rows, shapes = [], []
+    xy = None if shape_grid is None else grid_points(specimen.length, specimen.width, shape_grid)
     for c in specimen.configurations:
         if configurations is not None and c.name not in configurations:
             continue
@@ -51,6 +85,9 @@ def synthetic_measurements(
             if labels == "all" or (labels == "close" and close[i]):
                 row["label"] = solution.labels[i]
             rows.append(row)
+            if xy is not None:
+                shapes.append(ModeShape(c.name, float(noisy[i]), xy,
+                                        _measured_shape(solution, i, xy, rng, shape_noise_rel, 1e-3 * hammer_std_mm)))
         if damping_std_rel is not None:
             zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
             noisy_zeta = zeta * (1 + damping_std_rel * rng.standard_normal(modes))
@@ -64,4 +101,5 @@ def synthetic_measurements(
     # Noise can reorder two close modes; ranks follow the measured order.
     frame = frame.sort_values(["configuration", "frequency_hz"], kind="stable")
     frame["mode"] = frame.groupby("configuration").cumcount() + 1
-    return parse_measurements(frame, truth, "<synthetic>")
+    measurements = parse_measurements(frame, truth, "<synthetic>")
+    return replace(measurements, shapes=MeasuredShapes(tuple(shapes), "<synthetic>")) if shapes else measurements

@@ -19,7 +19,7 @@ from . import damping_report
 from . import html_report as h
 from .html_report import blank_missing
 from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
-from .residuals import before_after_table, fit_residuals
+from .residuals import before_after_table, fit_correlations, fit_residuals
 from .rounding import percent, status_line, with_std
 
 
@@ -72,6 +72,7 @@ def to_dict(result) -> dict:
     for kind, text in result.effect_notes:  # every effect switched on, with what was decided
         effects.setdefault(kind, {"std": {}, "flags": {}}).setdefault("notes", []).append(text)
     u, st = result.uncertainty, result.statistics
+    shapes = {name: c.to_dict() for name, c in fit_correlations(result).items()}
     return damping_report.merge_into({
         "converged": result.converged,
         "status": result.status.value,
@@ -94,7 +95,7 @@ def to_dict(result) -> dict:
                         "matrix": [[finite_or_none(x) for x in row] for row in u.correlation]},
         "warnings": list(result.warnings),
         "history": history_table(result).to_dict(orient="records"),
-    }, result.damping, result.model)
+    } | ({"mac_matrix": shapes} if shapes else {}), result.damping, result.model)
 
 
 def _formatted(frame: pd.DataFrame, formats: dict[str, Callable[[float], str]]) -> pd.DataFrame:

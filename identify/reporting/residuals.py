@@ -7,8 +7,9 @@ import numpy as np
 import pandas as pd
 
 from ..engine.objective import solving_model
+from ..engine.pairing import ShapeCorrelation, shape_correlation
 from ..engine.peak_assignment import peak_table
-from ..measurements import Measurements
+from ..measurements import MeasuredShapes, Measurements
 
 
 def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
@@ -24,12 +25,13 @@ def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataF
     return out
 
 
-def fit_residuals(result) -> pd.DataFrame:
+def fit_residuals(result, macs: bool = True) -> pd.DataFrame:
     """The residual rows of a fit (``fit --json`` "residuals"): every measured frequency with the model
     mode it is paired with (1-based), measured and model frequency, relative error,
     matched, and a note (a peak left out has None for mode, model frequency and error,
     and its note says why, naming the nearest mode); ranked data also
-    keep the rank given (``measured_mode``) and the error in std when std_hz is given."""
+    keep the rank given (``measured_mode``) and the error in std when std_hz is given;
+    with measured shapes (and ``macs``), each shape's MAC with its paired mode (``mac``)."""
     if result.peaks is not None:
         out = peak_table(result.peaks)
     else:
@@ -44,7 +46,47 @@ def fit_residuals(result) -> pd.DataFrame:
         out["matched"] = True
         out["note"] = ""
     out.insert(2, "label", _model_labels(result, out))
+    return with_macs(out, fit_correlations(result)) if macs else out
+
+
+def shape_correlations(model, measurements: Measurements, rows: pd.DataFrame,
+                       shapes: MeasuredShapes | None) -> dict[str, ShapeCorrelation]:
+    """Per configuration, the measured ``shapes`` against the modes of ``model`` as the
+    fit of ``measurements`` solves it, each shape's peak paired as the residual ``rows``
+    say (``mode``: the model mode, 1-based; None or 0 for a peak left out)."""
+    if shapes is None:
+        return {}
+    solver = solving_model(model, measurements)
+    out = {}
+    for name in dict.fromkeys(rows["configuration"]):
+        mine = rows[rows["configuration"] == name]
+        found = [(shapes.of(name, f), m) for f, m in zip(mine["measured_hz"], mine["mode"])]
+        found = [(shape, int(m) - 1 if m is not None and not pd.isna(m) and m > 0 else -1)
+                 for shape, m in found if shape is not None]
+        if found:
+            solution = solver.solve(name)
+            paired = np.array([m if m < len(solution.frequencies_hz) else -1 for _, m in found])
+            out[name] = shape_correlation(solution, [shape for shape, _ in found], paired)
     return out
+
+
+def with_macs(rows: pd.DataFrame, correlations: dict[str, ShapeCorrelation]) -> pd.DataFrame:
+    """The residual rows with a ``mac`` column (each measured shape's MAC with its paired
+    model mode; None where the peak has no shape or was left out), when shapes were given."""
+    if not correlations:
+        return rows
+    macs = {(c.configuration, f): m for c in correlations.values() for f, m in zip(c.measured_hz, c.paired_mac)}
+    out = rows.copy()
+    out["mac"] = [None if pd.isna(m := macs.get((name, f), np.nan)) else float(m)
+                  for name, f in zip(rows["configuration"], rows["measured_hz"])]
+    return out
+
+
+def fit_correlations(result) -> dict[str, ShapeCorrelation]:
+    """The shape correlations of a fit (duck-typed result), {} without measured shapes."""
+    measurements = result.peaks.measurements if result.peaks is not None else result.measurements
+    return shape_correlations(result.model, result.measurements, fit_residuals(result, macs=False),
+                              measurements.shapes)
 
 
 def _model_labels(result, rows: pd.DataFrame) -> list[str]:
@@ -86,4 +128,5 @@ def before_after_table(before, after) -> pd.DataFrame:
                          "rel_error_after": error_after})
 
 
-__all__ = ["before_after_table", "fit_residuals", "residual_table"]
+__all__ = ["before_after_table", "fit_correlations", "fit_residuals", "residual_table", "shape_correlations",
+           "with_macs"]

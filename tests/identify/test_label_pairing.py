@@ -1,5 +1,5 @@
 """Pairing labelled measured modes with model modes at the start (``ModePairing.initial``,
-``label_permits``): a label goes to the nearest-ranked model mode that holds its pattern,
+``permits``): a label goes to the nearest-ranked model mode that holds its pattern,
 a member of a mixed pair included."""
 from types import SimpleNamespace
 
@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 
 from fem.solver.mode_shapes import LABEL_SHARE, ORDER, label_of
-from identify.engine.matching import label_permits
-from identify.engine.pairing import ModePairing
+from identify.engine.pairing import ModePairing, permits
 from studies import blind_diagnosis
 
 
@@ -63,9 +62,9 @@ def test_pattern_below_the_share_is_not_a_partner():
 def test_peak_label_permits_both_members_of_a_mixed_pair():
     """Peak lists: a labelled peak may match either member of a mixed pair; the frequency
     match decides between them."""
-    permits = label_permits(["(3,2)", ""], _solution(_MIXED_PAIR))
-    assert np.flatnonzero(permits[0]).tolist() == [9, 11]
-    assert permits[1].all()
+    allowed = permits(_solution(_MIXED_PAIR), ["(3,2)", ""], [None, None])[0]
+    assert np.flatnonzero(allowed[0]).tolist() == [9, 11]
+    assert allowed[1].all()
 
 
 def test_in_plane_mode_never_takes_a_label():
@@ -76,7 +75,7 @@ def test_in_plane_mode_never_takes_a_label():
     solution = _solution(patterns, in_plane=(7, 8))
     pairing = ModePairing.initial("al_bottom", solution, list(range(1, 9)), [""] * 7 + ["(3,1)"])
     assert pairing.indices[7] == 9
-    assert np.flatnonzero(label_permits(["(3,1)"], solution)[0]).tolist() == [9]
+    assert np.flatnonzero(permits(solution, ["(3,1)"], [None])[0][0]).tolist() == [9]
 
 
 def test_blind33_sensor_mixed_mode_pairs_at_its_rank():
