@@ -163,7 +163,7 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
     # From a solution's matching the model is as close as it gets: no narrowing rounds, its
     # own error is the tolerance at once.
     narrowing = TIGHTENING if start_matches is None else ()
-    seen = [_signature(matches)]
+    seen, revisited = [_signature(matches)], []
     history: list[Iteration] = []
     result = None
     for round_ in range(MAX_ROUNDS + len(narrowing)):
@@ -185,10 +185,15 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             seen.append(_signature(again))
             matches, result = again, (result if unchanged else None)
             continue
-        if _signature(again) in seen:  # the matching cycles: keep the last fit and say so
+        if _signature(again) in seen and _signature(again) in revisited:  # it cycles: keep the last fit, say so
             notes.append("the peak matching did not settle (it cycles between alternatives): check the "
                          "left-out peaks and unseen modes below")
             break
+        if _signature(again) in seen:
+            # Back to a matching fitted before, now from another solution: a fit from a far
+            # start can end in a local minimum that a peak or two left out lets it escape,
+            # and the matching back from the better solution is then settled, not a cycle.
+            revisited.append(_signature(again))
         seen.append(_signature(again))
         notes.append("peaks re-matched at the solution (a different set of peaks or modes fits): refitted")
         matches, result = again, None

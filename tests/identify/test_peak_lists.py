@@ -78,3 +78,22 @@ def test_align_finds_the_scale_of_a_far_start():
     m = align(np.sort(peaks), None, model)
     assert m.scale == pytest.approx(1 / 1.14, rel=2e-3)
     assert m.modes.tolist() == [-1, 0, 1, 3, 4, 5]
+
+
+def test_a_matching_met_again_from_a_better_solution_is_refitted(example_spec, paper_model):
+    """The paper's plate carrying a 3 g sensor (in the spec: known), 8 modes per
+    configuration, no mode numbers.  From Table 6's start the first fit of all 24 peaks
+    ends in a local minimum (RMS about 0.6 %, 'original' off by 1-2 %); the narrowed
+    matching leaves two of its peaks out, the refit escapes and at that solution all 24
+    match again.  That matching was fitted before, from the far start, so meeting it again
+    is no cycle: it is refitted, and all 24 peaks are used (the old rule kept the 22-peak
+    fit and called two true modes spurious, on seeds 3, 4 and 5 alike)."""
+    from fem.solver.attachments import PointMass
+
+    sensor = [PointMass(3e-3, 0.125, 0.110)]
+    data = synthetic_measurements(paper_model.with_attachments(sensor), modes=8, noise_rel=5e-4, seed=4)
+    peaks = parse_measurements(data.table[["configuration", "frequency_hz", "std_hz"]], example_spec)
+    result = fit(example_spec.with_attachments(sensor), peaks)
+    assert result.converged, result.message
+    assert result.peaks.matched.all()
+    assert np.max(np.abs(z_scores(result, paper_model))) < 3
