@@ -66,6 +66,7 @@ def synthetic_measurements(
     solver = truth.with_options(modes=max(modes, truth.options.modes))
     specimen = truth.specimen
     rng = np.random.default_rng(seed)
+    shape_rng = np.random.default_rng([seed, 1])  # its own stream: shapes leave the frequencies' noise as it was
     rows, shapes = [], []
     xy = None if shape_grid is None else grid_points(specimen.length, specimen.width, shape_grid)
     for c in specimen.configurations:
@@ -87,7 +88,7 @@ def synthetic_measurements(
             rows.append(row)
             if xy is not None:
                 shapes.append(ModeShape(c.name, float(noisy[i]), xy,
-                                        _measured_shape(solution, i, xy, rng, shape_noise_rel, 1e-3 * hammer_std_mm)))
+                                        _measured_shape(solution, i, xy, shape_rng, shape_noise_rel, 1e-3 * hammer_std_mm)))
         if damping_std_rel is not None:
             zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
             noisy_zeta = zeta * (1 + damping_std_rel * rng.standard_normal(modes))
