@@ -2,6 +2,7 @@
 residues recovered exactly from analytic FRFs, standard errors that cover the noise, the
 shapes of the project's FE plate from simulated roving-hammer recordings, agreement with
 sdypy-EMA's LSFD on the same FRFs, and bad inputs refused with the field named."""
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -185,14 +186,17 @@ def test_shapes_of_the_fe_plate(roving):
 
 def test_shapes_csv(roving):
     """SHAPES.csv: the contract's columns, one row per mode and point, frequency_hz printed
-    as the peak list prints it (``%.7g``) so it names the same peak."""
+    as the peak list beside it prints it, so it names the same peak; the points as given."""
     estimate = roving.estimate
     path = roving.folder / "SHAPES.csv"
     estimate.write_csv(path)
+    estimate.write_peaks_csv(roving.folder / "peaks.csv")
     text = pd.read_csv(path, dtype={"frequency_hz": str})
+    peaks = pd.read_csv(roving.folder / "peaks.csv", dtype={"frequency_hz": str})
     assert list(text.columns) == CSV_COLUMNS
+    assert list(peaks.columns) == ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
     assert len(text) == MODES * 20
-    assert set(text["frequency_hz"]) == {f"{f:.7g}" for f in estimate.modes["frequency_hz"]}
+    assert set(text["frequency_hz"]) == set(peaks["frequency_hz"]) and len(peaks) == MODES
     back = pd.read_csv(path)
     first = back[back["frequency_hz"] == back["frequency_hz"].iloc[0]]
     np.testing.assert_allclose(first["amplitude"] + 1j * first["amplitude_imag"], estimate.shapes[0], atol=1e-6)
@@ -267,6 +271,16 @@ BAD_INPUTS = [
 def test_bad_inputs_name_the_field(recordings, points, message):
     with pytest.raises(MeasurementError, match=message):
         estimate_shapes(recordings, pd.DataFrame(points))
+
+
+def test_response_only_recordings_are_refused():
+    """Without the force, a point's response scales with how hard it was hit: no shape."""
+    points = pd.DataFrame({"point": ["A", "B"], "x_mm": [20.0, 60.0], "y_mm": [20.0, 20.0]})
+    hits = roving_hits([300.0], [0.01], [lambda x, y: x / 100], (100.0, 20.0), points, hits=2,
+                       options=TapOptions(sample_rate=8000.0, duration_s=0.5))
+    silent = {p: [replace(h, force=None) for h in hs] for p, hs in hits.items()}
+    with pytest.raises(MeasurementError, match="point 'A': its recordings have no force channel"):
+        estimate_shapes(silent, points, band_hz=(100.0, 1000.0))
 
 
 def test_a_points_recording_error_names_the_point(tmp_path):

@@ -57,6 +57,7 @@ import pandas as pd
 from fem.errors import MeasurementError
 from fem.io import write_text
 
+from .peaks import CSV_COLUMNS as PEAK_COLUMNS
 from .peaks import PeakList, extract_peaks
 
 #: Power k of s = i w that turns a receptance into the response's FRF.
@@ -138,7 +139,8 @@ def normalised(residues: np.ndarray, std: np.ndarray | None = None) -> tuple[np.
     r = np.atleast_2d(residues)
     turned = r * np.exp(-0.5j * np.angle(np.sum(r**2, axis=1)))[:, None]
     largest = turned[np.arange(len(r)), np.argmax(np.abs(turned), axis=1)]
-    factor = np.where(largest != 0, 1 / np.where(largest.real < 0, -np.abs(largest), np.abs(largest)), 1.0)
+    size = np.where(largest.real < 0, -np.abs(largest), np.abs(largest))
+    factor = 1 / np.where(size != 0, size, 1.0)
     return turned * factor[:, None], None if std is None else np.atleast_2d(std) * np.abs(factor)[:, None]
 
 
@@ -184,6 +186,13 @@ class ShapeEstimate:
             "amplitude": self.shapes.real.ravel(),
             "amplitude_imag": self.shapes.imag.ravel(),
         })[CSV_COLUMNS]
+
+    def write_peaks_csv(self, path: str | Path) -> None:
+        """The modes as a peak list (``configuration,frequency_hz,std_hz,damping_ratio,
+        damping_std``, ``%.7g`` as ``PeakList.write_csv`` writes it): the MEASUREMENTS
+        whose peaks SHAPES.csv names."""
+        frame = self.modes.assign(configuration=self.configuration)[PEAK_COLUMNS]
+        write_text(path, frame.to_csv(index=False, float_format="%.7g"))
 
     def write_csv(self, path: str | Path) -> None:
         """SHAPES.csv, written atomically: frequency_hz printed as the peak list prints it
@@ -274,15 +283,12 @@ def _poles(peak_lists: list[PeakList]) -> pd.DataFrame:
         if members["point"].nunique() < need:
             continue
         best = members[members["snr"] >= members["snr"].max() / SNR_SPAN]
-        n = len(best)
         rows.append({"frequency_hz": float(np.median(best["frequency_hz"])),
                      "std_hz": _median_error(best["frequency_hz"]),
                      "damping_ratio": float(np.median(best["damping_ratio"])),
                      "damping_std": _median_error(best["damping_ratio"]),
-                     "points_found": int(members["point"].nunique()),
-                     "used": n})
-    return pd.DataFrame(rows, columns=["frequency_hz", "std_hz", "damping_ratio", "damping_std", "points_found",
-                                       "used"])
+                     "points_found": int(members["point"].nunique())})
+    return pd.DataFrame(rows, columns=["frequency_hz", "std_hz", "damping_ratio", "damping_std", "points_found"])
 
 
 def _median_error(values: pd.Series) -> float:
@@ -309,6 +315,10 @@ def estimate_shapes(recordings_by_point: dict, points, configuration: str = "ori
             peak_lists[name] = extract_peaks(given[name], configuration, sample_rate, band_hz, guide_hz)
         except MeasurementError as exc:
             raise MeasurementError(f"point {name!r}: {exc}") from None
+        if not peak_lists[name].frf.has_force:
+            raise MeasurementError(f"point {name!r}: its recordings have no force channel; a roving-hammer shape "
+                                   "needs each point's force (the response alone scales with how hard it was hit): "
+                                   "record the hammer's force too")
     lists = list(peak_lists.values())
     modes = _poles(lists)
     notes = []
@@ -331,5 +341,5 @@ def estimate_shapes(recordings_by_point: dict, points, configuration: str = "ori
         fit = lsfd(frf.frequency_hz[lines], frf.h1[lines], pole - frf.decay_rate, quantity)
         residues[:, j], std[:, j] = fit.residues[:, 0], fit.residue_std[:, 0]
     shapes, shape_std = normalised(residues, std)
-    modes = modes.drop(columns="used").assign(mpc=mpc(residues), max_shape_std=shape_std.max(axis=1))
+    modes = modes.assign(mpc=mpc(residues), max_shape_std=shape_std.max(axis=1))
     return ShapeEstimate(configuration, table, modes, residues, shapes, shape_std, band, peak_lists, tuple(notes))
