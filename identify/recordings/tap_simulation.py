@@ -11,6 +11,8 @@ straight line through them (first-order hold), and each mode's response to that 
 is computed exactly by its first-order-hold discretisation (``cont2discrete``) and a
 recursive filter, so the simulated recordings are exact to rounding before the noise
 is added.  Writers put hits into CSV, WAV (float32) and UFF58 files for the readers.
+A roving-hammer test (:func:`roving_hits`) is such hits at each point of a grid, the
+modal constants taken from mode-shape functions where each hit lands.
 """
 from __future__ import annotations
 
@@ -127,13 +129,53 @@ class Session:
         rng = np.random.default_rng(self.seed)
         out = []
         for i in range(self.n_hits):
-            o = self.options
-            o = replace(o, amplitude=o.amplitude * np.exp(self.amplitude_spread * rng.standard_normal()),
-                        pretrigger_s=o.pretrigger_s * rng.uniform(0.5, 1.5),
+            o = replace(varied(self.options, rng, self.amplitude_spread),
                         double_hit_ms=self.double_hit_ms if i in self.double_hits else None,
-                        duration_s=self.cut_short.get(i, o.duration_s))
+                        duration_s=self.cut_short.get(i, self.options.duration_s))
             out.append(simulate_hit(self.modes, rng, o, source=f"hit{i + 1}"))
         return out
+
+
+def varied(options: TapOptions, rng: np.random.Generator, amplitude_spread: float) -> TapOptions:
+    """One hit's options: the amplitude times exp(``amplitude_spread`` x a standard normal
+    draw), the pre-trigger 0.5-1.5 x the options' (a hand-held hammer's hits differ)."""
+    return replace(options, amplitude=options.amplitude * np.exp(amplitude_spread * rng.standard_normal()),
+                   pretrigger_s=options.pretrigger_s * rng.uniform(0.5, 1.5))
+
+
+def roving_hits(frequencies_hz, damping_ratios, shapes, sensor_mm: tuple[float, float], points: pd.DataFrame,
+                hits: int = 3, position_std_mm: float = 1.0, seed: int = 0, options: TapOptions = TapOptions(),
+                amplitude_spread: float = 0.3) -> dict[str, list[Hit]]:
+    """A roving-hammer test: the sensor fixed at ``sensor_mm`` (x, y) [mm], ``hits`` hits
+    at each point of ``points`` (columns point, x_mm, y_mm).  ``shapes``: one callable
+    shape(x_mm, y_mm) per mode, mass-normalised, so that a hit at (x, y) has the modal
+    constants shape_r(x, y) shape_r(sensor) (response unit per force unit).  Each hit
+    lands off its point by a normal scatter of ``position_std_mm`` [mm] per axis, and its
+    modal constants are the shapes' values where it landed; otherwise each hit is
+    :func:`simulate_hit` with :func:`varied` options (seeded by ``seed``)."""
+    rng = np.random.default_rng(seed)
+    at_sensor = np.array([shape(*sensor_mm) for shape in shapes], dtype=float)
+    out = {}
+    for point, x, y in points[["point", "x_mm", "y_mm"]].itertuples(index=False):
+        out[str(point)] = []
+        for k in range(hits):
+            landed = (x, y) + position_std_mm * rng.standard_normal(2)
+            constants = np.array([shape(*landed) for shape in shapes], dtype=float) * at_sensor
+            modes = Modes(frequencies_hz, damping_ratios, constants)
+            hit = simulate_hit(modes, rng, varied(options, rng, amplitude_spread), source=f"{point}/hit{k + 1}")
+            out[str(point)].append(hit)
+    return out
+
+
+def write_roving(hits_by_point: dict[str, list[Hit]], folder: str | Path) -> dict[str, list[Path]]:
+    """Every point's hits as ``folder/<point>/hit<k>.csv`` (:func:`write_csv`): the file
+    lists per point that ``identify.recordings.shapes.estimate_shapes`` reads."""
+    out = {}
+    for point, hits in hits_by_point.items():
+        out[point] = [Path(folder) / point / f"hit{k + 1}.csv" for k in range(len(hits))]
+        for hit, path in zip(hits, out[point], strict=True):
+            write_csv(hit, path)
+    return out
 
 
 def write_csv(hit: Hit, path: str | Path, time_column: bool = True) -> None:
