@@ -74,6 +74,32 @@ def run_predict(args) -> int:
     return 0
 
 
+def run_shapes(args, guide) -> int:
+    """A roving-hammer test: the modes found over the points, their shapes (SHAPES.csv)."""
+    from .recordings.shapes import estimate_shapes, recordings_in_folders
+
+    if len(args.recordings) > 1:
+        raise MeasurementError("with --points give at most one folder: the one holding a sub-folder of hits per point "
+                               "(default: the points table's folder)")
+    recordings, points = recordings_in_folders(args.points, args.recordings[0] if args.recordings else None)
+    band = None if args.band is None else tuple(args.band)
+    result = estimate_shapes(recordings, points, args.configuration, args.sample_rate, band, guide)
+    if args.out:
+        result.write_peaks_csv(args.out)
+        _say(f"peak list written to {args.out}")
+    if args.shapes_out:
+        result.write_csv(args.shapes_out)
+        _say(f"mode shapes written to {args.shapes_out}")
+    if args.report:
+        with report_folder(args.report) as folder:
+            write_text(folder / "shapes.txt", result.report())
+            result.write_csv(folder / "shapes.csv")
+            result.write_peaks_csv(folder / "peaks.csv")
+        _say(f"report written to {args.report}/")
+    print(to_json(result.to_dict()) if args.json else result.report())
+    return 0 if len(result.modes) else 1
+
+
 def run_peaks(args) -> int:
     """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
     from .recordings.peaks import extract_peaks
@@ -89,6 +115,12 @@ def run_peaks(args) -> int:
             model.specimen.configuration(args.configuration)  # the one-line error naming the known ones
         guide = predict(model).frequencies_hz[args.configuration]
         _say(f"guided by the predicted modes of '{args.configuration}': {', '.join(f'{f:.1f}' for f in guide)} Hz")
+    if args.points:
+        return run_shapes(args, guide)
+    if args.shapes_out:
+        raise MeasurementError("--shapes-out needs --points POINTS.csv: shapes come from a roving-hammer test")
+    if not args.recordings:
+        raise MeasurementError("give the recordings (one file a hit), or --points POINTS.csv for a roving-hammer test")
     band = None if args.band is None else tuple(args.band)
     result = extract_peaks(args.recordings, args.configuration, args.sample_rate, band, guide)
     if args.out:
@@ -151,7 +183,7 @@ def run_compare(args) -> int:
             [(lambda path: plot_comparison(comparison, shown.with_options(modes=modes), path),
               "residuals_with_shapes.png", "error per measured mode with the paired mode shape above it"),
              (lambda path: plot_point_map(comparison, model, path), "point_mass_map.png",
-              "share of the misfit a point mass would explain at each point")])
+              "share of the misfit a point mass would explain at each point")], comparison)
         _say(f"report written to {args.report}/")
     print(to_json(comparison.to_dict()) if args.json else comparison.report())
     return 0
@@ -179,7 +211,7 @@ def run_diagnose(args) -> int:
         write_analysis_report(args.report, f"Diagnosis: {model.name}", "diagnose (identify-layers diagnose)", model,
                               measurements, result.report(),
                               {"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
-                              figures)
+                              figures, result.comparison)
         _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
     return 0 if result.explained else 1
@@ -195,15 +227,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--modes", type=int, help="elastic modes per configuration (default: [model] modes)")
     p.set_defaults(run=run_predict)
     p = sub.add_parser("peaks", help="modal peaks of one configuration from tap recordings")
-    p.add_argument("recordings", nargs="+", metavar="REC",
+    p.add_argument("recordings", nargs="*", metavar="REC",
                    help="impact-test recordings of one configuration: CSV (time_s, force, a response column), WAV, "
-                        "UFF58, MATLAB .mat or NI TDMS; several files are several hits")
+                        "UFF58, MATLAB .mat or NI TDMS; several files are several hits (with --points: the folder "
+                        "holding one sub-folder of hits per point)")
     p.add_argument("--configuration", default="original", help="the configuration recorded (default: original)")
     p.add_argument("--sample-rate", type=float, metavar="HZ",
                    help="for CSV or MAT files without a time_s column (e.g. integer ADC counts)")
     p.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="frequency band searched [Hz]")
     p.add_argument("--spec", help="a spec: its predicted frequencies of the configuration guide the search")
     p.add_argument("--out", metavar="CSV", help="write the peak list (configuration,frequency_hz,std_hz,damping_ratio)")
+    p.add_argument("--points", metavar="CSV",
+                   help="a roving-hammer test: the hammer points (point, x_mm, y_mm), each point's hits in a sub-folder "
+                        "named after it; the modes found over the points and their shapes")
+    p.add_argument("--shapes-out", metavar="CSV", help="with --points: write the mode shapes (the SHAPES.csv of fit "
+                                                        "--shapes); --out writes the peak list they name")
     p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
     p.add_argument("--report", metavar="DIR", help="write a report folder (text, CSV, FRF and stabilisation plots)")
     p.set_defaults(run=run_peaks)

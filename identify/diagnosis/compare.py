@@ -15,12 +15,13 @@ from ..engine.peak_lists import matched_at
 from ..engine.result import FitResult
 from ..engine.statistics import FitStatistics
 from ..fitting.driver import fit_holding_bounds
-from ..fitting.patterns import PATTERN_SHARE, Pattern, residual_patterns
+from ..fitting.patterns import PATTERN_SHARE, Pattern, ShapePointMap, residual_patterns, shape_point_map
 from ..measurements import Measurements
 from ..reporting import html_report as h
 from ..reporting.report import shown_residuals
-from ..reporting.residuals import residual_table
+from ..reporting.residuals import residual_table, shape_correlations, with_macs
 from ..reporting.rounding import percent
+from ..reporting.shape_plots import shape_lines
 
 
 @dataclass(frozen=True)
@@ -34,6 +35,9 @@ class Comparison:
     point_map: np.ndarray | None = None     # share explained by a point mass at each node
     node_xy: np.ndarray | None = None
     point_mass_hints: tuple = ()            # best distinct positions with mass estimates
+    shapes: dict | None = None              # configuration -> ShapeCorrelation, with measured shapes
+    shape_map: ShapePointMap | None = None  # where a point mass would explain the shapes' residuals
+    solver: SpecimenModel | None = None     # the model as compared, solved as the fit solves it
 
     @property
     def rms_rel_error(self) -> float:
@@ -53,7 +57,17 @@ class Comparison:
                 "at_noise_level": self.at_noise_level,
                 "patterns": [{"pattern": p.name, "share": p.share, "detail": p.detail, "suggests": list(p.suggests)}
                              for p in self.patterns],
-                "residuals": self.table.to_dict(orient="records")}
+                "residuals": self.table.to_dict(orient="records")} | self._shapes_dict()
+
+    def _shapes_dict(self) -> dict:
+        """The measured shapes' keys (empty, or null, without shapes)."""
+        shapes = self.shapes or {}
+        hint = self.shape_map.hint() if self.shape_map is not None else None
+        return {"mac_matrix": {name: c.to_dict() for name, c in shapes.items()},
+                "worst_point_mm": {name: (1e3 * c.worst_point).tolist() for name, c in shapes.items()},
+                "point_mass_from_shapes": None if hint is None else {
+                    "x_mm": 1e3 * hint["xy"][0], "y_mm": 1e3 * hint["xy"][1], "mass_g": 1e3 * hint["mass_kg"],
+                    "share": hint["share"]}}
 
     def sections(self) -> list[tuple[str, str]]:
         """(heading, HTML) sections of the notebook view: the misfit, the residual patterns
@@ -84,6 +98,9 @@ class Comparison:
         for p in sorted(self.patterns, key=lambda p: -p.share):
             mark = "*" if p.share > PATTERN_SHARE and not self.at_noise_level else " "
             lines.append(f" {mark} {p.name:34s} {100 * p.share:5.1f} %  {p.detail}  -> {', '.join(p.suggests)}")
+        if self.shapes:
+            lines += ["", "measured mode shapes (MAC at the measured points; residual: what the paired mode and its "
+                      "close neighbours cannot reproduce)", *shape_lines(self.shapes)]
         if self.at_noise_level:
             lines += ["", "the misfit is at the level of the measurement scatter: nothing is clearly missing"]
         return "\n".join(lines) + "\n"
@@ -103,8 +120,13 @@ def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True
         evaluation = objective.evaluate(np.zeros(0), None)
         now, model_hz, pairings, jacobian = model, evaluation.model_hz, evaluation.pairings, None
         statistics = objective.statistics(evaluation)
-    patterns, shares, xy, hints = residual_patterns(solving_model(now, measurements), measurements, model_hz, pairings, jacobian)
-    return Comparison(residual_table(measurements, model_hz), statistics, patterns, fitted, shares, xy, tuple(hints))
+    solver = solving_model(now, measurements)
+    patterns, shares, xy, hints = residual_patterns(solver, measurements, model_hz, pairings, jacobian)
+    table = residual_table(measurements, model_hz)
+    paired = table.assign(mode=np.concatenate([pairings[c].indices + 1 for c in measurements.configurations]))
+    shapes = shape_correlations(now, measurements, paired, measurements.shapes)
+    return Comparison(with_macs(table, shapes), statistics, patterns, fitted, shares, xy, tuple(hints), shapes,
+                      shape_point_map(solver, measurements, pairings), solver)
 
 
 __all__ = ["Comparison", "compare"]

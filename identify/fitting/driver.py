@@ -979,18 +979,21 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
     grid over its quarter of the plate (``_quadrant_grid``), ranked by the share of the
     misfit the scan says a mass there explains (``shares`` per node at ``xy``); the best
     ``POINT_MASS_STARTS`` (all of them without a scan)."""
+    by_shapes = tuple(h for h in hints[:1] if h.get("from_shapes"))  # measured shapes place it: tried first
+    hints = hints[len(by_shapes):]
     starts = tuple(hints[:1]) + _quadrant_grid(model, hints[0] if hints else None)
     if shares is None or xy is None or not len(shares):
-        return starts
+        return by_shapes + starts
 
     def share(start):
         return float(shares[int(np.argmin(np.hypot(*(xy - np.array(start["xy"])).T)))])
 
-    return tuple(sorted(starts, key=lambda start: -share(start))[:POINT_MASS_STARTS])
+    return (by_shapes + tuple(sorted(starts, key=lambda start: -share(start))))[:POINT_MASS_STARTS]
 
 
 def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
-    """The point mass from several starts: each ranked by the misfit one linearised
+    """The point mass from several starts (the measured shapes' first, when there are
+    shapes): each ranked by the misfit one linearised
     Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``; a bare peak
     list, which has no mode numbers to linearise with, keeps the scan's order), the best
     ``POINT_MASS_CONTINUED`` at distinct positions fitted to convergence (rivals need
@@ -1010,7 +1013,10 @@ def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
                 left = math.inf
             ranked.append((left, on))
     ranked.sort(key=lambda t: t[0])
-    chosen = []
+    # Where measured shapes place the mass (``shape_point_map``), that start is fitted
+    # whatever the frequencies' linearised step says: the shapes see the position, the
+    # step only a frequency misfit that a wrong position can share.
+    chosen = [on for hint in starts[:1] if hint.get("from_shapes") for on in effect("point_mass").free(state.model, hint)][:1]
     for _, on in ranked:
         position = [p for p in on.free if p.kind in ("x", "y")]
         if all(_differs(on.model, other.model, position) for other in chosen):

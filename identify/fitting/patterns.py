@@ -16,6 +16,16 @@ the effects a Kirchhoff free-plate model leaves out:
 Each signature is scored by the share of the weighted misfit it explains beyond what
 the fitted layer properties can absorb (a score test: its columns are projected on the
 complement of the fit's Jacobian).
+
+Measured mode shapes carry a sharper signature of a point mass (``shape_point_map``): a
+mass m at s turns mode i towards the others by, to first order,
+
+    d phi_i = m sum_j omega_i^2 phi_j(s) phi_i(s) / (omega_j^2 - omega_i^2) phi_j
+
+(mass-normalised modes), a pattern centred on s.  What of each measured shape its
+paired model mode and the modes close to it cannot reproduce is scored against that
+pattern at every node; the best node is where the shapes say a mass sits, with an
+estimate of it.
 """
 from __future__ import annotations
 
@@ -24,7 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.model import SpecimenModel
+from fem.solver.mode_shapes import deflection_operator
 
+from ..engine.pairing import CLOSE_MODES
 from ..measurements import Measurements
 
 #: A signature explaining more than this share of the misfit is reported as present.
@@ -34,6 +46,69 @@ PATTERN_SHARE = 0.5
 ABSORBED = 1e-8
 #: Distinct start positions the diagnosis tries for a point mass.
 POINT_MASS_STARTS = 4
+#: Model modes summed in the shape signature of a point mass (the first-order shape
+#: change is a sum over the other modes; on the paper's plate 20 and 40 put the mass at
+#: the same node, 11 mm from the truth, on a 5 x 4 grid).
+SHAPE_SIGNATURE_MODES = 30
+
+
+@dataclass(frozen=True)
+class ShapePointMap:
+    """Per node of the model's mesh (``xy`` [m]): the share of the measured shapes'
+    residual a point mass there explains (0 where the mass it would need is negative),
+    and that mass [kg]."""
+
+    xy: np.ndarray
+    share: np.ndarray
+    mass_kg: np.ndarray
+
+    @property
+    def best(self) -> int:
+        return int(np.argmax(self.share))
+
+    def hint(self) -> dict:
+        """The best node as a point-mass start (``from_shapes``: ahead of the frequency scan's)."""
+        k = self.best
+        return {"xy": tuple(self.xy[k]), "mass_kg": float(self.mass_kg[k]), "share": float(self.share[k]),
+                "from_shapes": True}
+
+
+def shape_point_map(model: SpecimenModel, measurements: Measurements, pairings) -> ShapePointMap | None:
+    """Where a point mass would explain the measured shapes' residuals (module
+    docstring), on ``model`` as the fit solved it with ``SHAPE_SIGNATURE_MODES`` modes;
+    None without measured shapes (or when no residual is left)."""
+    if measurements.shapes is None:
+        return None
+    solver = model.with_options(modes=max(SHAPE_SIGNATURE_MODES, model.options.modes))
+    explained = weight = residual2 = 0.0
+    xy = None
+    for name, pairing in pairings.items():
+        rows = measurements.of(name)
+        solution = solver.solve(name)
+        units, lam, f = solution.units, solution.modes.eigenvalues, solution.frequencies_hz
+        xy = units.mesh.node_xy
+        w_index = units.element_type.NODE_DOFS.index("w")
+        at_nodes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, len(lam))[:, w_index, :]
+        for shape, i in zip(measurements.shapes_of(rows), pairing.indices):
+            if shape is None:
+                continue
+            at_points = deflection_operator(units, shape.xy[:, 0], shape.xy[:, 1]) @ solution.modes.shapes
+            a = shape.amplitude / np.linalg.norm(shape.amplitude)  # every mode weighs alike
+            close = np.flatnonzero(np.abs(f / f[i] - 1) <= CLOSE_MODES)
+            basis = np.linalg.qr(at_points[:, close])[0]
+            r = a - basis @ (basis.T @ a)
+            scale = np.vdot(at_points[:, i], a) / np.vdot(at_points[:, i], at_points[:, i])
+            others = np.setdiff1d(np.arange(len(lam)), close)
+            coupling = lam[i] * at_nodes[:, others] * at_nodes[:, [i]] / (lam[others] - lam[i])  # (nodes, others) [1/kg]
+            pattern = scale * coupling @ (at_points[:, others] - basis @ (basis.T @ at_points[:, others])).T
+            explained = explained + (pattern.conj() @ r).real
+            weight = weight + np.sum(np.abs(pattern) ** 2, axis=1)
+            residual2 += np.vdot(r, r).real
+    if xy is None or residual2 <= 0:
+        return None
+    mass = explained / np.where(weight > 0, weight, np.inf)
+    share = np.where(mass > 0, explained**2 / (np.where(weight > 0, weight, np.inf) * residual2), 0.0)
+    return ShapePointMap(xy, share, mass)
 
 
 @dataclass(frozen=True)
@@ -126,6 +201,14 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
         if all(np.hypot(*(folded[k] - folded[j])) > 0.2 * span for j in chosen):
             chosen.append(k)
             hints.append({"xy": tuple(xy[k]), "mass_kg": float(masses[k]), "share": float(shares[k])})
+    by_shapes = shape_point_map(model, measurements, pairings) if pairings else None
+    if by_shapes is not None:
+        hints.insert(0, by_shapes.hint())
+        x, y = 1e3 * by_shapes.xy[by_shapes.best]
+        patterns.append(Pattern("shapes pulled towards one point", float(by_shapes.share[by_shapes.best]),
+                                f"best at x = {x:.0f} mm, y = {y:.0f} mm, about "
+                                f"{1e3 * by_shapes.mass_kg[by_shapes.best]:.2g} g there (measured shapes)",
+                                ("point_mass",)))
     best = int(np.argmax(shares))
     equivalent = int(np.sum(shares > shares[best] - 0.01))
     patterns.append(Pattern("follows one point's mode amplitude", float(shares[best]),
@@ -135,4 +218,5 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
     return tuple(patterns), shares, xy, hints
 
 
-__all__ = ["Pattern", "ScoreTest", "residual_patterns", "PATTERN_SHARE", "ABSORBED", "POINT_MASS_STARTS"]
+__all__ = ["Pattern", "ScoreTest", "ShapePointMap", "residual_patterns", "shape_point_map", "PATTERN_SHARE", "ABSORBED",
+           "POINT_MASS_STARTS"]

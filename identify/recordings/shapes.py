@@ -59,6 +59,7 @@ from fem.io import write_text
 
 from .peaks import CSV_COLUMNS as PEAK_COLUMNS
 from .peaks import PeakList, extract_peaks
+from .readers import READERS
 
 #: Power k of s = i w that turns a receptance into the response's FRF.
 POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
@@ -187,6 +188,19 @@ class ShapeEstimate:
             "amplitude_imag": self.shapes.imag.ravel(),
         })[CSV_COLUMNS]
 
+    def to_dict(self) -> dict:
+        """The ``peaks --points --json`` document: the modes (with MPC and the points that
+        found each) and every shape per point with its standard error."""
+        points = self.points.to_dict(orient="records")
+        return {"configuration": self.configuration, "band_hz": list(self.band_hz),
+                "peaks": self.modes.to_dict(orient="records"),
+                "shapes": [{"frequency_hz": float(f), "mpc": float(m),
+                            "points": [dict(p, amplitude=float(a.real), amplitude_imag=float(a.imag), std=float(e))
+                                       for p, a, e in zip(points, shape, std)]}
+                           for f, m, shape, std in zip(self.modes["frequency_hz"], self.modes["mpc"], self.shapes,
+                                                       self.shape_std)],
+                "notes": list(self.notes)}
+
     def write_peaks_csv(self, path: str | Path) -> None:
         """The modes as a peak list (``configuration,frequency_hz,std_hz,damping_ratio,
         damping_std``, ``%.7g`` as ``PeakList.write_csv`` writes it): the MEASUREMENTS
@@ -295,6 +309,33 @@ def _median_error(values: pd.Series) -> float:
     """Standard error of a median of normal samples: sqrt(pi / 2) s / sqrt(n) (NaN, n < 2)."""
     n = len(values)
     return float(math.sqrt(math.pi / 2) * np.std(values, ddof=1) / math.sqrt(n)) if n >= 2 else math.nan
+
+
+def recordings_in_folders(points, folder: str | Path | None = None) -> tuple[dict[str, list[Path]], pd.DataFrame]:
+    """A roving-hammer test laid out on disk: a points table (CSV: point, x_mm, y_mm) and,
+    in ``folder`` (default: the table's own folder), one sub-folder per point named as in
+    the table holding that point's hits (as ``tap_simulation.write_roving`` writes them).
+    Returns the recordings per point and the table read."""
+    path = Path(points)
+    try:
+        table = pd.read_csv(path, dtype={"point": str}, skipinitialspace=True, comment="#")
+    except FileNotFoundError:
+        raise MeasurementError(f"points table {str(path)!r} does not exist") from None
+    except (OSError, ValueError) as exc:
+        raise MeasurementError(f"points table {str(path)!r} cannot be read as a CSV ({exc}); give a table with "
+                               "columns point, x_mm, y_mm") from None
+    if "point" not in table.columns:
+        raise MeasurementError(f"points table {str(path)!r}: column 'point' is missing; give point, x_mm, y_mm")
+    root = Path(folder) if folder is not None else path.parent
+    out = {}
+    for name in table["point"].astype(str):
+        where = root / name
+        files = sorted(f for f in where.glob("*") if f.suffix.lower() in READERS) if where.is_dir() else []
+        if not files:
+            raise MeasurementError(f"point {name!r}: no recordings in {str(where)!r} (expected its hits there as "
+                                   f"{', '.join(READERS)} files, one file a hit)")
+        out[name] = files
+    return out, table
 
 
 def estimate_shapes(recordings_by_point: dict, points, configuration: str = "original",

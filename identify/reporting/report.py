@@ -14,6 +14,7 @@ import pandas as pd
 from fem.io import report_folder, to_json, write_text
 from fem.numbers import finite_or_none
 
+from ..engine.objective import solving_model
 from ..engine.parameters import UNITS, display, json_key
 from . import damping_report
 from . import html_report as h
@@ -21,6 +22,7 @@ from .html_report import blank_missing
 from .plots import plot_before_after, plot_convergence, plot_mode_shapes, plot_residuals
 from .residuals import before_after_table, fit_correlations, fit_residuals
 from .rounding import percent, status_line, with_std
+from .shape_plots import plot_mac_matrices, plot_nodal_lines, plot_shape_maps, plot_shape_point_map, shape_lines
 
 
 def parameter_table(result) -> pd.DataFrame:
@@ -95,7 +97,8 @@ def to_dict(result) -> dict:
                         "matrix": [[finite_or_none(x) for x in row] for row in u.correlation]},
         "warnings": list(result.warnings),
         "history": history_table(result).to_dict(orient="records"),
-    } | ({"mac_matrix": shapes} if shapes else {}), result.damping, result.model)
+        "mac_matrix": shapes,
+    }, result.damping, result.model)
 
 
 def _formatted(frame: pd.DataFrame, formats: dict[str, Callable[[float], str]]) -> pd.DataFrame:
@@ -116,7 +119,7 @@ def _error_percent(rel: float) -> str:
 RESIDUAL_FORMATS: dict[str, Callable[[float], str]] = {
     "measured_hz": lambda x: f"{x:.6g}", "model_hz": lambda x: f"{x:.6g}", "rel_error": _error_percent,
     "rel_error_before": _error_percent, "rel_error_after": _error_percent,
-    "error_over_std": lambda x: f"{x:+.2f}"}
+    "error_over_std": lambda x: f"{x:+.2f}", "mac": lambda x: f"{x:.3f}"}
 
 
 def shown_residuals(rows: pd.DataFrame) -> pd.DataFrame:
@@ -181,6 +184,10 @@ def report_text(result) -> str:
     lines += [f"  {c}" for c in u.weak_combinations] or ["  none"]
     lines += ["", "residuals (mode: the model mode each measured frequency is paired with)",
               blank_missing(shown_residuals(fit_residuals(result)), "-").to_string(index=False)]
+    correlations = fit_correlations(result)
+    if correlations:
+        lines += ["", "measured mode shapes (MAC at the measured points; residual: what the paired mode and its close "
+                  "neighbours cannot reproduce)", *shape_lines(correlations)]
     if before is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "the spec's effects"
         lines += ["", f"error per mode before and after adding {kinds} (RMS {percent(before.rms_rel_error, 3)} -> "
@@ -255,6 +262,7 @@ def _write_report_files(result, folder: Path) -> None:
                (plot_convergence(result, folder / "convergence.png"), "parameters and misfit against iteration"),
                (plot_mode_shapes(result, folder / "mode_shapes.png"), "the model's paired mode shapes (deflection, "
                 "nodal lines in black)")]
+    figures += shape_figures(fit_correlations(result), solving_model(result.model, result.measurements), folder)
     if result.baseline is not None:
         kinds = ", ".join(sorted(set(result.effect_of.values()))) or "effects"
         write_text(folder / "before_after.csv", before_after_table(result.baseline, result).to_csv(index=False))
@@ -273,16 +281,41 @@ def _write_report_files(result, folder: Path) -> None:
     write_text(folder / "report.html", page)
 
 
+def shape_figures(correlations: dict, solver, folder: Path, shape_map=None) -> list[tuple[Path, str]]:
+    """The measured shapes' figures (none without shapes): MAC matrices, nodal lines,
+    the maps of where the shapes disagree and, when given, where a point mass would
+    explain them (``shape_map``), drawn into ``folder``."""
+    if not correlations:
+        return []
+    specimen = solver.specimen
+    solutions = {name: solver.solve(name) for name in correlations}
+    out = [(plot_mac_matrices(correlations, folder / "mac_matrix.png"),
+            "MAC of each measured shape with each model mode (the pairing used outlined)"),
+           (plot_nodal_lines(correlations, solutions, folder / "nodal_lines.png"),
+            "model mode shapes with their nodal lines (black) and the measured nodal lines (dashed red)"),
+           (plot_shape_maps(correlations, specimen.length, specimen.width, folder / "shape_maps.png"),
+            "where on the plate the shapes disagree: shape residual and COMAC at the points measured")]
+    if shape_map is not None:
+        out.append((plot_shape_point_map(shape_map, correlations, specimen.length, specimen.width,
+                                         folder / "shape_point_mass_map.png"),
+                    "share of the shapes' residual a point mass would explain at each point of the plate"))
+    return out
+
+
 def write_analysis_report(folder: str | Path, title: str, analysis: str, model, measurements, text: str,
-                          files: dict[str, str], figures: list[tuple[Callable[[Path], Path], str, str]]) -> Path:
+                          files: dict[str, str], figures: list[tuple[Callable[[Path], Path], str, str]],
+                          comparison=None) -> Path:
     """A compare or diagnose report folder, written whole or not at all: ``text`` as a
     .txt and as the body of report.html (with the provenance header and the figures
-    embedded), ``files`` (name -> content) beside it, and each figure drawn by its
-    callable into the file named (callable(path) -> path, file name, caption)."""
+    embedded), ``files`` (name -> content) beside it, each figure drawn by its callable
+    into the file named (callable(path) -> path, file name, caption), and the measured
+    shapes' figures of a ``comparison`` that has them (``shape_figures``)."""
     with report_folder(folder) as tmp:
         for name, content in files.items():
             write_text(tmp / name, content)
         drawn = [(draw(tmp / name), caption) for draw, name, caption in figures]
+        if comparison is not None and comparison.shapes:
+            drawn += shape_figures(comparison.shapes, comparison.solver, tmp, comparison.shape_map)
         header = h.provenance(analysis, model.specimen.name, model.source, measurements.source)
         sections = [("Report", f"<pre>{html.escape(text)}</pre>"),
                     ("Figures", "".join(h.figure(path, caption) for path, caption in drawn))]
