@@ -16,7 +16,7 @@ def load(name: str):
 
 
 def test_every_example_is_tested():
-    tested = {"paper_plate", "recordings_to_layers", "hidden_sensor", "planning", "soft_bond_line"}
+    tested = {"paper_plate", "recordings_to_layers", "hidden_sensor", "planning", "soft_bond_line", "roving_hammer"}
     assert {p.stem for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -54,3 +54,14 @@ def test_soft_bond_line():
     than 5 %, the Mindlin plate by more than 0.2 %."""
     worst = load("soft_bond_line").main()
     assert worst["layerwise"] < 1e-3 and worst["Kirchhoff"] > 0.05 and worst["Mindlin (thick_plate)"] > 2e-3
+
+
+def test_roving_hammer(tmp_path):
+    """Roving-hammer recordings -> peaks with shapes -> fit paired by MAC (no mode numbers,
+    no labels): steel E1 = 201 GPa within 3 std, every shape's mode found (the close pairs
+    merged into one peak), and the report's shape figures drawn."""
+    result = load("roving_hammer").main(tmp_path)
+    steel = result.to_dict()["materials"]["steel"]
+    assert abs(steel["E1_GPa"] - 201.0) < 3 * steel["std"]["E1_GPa"]
+    assert result.converged and result.peaks.matched.all()
+    assert (tmp_path / "report" / "shape_maps.png").exists()

@@ -2,6 +2,7 @@
 residues recovered exactly from analytic FRFs, standard errors that cover the noise, the
 shapes of the project's FE plate from simulated roving-hammer recordings, agreement with
 sdypy-EMA's LSFD on the same FRFs, and bad inputs refused with the field named."""
+import json
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -12,6 +13,7 @@ import pytest
 from fem.errors import MeasurementError
 from fem.solver.mode_shapes import deflection_operator
 from fem.spec import load_spec
+from identify.cli import main as identify_layers
 from identify.recordings.shapes import CSV_COLUMNS, estimate_shapes, lsfd, mpc, normalised
 from identify.recordings.tap_simulation import Modes, TapOptions, roving_hits, write_roving
 
@@ -288,3 +290,26 @@ def test_a_points_recording_error_names_the_point(tmp_path):
     with pytest.raises(MeasurementError, match="point 'B': .*no such file"):
         estimate_shapes({"A": [tmp_path / "a.csv"], "B": [tmp_path / "b.csv"]},
                         pd.DataFrame({"point": ["B", "A"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]}))
+
+
+def test_peaks_points_command(roving, capsys):
+    """``peaks --points``: the points table beside a folder per point, the peak list and
+    SHAPES.csv written, the same modes as the library call, exit 0."""
+    folder = roving.folder / "recordings"
+    roving.estimate.points.to_csv(folder / "points.csv", index=False)
+    code = identify_layers(["peaks", "--points", str(folder / "points.csv"), "--band", *map(str, BAND_HZ),
+                            "--out", str(roving.folder / "cli_peaks.csv"), "--shapes-out",
+                            str(roving.folder / "cli_shapes.csv"), "--json"])
+    document = json.loads(capsys.readouterr().out)
+    assert code == 0
+    np.testing.assert_allclose([p["frequency_hz"] for p in document["peaks"]],
+                               roving.estimate.modes["frequency_hz"], rtol=1e-12)
+    assert len(pd.read_csv(roving.folder / "cli_shapes.csv")) == MODES * 20
+    assert len(pd.read_csv(roving.folder / "cli_peaks.csv")) == MODES
+
+
+def test_peaks_points_without_a_point_folder_is_exit_2(tmp_path, capsys):
+    pd.DataFrame({"point": ["A", "B"], "x_mm": [10.0, 20.0], "y_mm": [5.0, 5.0]}).to_csv(tmp_path / "points.csv",
+                                                                                       index=False)
+    assert identify_layers(["peaks", "--points", str(tmp_path / "points.csv")]) == 2
+    assert "point 'A': no recordings" in capsys.readouterr().err
