@@ -28,6 +28,10 @@ Per case (everything seeded by the case's number):
 Reported per half: the confusion table (true effects against selected), the RMS after the
 selection against the floor, each layer property's error in std, the time per case.
 
+``shapes_table(case)`` gives the held-out cases' 3-D mode shapes (the top face's w on a
+13 x 11 grid, ``tests/data/solid3d/blind_shapes/``) as a SHAPES.csv table whose
+frequencies are those of the case's measurement rows.
+
     python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR] [--jobs N]
 """
 from __future__ import annotations
@@ -88,6 +92,10 @@ def case_names(half: str = "both") -> list[str]:
 
 #: The regression cases (the diagnosis's two known failures on other stacks and masses).
 REGRESSION = DATA.parent / "regression"
+#: The 3-D top-face shapes of some cases' stored modes (``blind.py --shapes-only``).
+SHAPES = DATA.parent / "blind_shapes"
+#: The SHAPES.csv columns.
+SHAPE_COLUMNS = ("configuration", "frequency_hz", "x_mm", "y_mm", "amplitude")
 GPA = 1e9
 
 
@@ -309,12 +317,48 @@ def _z(fit, truth_values: dict, measurement_only: bool = False) -> dict:
     return out
 
 
+def _case_rng(name: str) -> tuple[np.random.Generator, float]:
+    """The case's generator (seeded by its number) and the scatter drawn first from it."""
+    digits = re.search(r"\d+", name)
+    rng = np.random.default_rng(1000 + (int(digits.group()) if digits else 0))
+    return rng, float(rng.uniform(*NOISE_RANGE))
+
+
+def shapes_table(case_name: str, configurations=None, *, noise: float | None = None) -> pd.DataFrame | None:
+    """The 3-D model's top-face deflection of the case's measured modes as a SHAPES.csv
+    table (``SHAPE_COLUMNS``: one row per mode and grid point, points in mm from the
+    plate's corner, amplitude scaled to max |w| = 1 per mode), or None when the case has
+    no stored shapes.  ``frequency_hz`` is the mode's frequency as ``run_case`` writes it
+    into its measurements (the same draws: the 3-D frequency with the case's scatter;
+    ``noise`` as in ``run_case``).  ``configurations``: names to keep (default all)."""
+    path = SHAPES / f"{case_name}.json"
+    if not path.exists():
+        return None
+    stored = json.loads(path.read_text())["configurations"]
+    names = [c["name"] for c in stored]
+    wanted = names if configurations is None else [configurations] if isinstance(configurations, str) \
+        else list(configurations)
+    unknown = [n for n in wanted if n not in names]
+    if unknown:
+        raise ValueError(f"configurations = {unknown!r}: not in the shapes of {case_name}; it has {names}")
+    case = load(case_name)
+    rng, drawn = _case_rng(case_name)
+    data = measurements(case, start_model(case, rng), drawn if noise is None else noise, rng)
+    frames = []
+    for conf in (c for c in stored if c["name"] in wanted):
+        measured = data.of(conf["name"]).set_index("mode")["frequency_hz"]
+        x, y = np.meshgrid(conf["x_mm"], conf["y_mm"])  # [j][i], as w
+        for k, mode in enumerate(conf["modes"]):
+            frames.append(pd.DataFrame({"configuration": conf["name"], "frequency_hz": float(measured[k + 1]),
+                                        "x_mm": x.ravel(), "y_mm": y.ravel(),
+                                        "amplitude": np.ravel(mode["w"]).astype(float)}))
+    return pd.concat(frames, ignore_index=True)[list(SHAPE_COLUMNS)]
+
+
 def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | None = None,
              noise: float | None = None) -> Outcome:
     case = load(name)
-    digits = re.search(r"\d+", name)
-    rng = np.random.default_rng(1000 + (int(digits.group()) if digits else 0))
-    drawn = float(rng.uniform(*NOISE_RANGE))
+    rng, drawn = _case_rng(name)
     noise = drawn if noise is None else noise
     out = Outcome(name, case["family"], case["half"], noise)
     try:

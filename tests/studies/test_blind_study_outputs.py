@@ -80,3 +80,35 @@ def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monke
     data = json.loads((tmp_path / "blind_dev.json").read_text(), parse_constant=lambda c: 1 / 0)
     assert [c["case"] for c in data["cases"]] == names
     assert "killed" in data["cases"][1]["error"] and data["summary"]["dev"]["tracebacks"] == 1
+
+
+def test_the_3d_top_face_shapes_load_as_a_shapes_table_that_pairs_with_the_plate_model():
+    """blind27 (a foam sandwich with a 2.83 g sensor on its base): its stored 3-D shapes
+    are a SHAPES.csv table of 10 modes x 13 x 11 points per configuration, each mode named
+    by the frequency its measurement row has (the 3-D one with the case's scatter), and
+    the first mode's top-face shape is the plate model's paired mode at the true values
+    (MAC >= 0.9).  A case without stored shapes gives None."""
+    import numpy as np
+
+    from fem.solver.mode_shapes import deflection_operator
+
+    name = "blind27_sandwich"
+    table = study.shapes_table(name)
+    assert list(table.columns) == list(study.SHAPE_COLUMNS)
+    case = study.load(name)
+    assert len(table) == len(case["configurations"]) * 10 * 13 * 11
+    assert study.shapes_table("blind01_hybrid") is None
+    assert study.shapes_table(name, ["al_top"])["configuration"].unique().tolist() == ["al_top"]
+    for conf in case["configurations"]:
+        rows = table[table["configuration"] == conf["name"]]
+        f3d = np.array([m["frequency_hz"] for m in conf["modes"]])
+        measured = rows["frequency_hz"].unique()
+        assert len(measured) == len(f3d) and np.all(np.abs(measured / f3d - 1) < 5 * study.NOISE_RANGE[1])
+        first = rows[rows["frequency_hz"] == measured[0]]
+        assert np.isclose(first["amplitude"].abs().max(), 1.0)
+        paired = conf["modes"][0]["plate_mode"]
+        solution = study.truth_model(case).with_options(modes=paired + 2).solve(conf["name"])
+        w = deflection_operator(solution.units, 1e-3 * first["x_mm"].to_numpy(),
+                                1e-3 * first["y_mm"].to_numpy()) @ solution.modes.shapes[:, paired - 1]
+        a = first["amplitude"].to_numpy()
+        assert (a @ w) ** 2 / ((a @ a) * (w @ w)) >= 0.9, conf["name"]

@@ -42,6 +42,12 @@ series of ``N_CASES_2`` cases drawn from ``SEED_2`` (blind25-blind36) is the hel
 since (``halves``).
 
     python tests/data/solid3d/blind.py [--only NAME ...] [--check]
+    python tests/data/solid3d/blind.py --shapes-only --only NAME [--only NAME ...]
+
+``--shapes-only`` re-solves stored cases exactly as they were made and writes the top-face
+w of their stored flexural modes (``blind_shapes/<case>.json``, the grid of ``generate.GRID``),
+refusing a case whose re-solved frequencies differ from its record by more than
+``SHAPES_TOLERANCE``.
 """
 from __future__ import annotations
 
@@ -64,6 +70,10 @@ sys.path.insert(0, str(HERE.parents[2]))
 import generate as g  # noqa: E402
 
 OUT = HERE / "blind"
+#: The top-face shapes of the stored modes (``--shapes-only``).
+SHAPES_OUT = HERE / "blind_shapes"
+#: A re-solve for the shapes must give the stored frequencies to this relative difference.
+SHAPES_TOLERANCE = 1e-5
 SEED = 20_2026
 SPLIT_SEED = 20_2027
 N_CASES = 24
@@ -302,13 +312,15 @@ def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> d
         density[heavier[0]] += heavier[1] * 1e-12
     shares = g.kinetic_shares(mesh, elements, density, disp)
     solved = g.Solved(mesh, elements, lam, disp, None, shares, wall)
-    z_mid = sum(t for _, t, _ in layers) / 2
+    z_top = sum(t for _, t, _ in layers)
+    z_mid = z_top / 2
     grid = g.sample(solved, case, z_mid, *g.GRID)
+    top = g.sample(solved, case, z_top, *g.GRID)
     fine = g.sample(solved, case, z_mid, *g.LABEL_GRID)
     flexural = [k for k in range(len(lam)) if shares[k] > g.FLEXURAL_SHARE][:FLEXURAL_MODES]
     if len(flexural) < FLEXURAL_MODES:
         raise RuntimeError(f"{tag}: only {len(flexural)} flexural modes among {len(lam)}")
-    return dict(frequency_hz=np.sqrt(lam[flexural]) / (2 * np.pi), w=grid[flexural, 2],
+    return dict(frequency_hz=np.sqrt(lam[flexural]) / (2 * np.pi), w=grid[flexural, 2], w_top=top[flexural, 2],
                 labels=[g.nodal_label(fine[k, 2]) for k in flexural], w_share=shares[flexural], wall_s=wall,
                 dofs=3 * len(coords), sensor_xy_mm=where,
                 elements=[mesh.nx, mesh.ny, [g.layer_elements(t, level.thickness_factor) for _, t, _ in layers]])
@@ -327,17 +339,25 @@ def truth_spec(case: dict, sensor_xy=None) -> str:
     return text
 
 
-def pair_with_plate(spec_text: str, configuration: str, w3d: np.ndarray) -> tuple[list[int], list[float]]:
-    """Rank (1-based) of the plate mode each 3-D mode pairs with, and the MAC."""
-    from scipy.optimize import linear_sum_assignment  # noqa: PLC0415
-
+def plate_grid_w(spec_text: str, configuration: str) -> np.ndarray:
+    """w of the plate model's modes on ``generate.GRID`` (points, modes): first-order shear
+    with rotary inertia, the spec's values."""
     from fem.spec import parse_spec  # noqa: PLC0415
     from studies.hidden_effect import _grid_w  # noqa: PLC0415
 
     model = parse_spec(tomllib.loads(spec_text), "<blind>").with_options(
         modes=FLEXURAL_MODES + 8, transverse_shear=True, rotary_inertia=True)
     solution = model.solve(configuration)
-    w = _grid_w(solution, model.specimen.length, model.specimen.width)
+    return _grid_w(solution, model.specimen.length, model.specimen.width)
+
+
+def pair_with_plate(spec_text: str, configuration: str, w3d: np.ndarray,
+                    w: np.ndarray | None = None) -> tuple[list[int], list[float]]:
+    """Rank (1-based) of the plate mode each 3-D mode pairs with, and the MAC (``w``: the
+    plate's grid shapes, when already at hand)."""
+    from scipy.optimize import linear_sum_assignment  # noqa: PLC0415
+
+    w = plate_grid_w(spec_text, configuration) if w is None else w
     a = np.array([np.ravel(x) for x in w3d]).T
     mac = (a.T @ w) ** 2 / np.outer(np.sum(a**2, axis=0), np.sum(w**2, axis=0))
     rows, cols = linear_sum_assignment(-mac)
@@ -386,6 +406,77 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
     )
 
 
+def _unit_max(w: np.ndarray) -> np.ndarray:
+    """w scaled to max |w| = 1, its largest value positive (``generate.py``'s convention)."""
+    peak = w.flat[np.argmax(np.abs(w))]
+    return w / peak
+
+
+def shapes(case: dict, record: dict, level: g.Level) -> tuple[dict | None, str]:
+    """The top-face w of the stored flexural modes, re-solved as the case was made: the
+    shapes' record and a summary line, or (None, why) when a re-solved frequency is not
+    the stored one (relative difference above ``SHAPES_TOLERANCE``)."""
+    started = time.perf_counter()
+    workdir = Path(tempfile.mkdtemp(prefix=f"ccx_shapes_{case['name']}_"))
+    try:
+        solved = {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
+                  for c in case["configurations"]}
+    finally:
+        shutil.rmtree(workdir, ignore_errors=True)
+    stored = {c["name"]: c for c in record["configurations"]}
+    worst, failures, configurations, notes = 0.0, [], [], []
+    spec = record["truth_spec_toml"]
+    for c in case["configurations"]:
+        s, kept = solved[c["name"]], stored[c["name"]]["modes"]
+        f_stored = np.array([m["frequency_hz"] for m in kept])
+        change = np.abs(s["frequency_hz"] / f_stored - 1)
+        worst = max(worst, float(change.max()))
+        if change.max() > SHAPES_TOLERANCE:
+            k = int(np.argmax(change))
+            failures.append(f"{c['name']} mode {k + 1}: {s['frequency_hz'][k]:.7g} Hz re-solved, "
+                            f"{f_stored[k]:.7g} Hz stored ({change[k]:.2e} relative)")
+            continue
+        mid = np.array([np.ravel(w) for w in s["w"]])
+        top = np.array([np.ravel(w) for w in s["w_top"]])
+        between = 1 - np.diag(g.mac(mid.T, top.T))
+        plate = plate_grid_w(spec, c["name"])
+        rank_mid, _ = pair_with_plate(spec, c["name"], s["w"], plate)
+        rank_top, _ = pair_with_plate(spec, c["name"], s["w_top"], plate)
+        mac_top = [g.mac(top[k][:, None], plate[:, m["plate_mode"] - 1:m["plate_mode"]])[0, 0]
+                   for k, m in enumerate(kept)]
+        if rank_mid != [m["plate_mode"] for m in kept]:  # the plate model may have changed since
+            notes.append(f"{c['name']}: the re-solved mid-plane shapes pair with plate modes {rank_mid} today, "
+                         f"the record with {[m['plate_mode'] for m in kept]}")
+        if rank_top != rank_mid:
+            notes.append(f"{c['name']}: the top face pairs with plate modes {rank_top} (mid-plane {rank_mid})")
+        thickness = sum(t for _, t, _ in g.stack(case, c))
+        configurations.append(dict(
+            name=c["name"], face_z_mm=g._sig(thickness),
+            x_mm=[g._sig(x) for x in case["length_mm"] * np.arange(g.GRID[0]) / (g.GRID[0] - 1)],
+            y_mm=[g._sig(y) for y in case["width_mm"] * np.arange(g.GRID[1]) / (g.GRID[1] - 1)],
+            modes=[dict(frequency_hz=g._sig(float(f)), label=m["label"], plate_mode=m["plate_mode"],
+                        mac_plate_mode=round(float(mt), 4), one_minus_mac_mid_plane=g._sig(float(b), 3),
+                        w=g._grid_list(_unit_max(w)))
+                   for f, m, mt, b, w in zip(s["frequency_hz"], kept, mac_top, between, s["w_top"], strict=True)]))
+        notes.append(f"{c['name']}: 1 - MAC(top, mid) max {between.max():.2e}")
+    if failures:
+        return None, f"{case['name']}: NOT written, re-solve differs from the record: " + "; ".join(failures)
+    out = dict(
+        case=case["name"], family=case["family"], face="top (z = the configuration's total thickness)",
+        grid=dict(points=list(g.GRID), x="x_i = L i / 12, from the corner", y="y_j = W j / 10",
+                  layout="w[j][i], row = y"),
+        normalisation="max |w| = 1 per mode, its largest value positive; 5 significant digits",
+        made_with=dict(solver=g.ccx_version(), element="C3D20R", model="full plate, free-free",
+                       mesh=dict(level=level.name, elements_along_length=level.n_length,
+                                 thickness_factor=level.thickness_factor),
+                       script="tests/data/solid3d/blind.py",
+                       command=f"python tests/data/solid3d/blind.py --shapes-only --only {case['name']}",
+                       wall_time_s=round(time.perf_counter() - started, 1),
+                       frequency_check=dict(max_relative_difference=g._sig(worst, 3), tolerance=SHAPES_TOLERANCE)),
+        configurations=configurations)
+    return out, f"{case['name']}: frequencies within {worst:.1e} of the record; " + "; ".join(notes)
+
+
 def mesh_check(case: dict) -> dict:
     """Relative change of the stored (coarse) frequencies against the medium mesh, on the
     al_bottom configuration (the thin soft bond line and aluminium plate are the layers the
@@ -428,20 +519,48 @@ def _write(path: Path, data) -> None:
     tmp.replace(path)
 
 
+def _shapes_only(cases: list[dict], names: list[str] | None, parser) -> int:
+    """Every named case re-solved from its draw (the materials of its record, as ``--only``
+    re-solves) and its shapes written; 1 when a case's re-solve was refused."""
+    known = {c["name"]: c for c in cases}
+    if not names or any(n not in known for n in names):
+        parser.error(f"--shapes-only needs --only NAME for stored cases; unknown: "
+                     f"{[n for n in names or [] if n not in known] or 'none given'}")
+    SHAPES_OUT.mkdir(exist_ok=True)
+    status = 0
+    for name in names:
+        case = known[name]
+        record = json.loads((OUT / f"{name}.json").read_text())
+        case["materials"] = record["materials"]
+        result, line = shapes(case, record, LEVEL)
+        if result is None:
+            status = 1
+        else:
+            _write(SHAPES_OUT / f"{name}.json", result)
+            line += f" ({result['made_with']['wall_time_s']:.0f} s)"
+        print(line, flush=True)
+    return status
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--only", action="append", help="case name(s) to (re)run")
+    parser.add_argument("--only", action="extend", nargs="+", help="case name(s) to (re)run")
     parser.add_argument("--check", action="store_true",
                         help="coarse against medium mesh, the first hybrid and the first sandwich")
     parser.add_argument("--out", type=Path, default=OUT)
     parser.add_argument("--check-stored", action="store_true",
                         help="the coarse mesh's error on the stored references (no ccx run)")
     parser.add_argument("--regression", action="store_true", help="the regression cases, into ../regression")
+    parser.add_argument("--shapes-only", action="store_true",
+                        help="re-solve the --only cases and write their top-face shapes into blind_shapes/ "
+                             "(the case records are not touched)")
     args = parser.parse_args(argv)
     if shutil.which("ccx") is None:
         parser.error("ccx (CalculiX) is not on the PATH; on Debian: apt-get install calculix-ccx")
     cases = all_cases()
     half = halves(cases)
+    if args.shapes_only:
+        return _shapes_only(cases, args.only, parser)
     if args.regression:
         folder = HERE / "regression"
         folder.mkdir(exist_ok=True)
