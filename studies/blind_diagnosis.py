@@ -324,6 +324,15 @@ def _case_rng(name: str) -> tuple[np.random.Generator, float]:
     return rng, float(rng.uniform(*NOISE_RANGE))
 
 
+def case_start(name: str, noise: float | None = None) -> tuple[dict, object, Measurements]:
+    """A case, the user's start model and the measurements, drawn as ``run_case`` draws
+    them (``noise`` None: the case's own scatter)."""
+    case = load(name)
+    rng, drawn = _case_rng(name)
+    start = start_model(case, rng)
+    return case, start, measurements(case, start, drawn if noise is None else noise, rng)
+
+
 def shapes_table(case_name: str, configurations=None, *, noise: float | None = None) -> pd.DataFrame | None:
     """The 3-D model's top-face deflection of the case's measured modes as a SHAPES.csv
     table (``SHAPE_COLUMNS``: one row per mode and grid point, points in mm from the
@@ -341,9 +350,7 @@ def shapes_table(case_name: str, configurations=None, *, noise: float | None = N
     unknown = [n for n in wanted if n not in names]
     if unknown:
         raise ValueError(f"configurations = {unknown!r}: not in the shapes of {case_name}; it has {names}")
-    case = load(case_name)
-    rng, drawn = _case_rng(case_name)
-    data = measurements(case, start_model(case, rng), drawn if noise is None else noise, rng)
+    _, _, data = case_start(case_name, noise)
     frames = []
     for conf in (c for c in stored if c["name"] in wanted):
         measured = data.of(conf["name"]).set_index("mode")["frequency_hz"]

@@ -13,7 +13,13 @@ numbers, no labels) without the sensor.  Per seed:
   (``fitting.patterns.shape_point_map``), the worst point of the shape residual and of
   COMAC, each as a distance from the sensor, and the mass the map estimates.
 
-    python -m studies.measured_shapes [--out DIR] [--seeds N]
+And on the blind study's held-out cases, whose 3-D models' top-face shapes are stored
+(``tests/data/solid3d/blind_shapes``): the start pairing of each measured mode with the
+user's start model (handbook values, nominal angles, no sensor, thin plate), by rank, by
+the study's labels, and by the shapes (the 13 x 11 grid, and a 5 x 4 subset of it),
+against the start model's mode that carries the truth's (``blind_pairing``).
+
+    python -m studies.measured_shapes [--out DIR] [--seeds N] [--blind]
 """
 from __future__ import annotations
 
@@ -22,15 +28,19 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import linear_sum_assignment
 
 from fem.solver.attachments import PointMass
+from fem.solver.mode_shapes import deflection_operator
 from identify.diagnosis.compare import Comparison, compare
-from identify.engine.pairing import mac_matrix
+from identify.engine.objective import solving_model
+from identify.engine.pairing import ModePairing, mac_matrix
 from identify.examples import COATED_PLATE_MEASURED
-from identify.measured_shapes import shapes_frame
+from identify.measured_shapes import parse_shapes, shapes_frame
 from identify.measurements import Measurements, load_measurements
 from identify.recordings.synthetic import synthetic_measurements
 
+from . import blind_diagnosis
 from .common import start_model, true_model, write_text
 
 SENSOR = PointMass(3e-3, 0.125, 0.110)
@@ -91,6 +101,61 @@ def hidden_sensor_run(seed: int, grid: tuple[int, int] = GRID) -> dict:
             "comac_worst_distance_mm": 1e3 * float(np.hypot(*(xy[np.argmax(comac)] - sensor)))}
 
 
+#: The truth's mode is carried to the start model by MAC of the deflection on this grid
+#: over the whole plate (finer than any measured grid: the partner, not the test's view).
+PARTNER_GRID = 31
+#: The 5 x 4 subset of the stored 13 x 11 grid (indices along x and along y).
+SUBSET = (np.array([0, 3, 6, 9, 12]), np.array([0, 3, 7, 10]))
+
+
+def _w_on_grid(solution, length: float, width: float) -> np.ndarray:
+    """(PARTNER_GRID^2, modes) deflection of every mode."""
+    g = (np.arange(PARTNER_GRID) + 0.5) / PARTNER_GRID
+    x, y = np.meshgrid(g * length, g * width)
+    return deflection_operator(solution.units, x.ravel(), y.ravel()) @ solution.modes.shapes
+
+
+def _subset(frame: pd.DataFrame) -> pd.DataFrame:
+    xs, ys = np.sort(frame["x_mm"].unique()), np.sort(frame["y_mm"].unique())
+    return frame[frame["x_mm"].isin(xs[SUBSET[0]]) & frame["y_mm"].isin(ys[SUBSET[1]])]
+
+
+def blind_pairing(name: str) -> pd.DataFrame:
+    """Per configuration of a held-out blind case: how many measured modes each way of
+    pairing at the start gives the start model's mode that carries the truth's (the truth
+    model's mode the 3-D one pairs with, ``plate_mode``, carried to the start model by the
+    optimal MAC assignment of the deflection over the plate)."""
+    case, start, data = blind_diagnosis.case_start(name)
+    table = blind_diagnosis.shapes_table(name)
+    full = parse_shapes(table, start, data)
+    coarse = parse_shapes(_subset(table), start, data)
+    truth = blind_diagnosis.truth_model(case)
+    solver = solving_model(start, data)
+    specimen = start.specimen
+    rows = []
+    for conf in case["configurations"]:
+        name_ = conf["name"]
+        measured = data.of(name_)
+        ranks, labels = measured["mode"].to_numpy(), measured["label"].tolist()
+        start_solution = solver.solve(name_)
+        truth_solution = truth.with_options(modes=len(ranks) + 8).solve(name_)
+        partners = np.array([m["plate_mode"] - 1 for m in conf["modes"]])
+        mac = mac_matrix(_w_on_grid(truth_solution, specimen.length, specimen.width)[:, partners],
+                         _w_on_grid(start_solution, specimen.length, specimen.width), np.eye(PARTNER_GRID**2))
+        truth_rows, truth_cols = linear_sum_assignment(-mac)
+        expected = truth_cols[np.argsort(truth_rows)]
+        ways = {"rank": ([""] * len(ranks), None), "labels": (labels, None),
+                "shapes 13x11": ([""] * len(ranks), [full.of(name_, f) for f in measured["frequency_hz"]]),
+                "shapes 5x4": ([""] * len(ranks), [coarse.of(name_, f) for f in measured["frequency_hz"]])}
+        row = {"case": name, "configuration": name_, "modes": len(ranks),
+               "labelled": sum(bool(label) for label in labels)}
+        for way, (given, shapes) in ways.items():
+            indices = ModePairing.initial(name_, start_solution, ranks, given, shapes).indices
+            row[way] = int(np.sum(indices == expected))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def grid_spacing_mm(grid: tuple[int, int] = GRID) -> tuple[float, float]:
     """The grid's spacing along x and y [mm] on the paper's plate."""
     specimen = true_model().specimen
@@ -121,6 +186,7 @@ def main() -> None:
     parser.add_argument("--out", help="report folder (default reports/measured_shapes)")
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--example", action="store_true", help="write the bundled example's shape file and stop")
+    parser.add_argument("--blind", action="store_true", help="the start pairing on the blind study's held-out cases")
     args = parser.parse_args()
     if args.example:
         from identify.examples import COATED_PLATE_SHAPES
@@ -129,6 +195,14 @@ def main() -> None:
         return
     folder = Path(args.out or "reports/measured_shapes")
     folder.mkdir(parents=True, exist_ok=True)
+    if args.blind:
+        pairing = pd.concat([blind_pairing(n) for n in blind_diagnosis.case_names("heldout")], ignore_index=True)
+        text = pairing.to_string(index=False) + "\n\ntotal\n" + pairing.drop(
+            columns=["case", "configuration"]).sum().to_string() + "\n"
+        write_text(folder / "blind_pairing.csv", pairing.to_csv(index=False))
+        write_text(folder / "blind_pairing.txt", text)
+        print(text)
+        return
     rows = pd.DataFrame([hidden_sensor_run(seed) for seed in range(1, args.seeds + 1)])
     spacing = grid_spacing_mm()
     text = (rows.to_string(index=False, float_format=lambda x: f"{x:.3g}")
