@@ -77,6 +77,7 @@ def run_predict(args) -> int:
 def run_shapes(args, guide) -> int:
     """A roving-hammer test: the modes found over the points, their shapes (SHAPES.csv)."""
     from .recordings.shapes import estimate_shapes, recordings_in_folders
+    from .reporting.shape_plots import plot_measured_shapes
 
     if len(args.recordings) > 1:
         raise MeasurementError("with --points give at most one folder: the one holding a sub-folder of hits per point "
@@ -95,6 +96,7 @@ def run_shapes(args, guide) -> int:
             write_text(folder / "shapes.txt", result.report())
             result.write_csv(folder / "shapes.csv")
             result.write_peaks_csv(folder / "peaks.csv")
+            plot_measured_shapes(result, folder / "shapes.png")
         _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
     return 0 if len(result.modes) else 1

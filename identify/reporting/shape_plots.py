@@ -95,6 +95,34 @@ def plot_shape_point_map(shape_map, correlations: dict, length: float, width: fl
     return save_figure(fig, path, dpi=100)
 
 
+def plot_measured_shapes(estimate, path: Path) -> Path:
+    """A roving-hammer test's shapes (``recordings.shapes.ShapeEstimate``, duck-typed):
+    per mode the real part of its normalised shape over the points, its nodal lines
+    dashed, titled by frequency, MPC and the points that found it."""
+    n = len(estimate.modes)
+    x, y = estimate.points["x_mm"].to_numpy(), estimate.points["y_mm"].to_numpy()
+    aspect = max(np.ptp(y), 1.0) / max(np.ptp(x), 1.0)
+    columns = min(n, 5)
+    rows = -(-n // columns)
+    fig, axes = new_figure(rows, columns, figsize=(2.3 * columns + 0.4, (2.3 * aspect + 0.7) * rows), squeeze=False)
+    for k, ax in enumerate(axes.ravel()):
+        ax.axis("off")
+        if k >= n:
+            continue
+        shape = estimate.shapes[k].real
+        _filled(ax, x, y, shape, "RdBu")
+        try:
+            ax.tricontour(Triangulation(x, y), shape, levels=[0], colors="k", linestyles="--", linewidths=0.8)
+        except (ValueError, RuntimeError):
+            pass  # too few points for a line
+        ax.plot(x, y, "k.", ms=2)
+        ax.set_aspect("equal")
+        mode = estimate.modes.iloc[k]
+        ax.set_title(f"{mode['frequency_hz']:.1f} Hz\nMPC {mode['mpc']:.3f}, {int(mode['points_found'])} points",
+                     fontsize=7)
+    return save_figure(fig, path, dpi=100)
+
+
 def _filled(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cmap: str):
     """Filled contours over the points where they span an area, else the points coloured."""
     ok = np.isfinite(values)
@@ -142,4 +170,5 @@ def plot_nodal_lines(correlations: dict, solutions: dict, path: Path) -> Path:
     return save_figure(fig, path, dpi=100)
 
 
-__all__ = ["plot_mac_matrices", "plot_nodal_lines", "plot_shape_maps", "plot_shape_point_map", "shape_lines"]
+__all__ = ["plot_mac_matrices", "plot_measured_shapes", "plot_nodal_lines", "plot_shape_maps", "plot_shape_point_map",
+           "shape_lines"]

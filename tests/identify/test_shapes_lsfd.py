@@ -294,18 +294,21 @@ def test_a_points_recording_error_names_the_point(tmp_path):
 
 def test_peaks_points_command(roving, capsys):
     """``peaks --points``: the points table beside a folder per point, the peak list and
-    SHAPES.csv written, the same modes as the library call, exit 0."""
+    SHAPES.csv written, the same modes as the library call, a report with the shapes
+    drawn, exit 0."""
     folder = roving.folder / "recordings"
     roving.estimate.points.to_csv(folder / "points.csv", index=False)
     code = identify_layers(["peaks", "--points", str(folder / "points.csv"), "--band", *map(str, BAND_HZ),
                             "--out", str(roving.folder / "cli_peaks.csv"), "--shapes-out",
-                            str(roving.folder / "cli_shapes.csv"), "--json"])
+                            str(roving.folder / "cli_shapes.csv"), "--json", "--report",
+                            str(roving.folder / "cli_report")])
     document = json.loads(capsys.readouterr().out)
     assert code == 0
     np.testing.assert_allclose([p["frequency_hz"] for p in document["peaks"]],
                                roving.estimate.modes["frequency_hz"], rtol=1e-12)
     assert len(pd.read_csv(roving.folder / "cli_shapes.csv")) == MODES * 20
     assert len(pd.read_csv(roving.folder / "cli_peaks.csv")) == MODES
+    assert (roving.folder / "cli_report" / "shapes.png").stat().st_size > 0
 
 
 def test_peaks_points_without_a_point_folder_is_exit_2(tmp_path, capsys):
