@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from .design_space import DesignSpace
-from .elements import ShearDifferencePlate
+from .elements import HermitePlate, ShearDifferencePlate
 from .errors import ModelError, OptionsError
 from .inputs import InputStd
 from .laminates.laminate import Laminate
@@ -24,6 +24,7 @@ from .solver.mode_shapes import beam_coefficients, in_plane, label_of
 from .solver.sensitivity import (
     ModalEnergies,
     eigenvalue_derivatives,
+    eigenvector_derivatives,
     frequency_derivatives,
     normalised,
 )
@@ -154,6 +155,11 @@ class LaminateSolution:
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
+    def shape_derivatives(self, parameters: list[Parameter], indices) -> np.ndarray:
+        """d phi_i / dp of the modes ``indices`` [per SI unit of p]: (n_dofs, modes,
+        parameters), exact, for laminate parameters of a single-layer theory."""
+        return _shape_derivatives(self, parameters, indices)
+
     @one_blas_thread
     def derivatives(self, parameters: list[Parameter]) -> np.ndarray:
         """df_i/dp_j [Hz per SI unit of p]: (modes, parameters)."""
@@ -179,6 +185,39 @@ class LaminateSolution:
         return frequency_derivatives(self.modes.eigenvalues, d_lambda)
 
 
+def _shape_derivatives(solution: LaminateSolution, parameters: list[Parameter], indices) -> np.ndarray:
+    """d phi / dp [per SI unit of p] of the modes ``indices``: (n_dofs, modes, parameters),
+    exact (``eigenvector_derivatives``), for the laminate parameters of a single-layer
+    theory (attachments kept in K and M)."""
+    if solution.layerwise is not None:
+        raise ModelError("mode shape sensitivities are not available for the layerwise theory; use the "
+                         "single-layer plate (Kirchhoff or first-order shear)")
+    if any(p.kind in ATTACHMENT_PARAMETERS for p in parameters):
+        raise ModelError("mode shape sensitivities to an attachment's parameters are not available; hold its mass "
+                         "and position, or fit frequencies alone")
+    units = solution.units
+    coefficients, inertia = system_coefficients(solution.laminate, solution.transverse_shear, solution.inertia_terms)
+    stiffness, mass = _weighted(units, solution.transverse_shear, coefficients, inertia)
+    if solution.attachments:
+        extra_stiffness, extra_mass = attachment_data(units, solution.attachments)
+        stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
+    dx, di = (np.array(d) for d in zip(*(solution.laminate.derivative(p.kind, p.target) for p in parameters)))
+    if solution.transverse_shear:
+        dx = np.hstack([dx, solution.laminate.shear_derivatives([(p.kind, p.target) for p in parameters])])
+    di = di * solution.inertia_terms
+    d_stiffness, d_mass = [], []
+    for x, i in zip(dx, di):
+        dk, dm = _weighted(units, solution.transverse_shear, x, i)
+        d_stiffness.append(units.matrix(dk))
+        d_mass.append(units.matrix(dm))
+    k_matrix, m_matrix = units.matrix(stiffness), units.matrix(mass)
+    out = np.empty((units.n_dofs, len(indices), len(parameters)))
+    for n, i in enumerate(indices):
+        out[:, n, :] = eigenvector_derivatives(k_matrix, m_matrix, float(solution.modes.eigenvalues[i]),
+                                               solution.modes.shapes[:, i], d_stiffness, d_mass)[0]
+    return out
+
+
 def system_coefficients(laminate: Laminate, transverse_shear: bool,
                         inertia_terms: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """The weights of the unit stiffness and mass matrices of a single-layer theory: the
@@ -188,6 +227,17 @@ def system_coefficients(laminate: Laminate, transverse_shear: bool,
     if transverse_shear:
         coefficients = np.concatenate([coefficients, laminate.shear_stiffness])
     return coefficients, laminate.inertia * np.array(inertia_terms)
+
+
+def _weighted(units: UnitMatrices, transverse_shear: bool, coefficients: np.ndarray,
+              inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """CSR data of sum_c coefficients_c K_c and sum_j inertia_j M_j of a single-layer
+    theory.  With transverse shear (80 x 80 elements) the element matrices are weighted
+    before one aggregation: memory for one data array instead of 21."""
+    if transverse_shear:
+        return (units.combined_data(coefficients, units.element_stiffness),
+                units.combined_data(inertia, units.element_mass))
+    return coefficients @ units.stiffness_data, inertia @ units.mass_data
 
 
 def _solution_bytes(solution: LaminateSolution) -> int:
@@ -226,15 +276,9 @@ def solve_laminate(
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
     if stack is not None:
         units, stiffness, mass = layerwise_system(stack, mesh)
-    elif transverse_shear:
-        # 80 x 80 elements: weighting the element matrices before one aggregation keeps
-        # memory at one data array instead of 21.
-        units = unit_matrices(mesh, ShearDifferencePlate)
-        stiffness = units.combined_data(coefficients, units.element_stiffness)
-        mass = units.combined_data(inertia, units.element_mass)
     else:
-        units = unit_matrices(mesh)
-        stiffness, mass = coefficients @ units.stiffness_data, inertia @ units.mass_data
+        units = unit_matrices(mesh, ShearDifferencePlate if transverse_shear else HermitePlate)
+        stiffness, mass = _weighted(units, transverse_shear, coefficients, inertia)
     if attachments:
         extra_stiffness, extra_mass = attachment_data(units, attachments)
         stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
