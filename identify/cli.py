@@ -157,7 +157,14 @@ def run_fit(args) -> int:
         _say(f"{pairs} pairs of unlabelled modes lie within {100 * NEAR_MODES:g} % of each other: after the fit "
              f"converges, checking their pairing refits up to {MAX_REFITS} of them a round (minutes on a long mode "
              "list); a 'label' column for close modes makes it unnecessary")
-    result = fit(model, measurements, args.effect or (), progress=_progress, workers=None)
+    options = None
+    if args.use_shapes:
+        if measurements.shapes is None:
+            raise MeasurementError("--use-shapes needs the measured shapes: give --shapes SHAPES.csv")
+        from .engine.updating import FitOptions
+
+        options = FitOptions(use_shapes=True)
+    result = fit(model, measurements, args.effect or (), options=options, progress=_progress, workers=None)
     if args.report:
         _say(f"report written to {write_report(result, args.report)}/")
     print(to_json(result.to_dict()) if args.json else result.report())
@@ -259,6 +266,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "peaks are paired with model modes by MAC, and the report maps where the shapes disagree")
         p.set_defaults(run=run)
         if name == "fit":
+            p.add_argument("--use-shapes", action="store_true",
+                           help="fit the measured shapes (--shapes) beside the frequencies: each point's amplitude a "
+                                "residual (separated modes; scatter 1 %% of the largest amplitude)")
             p.add_argument("--effect", action="append", metavar="KIND",
                            help="switch an effect on with its parameters free (repeatable): "
                                 + ", ".join(BUILT_IN))

@@ -12,18 +12,26 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fem.model import LaminateSolution, SpecimenModel
+from fem.solver.mode_shapes import deflection_operator
 from fem.solver.reduced_basis import OutsideBasis, Reanalysis
 from fem.specimen import Parameter, Specimen
 
 from ..measurements import Measurements
 from . import ties
-from .pairing import ModePairing
+from .pairing import CLOSE_MODES, ModePairing
 from .parameters import ParameterSpace
 from .statistics import FitStatistics, weighted_residuals
 
 #: Singular values of the Jacobian below this fraction of the largest span its null
 #: space: the pseudo-inverse of the paper's eq. 15 drops them.
 NULL_SINGULAR_VALUE = 1e-12
+#: The scatter of a measured shape's amplitude at a point, relative to the shape's
+#: largest amplitude, the fit starts from: 1 %, what a roving-hammer test's LSFD shapes
+#: show on a plate (``identify.recordings.shapes``: standard errors 0.1-1.4 % of the
+#: largest for the well-excited modes).  The fit then takes it from the shapes' own
+#: residuals (``ShapeObjective.rescaled``): a hammer landing 1 mm off its point moves a
+#: 100 mm wave's amplitude by about 6 % of its largest, which no LSFD error shows.
+SHAPE_SCATTER = 0.01
 
 
 @dataclass(frozen=True)
@@ -125,12 +133,20 @@ class Objective:
         r = self.residual(e)
         return 0.5 * float(r @ r)
 
+    def frequency_cost(self, e: Evaluation) -> float:
+        r = Objective.residual(self, e)
+        return 0.5 * float(r @ r)
+
     def rms(self, e: Evaluation) -> float:
         """RMS of the relative frequency errors."""
         return float(np.sqrt(np.mean((e.model_hz / self.measured_hz - 1) ** 2)))
 
     def statistics(self, e: Evaluation) -> FitStatistics:
         return FitStatistics.of(e.model_hz, self.measurements, len(e.values))
+
+    def frequency_jacobian(self, e: Evaluation) -> np.ndarray:
+        """The frequency rows of the Jacobian (all of it here)."""
+        return self.jacobian(e)
 
     def std_z(self, e: Evaluation) -> np.ndarray:
         """Linearised std of each z at ``e`` (scatter from std_hz, or from the residual);
@@ -141,6 +157,111 @@ class Objective:
         variance = self.statistics(e).chi2_unit * np.sum((vt[~null] / s[~null, None]) ** 2, axis=0)
         undetermined = np.sum(vt[null] ** 2, axis=0) > 1e-6
         return np.where(undetermined, np.inf, np.sqrt(variance))
+
+
+def _real_unit(amplitude: np.ndarray) -> np.ndarray:
+    """A measured (complex) shape turned to its most real phase, real part, unit length."""
+    turned = (amplitude * np.exp(-0.5j * np.angle(np.sum(amplitude**2)))).real
+    return turned / np.linalg.norm(turned)
+
+
+class ShapeObjective(Objective):
+    """The frequencies and the measured mode shapes together (``FitOptions.use_shapes``).
+
+    Each measured shape whose paired mode has no other bending mode within
+    ``CLOSE_MODES`` (a close pair's shapes mix in any proportion: they pin the pairing,
+    not the stiffness) adds one residual per point: the model's paired mode at the
+    points, scaled to unit length and turned to the measured sign, minus the measured
+    shape at unit length, over its scatter (``SHAPE_SCATTER`` of the largest amplitude).
+    Their derivatives come from the exact mode shape sensitivities
+    (``LaminateSolution.shape_derivatives``).  The set of shapes used is fixed at the first
+    evaluation, so the residual keeps its length through the iterations."""
+
+    def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
+        super().__init__(model, measurements, parameters, extra_modes)
+        table = measurements.table
+        self.shaped = [(row, shape) for row, shape in enumerate(measurements.shapes_of(table)) if shape is not None]
+        self.used: list[tuple[int, object]] | None = None
+        self.scatter: np.ndarray | None = None  # per shape used: of a point's amplitude, relative to its largest
+        self._jacobian: tuple[Evaluation, np.ndarray] | None = None  # the last one asked for
+
+    def _local(self, row: int) -> tuple[str, int]:
+        name = self.measurements.table["configuration"].iloc[row]
+        return name, int(np.flatnonzero(self.rows[name] == row)[0])
+
+    def shapes_used(self, e: Evaluation) -> list[tuple[int, object]]:
+        """(row, shape) of the shapes in the objective, chosen at the first evaluation."""
+        if self.used is None:
+            self.used = []
+            for row, shape in self.shaped:
+                name, local = self._local(row)
+                solution = self.solution(e.model.specimen, name)
+                f, j = solution.frequencies_hz, e.pairings[name].indices[local]
+                bending = np.asarray(solution.labels) != "in-plane"
+                if np.sum(bending & (np.abs(f / f[j] - 1) <= CLOSE_MODES)) == 1:
+                    self.used.append((row, shape))
+            self.scatter = np.full(len(self.used), SHAPE_SCATTER)
+        return self.used
+
+    def _model_shape(self, e: Evaluation, row: int, shape) -> tuple[np.ndarray, np.ndarray, object, int]:
+        """The paired mode at the points (unit length, the measured sign), the operator,
+        the solution and the mode's index."""
+        name, local = self._local(row)
+        solution = self.solution(e.model.specimen, name)
+        j = int(e.pairings[name].indices[local])
+        at = deflection_operator(solution.units, shape.xy[:, 0], shape.xy[:, 1])
+        x = at @ solution.modes.shapes[:, j]
+        return x, at, solution, j
+
+    def shape_residual(self, e: Evaluation) -> np.ndarray:
+        return np.concatenate(self._shape_blocks(e)) if self.shapes_used(e) else np.zeros(0)
+
+    def _shape_blocks(self, e: Evaluation) -> list[np.ndarray]:
+        out = []
+        for k, (row, shape) in enumerate(self.shapes_used(e)):
+            x = self._model_shape(e, row, shape)[0]
+            measured = _real_unit(shape.amplitude)
+            unit = x / np.linalg.norm(x) * np.sign(x @ measured)
+            out.append((unit - measured) / (self.scatter[k] * np.abs(measured).max()))
+        return out
+
+    def residual(self, e: Evaluation) -> np.ndarray:
+        """Weighted residuals: the frequencies', then the shapes' (class docstring)."""
+        return np.concatenate([super().residual(e), self.shape_residual(e)])
+
+    def jacobian(self, e: Evaluation) -> np.ndarray:
+        """d residual / d z, the shapes' rows from the exact shape sensitivities."""
+        if self._jacobian is not None and self._jacobian[0] is e:
+            return self._jacobian[1]
+        rows = []
+        for k, (row, shape) in enumerate(self.shapes_used(e)):
+            x, at, solution, j = self._model_shape(e, row, shape)
+            measured = _real_unit(shape.amplitude)
+            norm, sign = np.linalg.norm(x), np.sign(x @ measured)
+            unit = x / norm
+            dx = at @ solution.shape_derivatives(list(self.parameters), [j])[:, 0, :]  # (points, parameters)
+            d_unit = sign * (dx - np.outer(unit, unit @ dx)) / norm
+            rows.append(d_unit / (self.scatter[k] * np.abs(measured).max()))
+        shapes = np.vstack(rows) * self.space.dvalue_dz(e.values)[None, :] if rows else np.zeros((0, len(e.values)))
+        out = np.vstack([super().jacobian(e), shapes])
+        self._jacobian = (e, out)
+        return out
+
+    def frequency_jacobian(self, e: Evaluation) -> np.ndarray:
+        return super().jacobian(e)
+
+    def rescaled(self, e: Evaluation) -> float:
+        """Each shape's scatter as its residuals at ``e`` say (the RMS of its weighted
+        residuals x the scatter it had), set as the objective's: a hammer's position
+        error grows with a mode's slopes, so each mode has its own.  Returns the largest
+        factor a scatter changed by (or its inverse, when below 1)."""
+        blocks = self._shape_blocks(e)
+        if not blocks:
+            return 1.0
+        factors = np.array([np.sqrt(np.mean(b**2)) for b in blocks])
+        self.scatter = self.scatter * factors
+        self._jacobian = None
+        return float(np.max(np.maximum(factors, 1 / factors)))
 
 
 class RitzObjective(Objective):
@@ -182,7 +303,9 @@ class TrialScreen:
     @classmethod
     def of(cls, objective: Objective, current: Evaluation, rejected: Evaluation) -> TrialScreen:
         """The screen of the iteration at ``current`` whose trial ``rejected`` raised the misfit."""
-        return cls(RitzObjective(objective, current, rejected), current, objective.cost(current))
+        # The screen compares frequency misfits (a Ritz model's shapes at the points are
+        # not worth the screen's while); the full solve decides with the whole objective.
+        return cls(RitzObjective(objective, current, rejected), current, objective.frequency_cost(current))
 
     def descends(self, values: np.ndarray) -> bool:
         """The Ritz misfit at ``values`` is not above the current one (True also where the
@@ -199,4 +322,5 @@ def relative_sensitivity(e: Evaluation) -> np.ndarray:
     return e.derivatives * e.values[None, :] / e.model_hz[:, None]
 
 
-__all__ = ["Evaluation", "Objective", "RitzObjective", "TrialScreen", "relative_sensitivity", "solving_model"]
+__all__ = ["Evaluation", "Objective", "RitzObjective", "ShapeObjective", "TrialScreen", "relative_sensitivity",
+           "solving_model"]

@@ -22,7 +22,8 @@ from fem.specimen import Parameter
 
 from ..measurements import Measurements
 from .ambiguity import lone_close_modes, settle_pairings
-from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, TrialScreen
+from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, ShapeObjective, TrialScreen
+from .pairing import CLOSE_MODES
 from .parameters import UNITS, display
 from .repair import quick_repair
 from .result import FitResult, FitStatus, Iteration
@@ -45,6 +46,12 @@ from .stopping import (
 )
 from .uncertainty import Uncertainty
 
+#: Rounds of re-estimating the measured shapes' scatter from their residuals and fitting
+#: again (``ShapeObjective.rescaled``); it has settled when it changes by less than
+#: ``SCATTER_SETTLED``.
+SCATTER_ROUNDS = 4
+SCATTER_SETTLED = 0.1
+
 
 @dataclass(frozen=True)
 class FitOptions:
@@ -65,6 +72,9 @@ class FitOptions:
     # reduced basis (``objective.TrialScreen``) and solve in full only those it
     # says descend; off: every trial is a full solve.
     reanalysis: bool = True
+    # Measured mode shapes in the objective beside the frequencies (``ShapeObjective``);
+    # off: they pin the pairing only.
+    use_shapes: bool = False
 
     def __post_init__(self):
         where = "FitOptions"
@@ -181,7 +191,8 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             f"{len(measurements)} measured frequencies for {len(parameters)} unknown parameters: "
             "measure at least as many modes as unknowns (the paper uses 5 per configuration)"
         )
-    objective = Objective(model, measurements, parameters, options.extra_modes)
+    shaped = options.use_shapes and measurements.shapes is not None
+    objective = (ShapeObjective if shaped else Objective)(model, measurements, parameters, options.extra_modes)
     given = np.array([model.value(p) for p in parameters], dtype=float)
     values = objective.space.clip(given)
     warnings = [f"start {p.name} = {display(p, v):.4g} is outside its bounds "
@@ -195,6 +206,14 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
         progress(history[-1])
     current, stop, tracking = iterate(objective, current, history, options, progress)
     warnings += tracking
+    for _ in range(SCATTER_ROUNDS if shaped else 0):
+        # The shapes' scatter from their own residuals, then the fit again with it: the
+        # weight of shapes against frequencies is the data's, not an assumption's.
+        if abs(objective.rescaled(current) - 1) < SCATTER_SETTLED:
+            break
+        current = objective.evaluate(current.values, current.pairings, track=False)
+        current, stop, tracking = iterate(objective, current, history, options, progress)
+        warnings += tracking
     twins, repaired = [], ""
     if stop.converged and settle:
         def refit(state, branch, max_iterations):
@@ -223,11 +242,19 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
     elif vague.all() and status is FitStatus.NOT_IDENTIFIABLE:
         message += f": {_listed(parameters, current.values, uncertainty.std, vague)}"
     warnings += _overstated(statistics)
+    if shaped:
+        used = objective.shapes_used(current)
+        warnings.append(f"{len(used)} of {len(objective.shaped)} measured shapes in the objective "
+                        f"({sum(len(shape.xy) for _, shape in used)} residuals; each point's scatter "
+                        f"{100 * objective.scatter.min():.2g}-{100 * objective.scatter.max():.2g} % of its shape's "
+                        "largest amplitude, from each shape's residuals)"
+                        + (f"; the others, of modes within {CLOSE_MODES:.0%} of another, pin their pairing only"
+                           if len(used) < len(objective.shaped) else ""))
     if repaired:
         message += f"; re-paired {repaired}"
     return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
                      measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
-                     tuple(values for values, _ in twins), current.pairings, objective.jacobian(current),
+                     tuple(values for values, _ in twins), current.pairings, objective.frequency_jacobian(current),
                      dict(effect_of or {}), stop=stop)
 
 
