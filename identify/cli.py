@@ -75,14 +75,24 @@ def run_predict(args) -> int:
 
 
 def run_shapes(args, guide) -> int:
-    """A roving-hammer test: the modes found over the points, their shapes (SHAPES.csv)."""
+    """A multi-point test: the modes found over the points, their shapes (SHAPES.csv); from
+    a folder of hits per point (roving hammer) or from UFF files of FRFs per node."""
+    from pathlib import Path
+
+    from .recordings.readers import UFF_SUFFIXES, read_uff_points
     from .recordings.shapes import estimate_shapes, recordings_in_folders
     from .reporting.shape_plots import plot_measured_shapes
 
-    if len(args.recordings) > 1:
+    if args.recordings and all(Path(r).suffix.lower() in UFF_SUFFIXES for r in args.recordings):
+        measured = read_uff_points(args.recordings, args.points)
+        for note in measured.notes:
+            _say(f"note: {note}")
+        recordings, points = measured.recordings_by_point, measured.points
+    elif len(args.recordings) > 1:
         raise MeasurementError("with --points give at most one folder: the one holding a sub-folder of hits per point "
-                               "(default: the points table's folder)")
-    recordings, points = recordings_in_folders(args.points, args.recordings[0] if args.recordings else None)
+                               "(default: the points table's folder), or UFF files of FRFs per node")
+    else:
+        recordings, points = recordings_in_folders(args.points, args.recordings[0] if args.recordings else None)
     band = None if args.band is None else tuple(args.band)
     result = estimate_shapes(recordings, points, args.configuration, args.sample_rate, band, guide)
     if args.out:
@@ -105,6 +115,7 @@ def run_shapes(args, guide) -> int:
 def run_peaks(args) -> int:
     """Modal peaks of one configuration from impact-test recordings: a peak-list CSV."""
     from .recordings.peaks import extract_peaks
+    from .recordings.readers import is_multi_point_uff
 
     guide = None
     if args.spec is not None:
@@ -117,10 +128,11 @@ def run_peaks(args) -> int:
             model.specimen.configuration(args.configuration)  # the one-line error naming the known ones
         guide = predict(model).frequencies_hz[args.configuration]
         _say(f"guided by the predicted modes of '{args.configuration}': {', '.join(f'{f:.1f}' for f in guide)} Hz")
-    if args.points:
+    if args.points or is_multi_point_uff(args.recordings):
         return run_shapes(args, guide)
     if args.shapes_out:
-        raise MeasurementError("--shapes-out needs --points POINTS.csv: shapes come from a roving-hammer test")
+        raise MeasurementError("--shapes-out needs a multi-point test: --points POINTS.csv with a folder of hits per "
+                               "point, or UFF files holding the FRFs of several nodes (these hold one point's)")
     if not args.recordings:
         raise MeasurementError("give the recordings (one file a hit), or --points POINTS.csv for a roving-hammer test")
     band = None if args.band is None else tuple(args.band)
@@ -239,7 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("recordings", nargs="*", metavar="REC",
                    help="impact-test recordings of one configuration: CSV (time_s, force, a response column), WAV, "
                         "UFF58, MATLAB .mat or NI TDMS; several files are several hits (with --points: the folder "
-                        "holding one sub-folder of hits per point)")
+                        "holding one sub-folder of hits per point); UFF files with FRFs of several nodes (and their "
+                        "coordinates, data set 15 or 2411) are a multi-point test: the modes and their shapes")
     p.add_argument("--configuration", default="original", help="the configuration recorded (default: original)")
     p.add_argument("--sample-rate", type=float, metavar="HZ",
                    help="for CSV or MAT files without a time_s column (e.g. integer ADC counts)")
@@ -248,9 +261,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="CSV", help="write the peak list (configuration,frequency_hz,std_hz,damping_ratio)")
     p.add_argument("--points", metavar="CSV",
                    help="a roving-hammer test: the hammer points (point, x_mm, y_mm), each point's hits in a sub-folder "
-                        "named after it; the modes found over the points and their shapes")
-    p.add_argument("--shapes-out", metavar="CSV", help="with --points: write the mode shapes (the SHAPES.csv of fit "
-                                                        "--shapes); --out writes the peak list they name")
+                        "named after it; the modes found over the points and their shapes.  With multi-point UFF "
+                        "files: the nodes' coordinates (point = node number), replacing the files' geometry")
+    p.add_argument("--shapes-out", metavar="CSV", help="with --points or multi-point UFF files: write the mode shapes "
+                                                        "(the SHAPES.csv of fit --shapes); --out writes the peak list "
+                                                        "they name")
     p.add_argument("--json", action="store_true", help="machine-readable output on stdout")
     p.add_argument("--report", metavar="DIR", help="write a report folder (text, CSV, FRF and stabilisation plots)")
     p.set_defaults(run=run_peaks)

@@ -5,7 +5,9 @@ A *hit* is one tap: the force and the response sampled at one rate, in the recor
 own (arbitrary) units.  A UFF58 FRF record (function type 4) is already averaged by the
 acquisition and is kept as a :class:`MeasuredFRF`; a UFF58 pair of time records
 (function type 1: excitation force and response) is a hit.  Several files are several
-hits on one configuration.
+hits on one configuration, unless their FRF records measure several nodes: then they are
+a multi-point test (:func:`read_uff_points`: each node's FRFs and its coordinates, for
+the mode shapes).
 
 Every problem is one line of :class:`fem.errors.MeasurementError` naming the file, the
 field and value, what is allowed and a fix.
@@ -246,22 +248,30 @@ def _uff_quantity(source, record: dict, key: str) -> str:
     return UFF_RESPONSE[code]
 
 
-def read_uff(path: str | Path, sample_rate: float | None = None) -> list[Recording]:
-    """UFF type-58 records: each FRF record (function type 4) as a MeasuredFRF, or a
-    pair of time records (function type 1, force and response) as one Hit."""
+def _uff_sets(path: str | Path, header_only: bool = False) -> list[dict]:
+    """Every data set of a universal file as pyuff reads it (type-58 records checked
+    whole unless ``header_only``)."""
     import pyuff
 
     source = Path(path).name
     try:
-        records = pyuff.UFF(str(path)).read_sets() if Path(path).stat().st_size else []
+        sets = pyuff.UFF(str(path)).read_sets(header_only=header_only) if Path(path).stat().st_size else []
     except Exception as exc:  # noqa: BLE001 - pyuff raises bare Exception on malformed files
         raise _fail(source, f"cannot read as UFF ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__}); "
                     "give a universal file with type-58 records") from None
-    records = [r for r in ([records] if isinstance(records, dict) else records) if r.get("type") == 58]
-    for r in records:  # pyuff returns a truncated record's points without complaint
-        if len(r["data"]) != int(r.get("num_pts", len(r["data"]))):
+    sets = [sets] if isinstance(sets, dict) else sets
+    for r in sets:  # pyuff returns a truncated record's points without complaint
+        if r.get("type") == 58 and not header_only and len(r["data"]) != int(r.get("num_pts", len(r["data"]))):
             raise _fail(source, f"record '{r.get('id1', '')}' holds {len(r['data'])} of its num_pts = {r['num_pts']} "
                         "points (truncated file); export it again")
+    return sets
+
+
+def read_uff(path: str | Path, sample_rate: float | None = None) -> list[Recording]:
+    """UFF type-58 records: each FRF record (function type 4) as a MeasuredFRF, or a
+    pair of time records (function type 1, force and response) as one Hit."""
+    source = Path(path).name
+    records = [r for r in _uff_sets(path) if r.get("type") == 58]
     if not records:
         raise _fail(source, "no type-58 record; export the FRF or the force and response time records as UFF58")
     frfs = [r for r in records if r["func_type"] == UFF_FRF]
@@ -324,6 +334,172 @@ def _uff_hit(source: str, times: list[dict], sample_rate: float | None) -> Hit:
     if len(f) != len(y):
         raise _fail(source, f"force has {len(f)} samples, response {len(y)}; export both over the same time")
     return Hit(source, rates[0], y, f, _uff_quantity(source, response[0], "ordinate_spec_data_type"))
+
+
+#: UFF58 direction codes (response and reference direction fields).
+UFF_DIRECTIONS = {0: "scalar", 1: "+X", -1: "-X", 2: "+Y", -2: "-Y", 3: "+Z", -3: "-Z", 4: "+X rotation",
+                  -4: "-X rotation", 5: "+Y rotation", -5: "-Y rotation", 6: "+Z rotation", -6: "-Z rotation"}
+#: The plate normal's codes and the sign that turns an FRF measured along them into +Z.
+UFF_NORMAL = {3: 1.0, -3: -1.0}
+UFF_SUFFIXES = (".uff", ".unv")
+#: Node coordinates without a units data set (164) are taken as metres when every one
+#: lies below this (in the file's units): no plate tested this way is 5 m long, and no
+#: grid in mm fits inside 5 mm.
+METRES_BELOW = 5.0
+#: Decimals [mm] kept of converted node coordinates (1 nm, far below any measurement):
+#: the same grid in metres and in mm gives the same points (0.038 m is 38.00000000000001 mm).
+MM_DECIMALS = 6
+
+
+@dataclass(frozen=True, eq=False)
+class MultiPointUFF:
+    """A multi-point test read from universal files, as
+    :func:`identify.recordings.shapes.estimate_shapes` takes it.
+
+    recordings_by_point: point name (the node number) -> its FRF records (MeasuredFRF,
+    turned to +Z); points: point, x_mm, y_mm [mm] (the measured nodes); roving:
+    "response" (vibrometer, roving sensor: one reference, several response nodes) or
+    "reference" (roving hammer: one response node, several reference nodes); notes."""
+
+    recordings_by_point: dict[str, list[MeasuredFRF]]
+    points: pd.DataFrame
+    roving: str
+    notes: tuple[str, ...] = ()
+
+
+def _node_name(value) -> str:
+    """A node number as a point name ("7" for 7, 7.0 or " 07")."""
+    text = str(value).strip()
+    try:
+        return str(int(float(text)))
+    except ValueError:
+        return text
+
+
+def _frf_nodes(records) -> tuple[set, set]:
+    """The response nodes and the reference nodes of the FRF records (function type 4)."""
+    frfs = [r for r in records if r.get("func_type") == UFF_FRF]
+    return {int(r["rsp_node"]) for r in frfs}, {int(r["ref_node"]) for r in frfs}
+
+
+def is_multi_point_uff(paths) -> bool:
+    """True when every path is an existing UFF file and their FRF records (function type 4)
+    measure several points: several response nodes or several reference nodes (headers
+    only are read)."""
+    paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    if not paths or not all(p.suffix.lower() in UFF_SUFFIXES and p.is_file() for p in paths):
+        return False
+    records = [r for p in paths for r in _uff_sets(p, header_only=True) if r.get("type") == 58]
+    responses, references = _frf_nodes(records)
+    return len(responses) > 1 or len(references) > 1
+
+
+def _points_csv(points) -> pd.DataFrame:
+    """A points table (a DataFrame or a CSV path: point, x_mm, y_mm), its point names as node numbers."""
+    if isinstance(points, (str, Path)):
+        try:
+            points = pd.read_csv(points, dtype={"point": str}, skipinitialspace=True, comment="#")
+        except (OSError, ValueError) as exc:
+            raise MeasurementError(f"points table {str(points)!r} cannot be read as a CSV ({exc}); give a table with "
+                                   "columns point, x_mm, y_mm") from None
+    missing = [c for c in ("point", "x_mm", "y_mm") if c not in points.columns]
+    if missing:
+        raise MeasurementError(f"points: column {missing[0]!r} is missing (columns: {', '.join(map(str, points.columns))}"
+                               "); give point (the UFF node number), x_mm, y_mm")
+    return points.assign(point=points["point"].map(_node_name))
+
+
+def _geometry(sets: list[tuple[str, dict]]) -> tuple[dict[str, tuple[float, float, float]], float | None]:
+    """Node coordinates (data sets 15 and 2411) in the files' units, and the units' length
+    factor (data set 164: file units per metre; None without one)."""
+    nodes, factors = {}, {}
+    for source, s in sets:
+        if s.get("type") in (15, 2411):
+            for n, x, y, z in zip(s["node_nums"], s["x"], s["y"], s["z"]):
+                nodes[_node_name(n)] = (float(x), float(y), float(z))
+        elif s.get("type") == 164:
+            factors[float(s["length"])] = source
+    if len(factors) > 1:
+        raise MeasurementError(f"{', '.join(factors.values())}: data sets 164 give different length units "
+                               f"({', '.join(f'{f:g}' for f in factors)} per metre); export every file in one unit system")
+    return nodes, next(iter(factors), None)
+
+
+def read_uff_points(paths, points=None) -> MultiPointUFF:
+    """A multi-point test from universal files ``paths``: data set 58 FRFs (function type
+    4) of several points along the plate normal (+Z or -Z, turned to +Z) with one
+    reference (a vibrometer or roving sensor) or one response node (a roving hammer), and
+    the points' coordinates from data sets 15 or 2411 in the files (units from data set
+    164; z ignored) or from ``points`` (a table or CSV: point = node number, x_mm, y_mm
+    [mm] in the plate's frame), which then replace the files' geometry."""
+    paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    sets = []
+    for path in paths:
+        if path.suffix.lower() not in UFF_SUFFIXES or not path.is_file():
+            raise _fail(path.name, f"not an existing UFF file ({', '.join(UFF_SUFFIXES)}); check the path")
+        sets += [(path.name, s) for s in _uff_sets(path)]
+    records = [(source, s) for source, s in sets if s.get("type") == 58]
+    if not records:
+        raise _fail(", ".join(p.name for p in paths), "no type-58 record; export the FRFs of every point as UFF58")
+    for source, r in records:
+        if r["func_type"] != UFF_FRF:
+            raise _fail(source, f"record '{r.get('id1', '')}': func_type = {r['func_type']} is not an FRF; a "
+                        f"multi-point test is read from FRFs (function type {UFF_FRF}): export the FRFs alone, "
+                        "without time records, spectra or coherences")
+    responses, references = _frf_nodes(r for _, r in records)
+    where = ", ".join(p.name for p in paths)
+    if len(responses) > 1 and len(references) > 1:
+        raise _fail(where, f"FRFs of {len(responses)} response nodes and {len(references)} reference nodes; a shape "
+                    "needs one fixed end: export one reference's FRFs (or one response node's, for a roving hammer)")
+    if len(responses) == 1 and len(references) == 1:
+        raise _fail(where, f"every FRF has response node {responses.pop()} and reference node {references.pop()}: one "
+                    "point, not a multi-point test; export the FRFs of every point (or read these as the hits of "
+                    "one point: peaks without --shapes-out)")
+    roving = "response" if len(responses) > 1 else "reference"
+    node_key, direction_key = ("rsp_node", "rsp_dir") if roving == "response" else ("ref_node", "ref_dir")
+    fixed_key = "ref_dir" if roving == "response" else "rsp_dir"
+    first = _uff_frf(*records[0])
+    by_point: dict[str, list[MeasuredFRF]] = {}
+    record_of = {}
+    for source, r in records:
+        name = _node_name(r[node_key])
+        direction = int(r[direction_key])
+        if direction not in UFF_NORMAL:
+            raise _fail(source, f"record '{r.get('id1', '')}' (node {name}): {direction_key} = {direction} "
+                        f"({UFF_DIRECTIONS.get(direction, 'unknown')}) is not the plate normal; allowed +Z (3) or "
+                        "-Z (-3): export the FRFs measured normal to the plate's face")
+        frf = _uff_frf(source, r)
+        if len(frf.frequency_hz) != len(first.frequency_hz) or not np.allclose(frf.frequency_hz, first.frequency_hz,
+                                                                               rtol=1e-9, atol=1e-9):
+            raise _fail(source, f"record '{r.get('id1', '')}' (node {name}): {len(frf.frequency_hz)} lines from "
+                        f"{frf.frequency_hz[0]:g} Hz by {frf.frequency_hz[1] - frf.frequency_hz[0]:g} Hz, but "
+                        f"{first.source}'s first record has {len(first.frequency_hz)} from {first.frequency_hz[0]:g} "
+                        f"Hz by {first.frequency_hz[1] - first.frequency_hz[0]:g} Hz; export every FRF on the same "
+                        "frequency lines")
+        sign = UFF_NORMAL[direction] * UFF_NORMAL.get(int(r[fixed_key]), 1.0)
+        by_point.setdefault(name, []).append(MeasuredFRF(f"{source} node {name}", frf.frequency_hz, sign * frf.frf,
+                                                         frf.quantity))
+        record_of.setdefault(name, (source, r.get("id1", "")))
+    notes = []
+    if points is not None:
+        table = _points_csv(points)
+        frame = table.loc[table["point"].isin(by_point), ["point", "x_mm", "y_mm"]].reset_index(drop=True)
+        missing_fix = "add its row (point = node number, x_mm, y_mm) to the points table"
+    else:
+        nodes, per_metre = _geometry(sets)
+        measured = {n: nodes[n] for n in by_point if n in nodes}
+        values = np.abs([c for xyz in measured.values() for c in xyz])
+        if per_metre is None and len(values) and values.max() < METRES_BELOW:
+            per_metre = 1.0
+            notes.append(f"no units data set (164) and every node coordinate below {METRES_BELOW:g}: taken as metres")
+        to_mm = 1000.0 / per_metre if per_metre is not None else 1.0
+        frame = pd.DataFrame([(n, *(round(c * to_mm, MM_DECIMALS) for c in measured[n][:2]))
+                              for n in sorted(measured, key=int)], columns=["point", "x_mm", "y_mm"])
+        missing_fix = "export the geometry (data set 15 or 2411) with the FRFs, or give a points table (--points)"
+    for name, (source, record) in record_of.items():
+        if name not in set(frame["point"]):
+            raise _fail(source, f"record '{record}': {node_key} = {name} has no coordinates; {missing_fix}")
+    return MultiPointUFF({n: by_point[n] for n in frame["point"]}, frame, roving, tuple(notes))
 
 
 def _hit_from_channels(source: str, channels: dict, sample_rate: float | None, kind: str) -> Hit:
