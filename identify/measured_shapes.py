@@ -19,7 +19,7 @@ from fem.errors import MeasurementError
 from fem.model import SpecimenModel
 from fem.validation import suggestion
 
-from .measurements import MeasuredShapes, Measurements, ModeShape, read_table
+from .measurements import MeasuredShapes, Measurements, ModeShape, checked_columns, read_table
 
 REQUIRED = ("configuration", "frequency_hz", "x_mm", "y_mm", "amplitude")
 OPTIONAL = ("amplitude_imag",)
@@ -92,17 +92,7 @@ def parse_shapes(frame: pd.DataFrame, model: SpecimenModel, measurements: Measur
                  source: str = "<shapes>") -> MeasuredShapes:
     """Validate a raw shape table against the spec and the measured peaks; rows are
     reported by CSV line number."""
-    frame = frame.copy()
-    frame.columns = [str(c).strip() for c in frame.columns]
-    for column in frame.columns:
-        if column not in REQUIRED + OPTIONAL:
-            raise _fail(source, f"unknown column '{column}'; {suggestion(column, REQUIRED + OPTIONAL)}")
-    for column in REQUIRED:
-        if column not in frame.columns:
-            raise _fail(source, f"missing column '{column}' (need {', '.join(REQUIRED)})")
-    if frame.empty:
-        raise _fail(source, "no rows: give one row per mode and point")
-    line = frame.index.to_numpy() + 2  # header is line 1
+    frame, line = checked_columns(frame, REQUIRED, OPTIONAL, source, "give one row per mode and point")
     known = measurements.configurations
     for i, name in enumerate(frame["configuration"]):
         if pd.isna(name) or str(name).strip() not in known:

@@ -112,6 +112,23 @@ def _fail(source: str, message: str) -> MeasurementError:
     return MeasurementError(f"{source}: {message}")
 
 
+def checked_columns(frame: pd.DataFrame, required, optional, source: str, what_rows: str) -> tuple[pd.DataFrame, np.ndarray]:
+    """A copy of a raw table with its column names stripped, every column known and the
+    required ones there, and its CSV line numbers (the header is line 1); ``what_rows``
+    tells an empty table what to give."""
+    frame = frame.copy()
+    frame.columns = [str(c).strip() for c in frame.columns]
+    for column in frame.columns:
+        if column not in required + optional:
+            raise _fail(source, f"unknown column '{column}'; {suggestion(column, required + optional)}")
+    for column in required:
+        if column not in frame.columns:
+            raise _fail(source, f"missing column '{column}' (need {', '.join(required)})")
+    if frame.empty:
+        raise _fail(source, f"no rows: {what_rows}")
+    return frame, frame.index.to_numpy() + 2
+
+
 def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = "<measurements>") -> Measurements:
     """Validate a raw table against the model's configurations; rows are reported by CSV
     line number.  ``frame``: a data frame, or what makes one (a list of row dicts, a
@@ -122,17 +139,7 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         except (TypeError, ValueError) as exc:
             raise _fail(source, f"need a table (a data frame, a list of row dicts or a dict of columns), not "
                         f"{type(frame).__name__}: {exc}") from None
-    frame = frame.copy()
-    frame.columns = [str(c).strip() for c in frame.columns]
-    for column in frame.columns:
-        if column not in REQUIRED + OPTIONAL:
-            raise _fail(source, f"unknown column '{column}'; {suggestion(column, REQUIRED + OPTIONAL)}")
-    for column in REQUIRED:
-        if column not in frame.columns:
-            raise _fail(source, f"missing column '{column}' (need {', '.join(REQUIRED)})")
-    if frame.empty:
-        raise _fail(source, "no rows: give at least one measured frequency")
-    line = frame.index.to_numpy() + 2  # header is line 1
+    frame, line = checked_columns(frame, REQUIRED, OPTIONAL, source, "give at least one measured frequency")
 
     known = [c.name for c in model.specimen.configurations]
     for i, name in enumerate(frame["configuration"]):

@@ -365,14 +365,19 @@ def pair_with_plate(spec_text: str, configuration: str, w3d: np.ndarray,
     return [int(r) + 1 for r in rank], [round(float(mac[k, rank[k]]), 4) for k in range(len(rank))]
 
 
-def run_case(case: dict, level: g.Level, half: str) -> dict:
-    started = time.perf_counter()
-    workdir = Path(tempfile.mkdtemp(prefix=f"ccx_{case['name']}_"))
+def solve_configurations(case: dict, level: g.Level, prefix: str) -> dict:
+    """``solve_full`` of every configuration of a case, in a scratch folder removed after."""
+    workdir = Path(tempfile.mkdtemp(prefix=f"{prefix}_{case['name']}_"))
     try:
-        solved = {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
-                  for c in case["configurations"]}
+        return {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
+                for c in case["configurations"]}
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
+
+
+def run_case(case: dict, level: g.Level, half: str) -> dict:
+    started = time.perf_counter()
+    solved = solve_configurations(case, level, "ccx")
     sensor_xy = next(iter(solved.values()))["sensor_xy_mm"]
     spec = truth_spec(case, sensor_xy)
     g.check_spec(spec)
@@ -417,12 +422,7 @@ def shapes(case: dict, record: dict, level: g.Level) -> tuple[dict | None, str]:
     shapes' record and a summary line, or (None, why) when a re-solved frequency is not
     the stored one (relative difference above ``SHAPES_TOLERANCE``)."""
     started = time.perf_counter()
-    workdir = Path(tempfile.mkdtemp(prefix=f"ccx_shapes_{case['name']}_"))
-    try:
-        solved = {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
-                  for c in case["configurations"]}
-    finally:
-        shutil.rmtree(workdir, ignore_errors=True)
+    solved = solve_configurations(case, level, "ccx_shapes")
     stored = {c["name"]: c for c in record["configurations"]}
     worst, failures, configurations, notes = 0.0, [], [], []
     spec = record["truth_spec_toml"]
