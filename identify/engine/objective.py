@@ -233,13 +233,21 @@ class ShapeObjective(Objective):
         """d residual / d z, the shapes' rows from the exact shape sensitivities."""
         if self._jacobian is not None and self._jacobian[0] is e:
             return self._jacobian[1]
+        used = self.shapes_used(e)
+        modes: dict[str, list[int]] = {}  # per configuration, the modes whose derivatives are wanted
+        for row, _ in used:
+            name, local = self._local(row)
+            modes.setdefault(name, []).append(int(e.pairings[name].indices[local]))
+        derivatives = {name: (js, self.solution(e.model.specimen, name).shape_derivatives(list(self.parameters), js))
+                       for name, js in modes.items()}  # one K, M and dK, dM per configuration
         rows = []
-        for k, (row, shape) in enumerate(self.shapes_used(e)):
-            x, at, solution, j = self._model_shape(e, row, shape)
+        for k, (row, shape) in enumerate(used):
+            x, at, _, j = self._model_shape(e, row, shape)
             measured = _real_unit(shape.amplitude)
             norm, sign = np.linalg.norm(x), np.sign(x @ measured)
             unit = x / norm
-            dx = at @ solution.shape_derivatives(list(self.parameters), [j])[:, 0, :]  # (points, parameters)
+            js, d_phi = derivatives[self._local(row)[0]]
+            dx = at @ d_phi[:, js.index(j), :]  # (points, parameters)
             d_unit = sign * (dx - np.outer(unit, unit @ dx)) / norm
             rows.append(d_unit / (self.scatter[k] * np.abs(measured).max()))
         shapes = np.vstack(rows) * self.space.dvalue_dz(e.values)[None, :] if rows else np.zeros((0, len(e.values)))

@@ -261,20 +261,21 @@ def test_shapes_in_the_objective_determine_a_weak_poisson_ratio(wood):
 
 
 def test_shapes_in_the_objective_state_their_std_honestly(wood):
-    """Monte Carlo coverage: over 24 seeds the RMS of (estimate - truth) / std lies within
-    0.75-1.3 for every property (a std right to 1/sqrt(48) = 14 %: 2 sigma; measured
-    0.93-1.14, and 0.87-1.07 over 40 seeds), though the hammer's 1 mm position error is in
-    no stated std: each shape's scatter is taken from its own residuals."""
+    """Monte Carlo coverage: over 16 seeds the RMS of (estimate - truth) / std lies within
+    0.7-1.35 for every property (16 seeds tell a right std to 1/sqrt(32) = 18 %: the
+    bounds are 2 sigma; measured 0.89-1.18, and 0.87-1.07 over 40 seeds), though the
+    hammer's 1 mm position error is in no stated std: each shape's scatter is taken from
+    its own residuals."""
     from identify.engine.updating import FitOptions
 
     truth, start = wood
     z = []
-    for seed in range(24):
+    for seed in range(16):
         result = fit(start, _wood_data(truth, seed), options=FitOptions(use_shapes=True))
         z.append([(v - truth.value(p)) / s for p, v, s in zip(result.parameters, result.values,
                                                                result.uncertainty.std)])
     coverage = np.sqrt(np.mean(np.square(z), axis=0))
-    assert np.all((coverage > 0.75) & (coverage < 1.3)), coverage
+    assert np.all((coverage > 0.7) & (coverage < 1.35)), coverage
 
 
 def test_use_shapes_needs_shapes(capsys):
