@@ -36,6 +36,9 @@ MIN_SAMPLE_RATE = 500.0
 UFF_RESPONSE = {8: "displacement", 11: "velocity", 12: "acceleration"}
 UFF_FORCE = (9, 13)
 UFF_TIME, UFF_FRF = 1, 4
+#: UFF58 function types a multi-point export carries beside its FRFs and the shapes do
+#: not use: auto and cross spectra, coherence (skipped, and said so).
+UFF_BESIDE_FRFS = {2: "auto spectrum", 3: "cross spectrum", 6: "coherence"}
 
 
 @dataclass(frozen=True)
@@ -441,11 +444,16 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
     records = [(source, s) for source, s in sets if s.get("type") == 58]
     if not records:
         raise _fail(", ".join(p.name for p in paths), "no type-58 record; export the FRFs of every point as UFF58")
+    beside = [r for _, r in records if int(r["func_type"]) in UFF_BESIDE_FRFS]
+    records = [(source, r) for source, r in records if int(r["func_type"]) not in UFF_BESIDE_FRFS]
+    if not records:
+        raise _fail(", ".join(p.name for p in paths), "no FRF record (function type 4) beside the spectra and "
+                    "coherences; export the FRFs of every point")
     for source, r in records:
         if r["func_type"] != UFF_FRF:
             raise _fail(source, f"record '{r.get('id1', '')}': func_type = {r['func_type']} is not an FRF; a "
-                        f"multi-point test is read from FRFs (function type {UFF_FRF}): export the FRFs alone, "
-                        "without time records, spectra or coherences")
+                        f"multi-point test is read from FRFs (function type {UFF_FRF}; spectra and coherences beside "
+                        "them are skipped): export the FRFs without time records")
     responses, references = _frf_nodes(r for _, r in records)
     where = ", ".join(p.name for p in paths)
     if len(responses) > 1 and len(references) > 1:
@@ -480,7 +488,9 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
         by_point.setdefault(name, []).append(MeasuredFRF(f"{source} node {name}", frf.frequency_hz, sign * frf.frf,
                                                          frf.quantity))
         record_of.setdefault(name, (source, r.get("id1", "")))
-    notes = []
+    notes = [f"skipped {len(beside)} record(s) of " + ", ".join(sorted({UFF_BESIDE_FRFS[int(r['func_type'])]
+                                                                      for r in beside}))
+             + " (the shapes come from the FRFs)"] if beside else []
     if points is not None:
         table = _points_csv(points)
         frame = table.loc[table["point"].isin(by_point), ["point", "x_mm", "y_mm"]].reset_index(drop=True)

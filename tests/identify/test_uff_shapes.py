@@ -219,3 +219,16 @@ def test_single_point_uff_stays_one_points_hits(plate, tmp_path):
     assert identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--out", str(tmp_path / "p.csv")]) == 0
     assert len(pd.read_csv(tmp_path / "p.csv")) >= 5
     assert identify_layers(["peaks", str(path), "--shapes-out", str(tmp_path / "s.csv")]) == 2
+
+
+def test_coherences_beside_the_frfs_are_skipped(plate, metres_file, tmp_path):
+    """A lab export with a coherence record per point beside its FRF (function type 6):
+    the coherences are skipped, said in a note, and the FRFs read as without them."""
+    _, points, frfs, _, _ = plate
+    records = [units(SI), geometry(points, 15, 1e-3)]
+    for n, h in frfs.items():
+        records += [frf_record(n, h), frf_record(n, np.ones(len(h)), func_type=6)]
+    measured, reference = read_uff_points(write(tmp_path / "with_coherence.uff", records)), read_uff_points(metres_file)
+    assert len(measured.notes) == 1 and reference.notes == ()
+    for name, (record,) in measured.recordings_by_point.items():
+        np.testing.assert_array_equal(record.frf, reference.recordings_by_point[name][0].frf)
