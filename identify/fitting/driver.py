@@ -19,6 +19,7 @@ from fem.errors import LayerIdError, NotApplicableError
 from fem.inputs import InputStd
 from fem.laminates.material import MATERIAL_PARAMETERS, SHEAR_MODULI
 from fem.model import SpecimenModel
+from fem.solver.attachments import ATTACHMENT_PARAMETERS
 from fem.specimen import Parameter, Specimen
 
 from ..engine.objective import solving_model
@@ -148,9 +149,23 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
     if effects:
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
+            if options is not None and options.use_shapes:
+                _shapes_fit(model, kind)
         return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress,
                                                          parameters=parameters, options=options, workers=workers)))
     return with_damping(with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress)))
+
+
+def _shapes_fit(model: SpecimenModel, kind: str) -> None:
+    """Refuse, before any work, an effect whose refit the measured shapes cannot enter:
+    the shape sensitivities cover the laminate parameters of a single-layer theory
+    (``LaminateSolution.shape_derivatives``), not an attachment's or the layerwise theory."""
+    for on in effect(kind).free(model):
+        if on.model.options.theory == "layerwise" or any(p.kind in ATTACHMENT_PARAMETERS for p in on.free):
+            raise LayerIdError(f"effect {kind!r} with use_shapes: the measured shapes cannot enter its refit yet "
+                               "(shape sensitivities cover a single-layer plate's laminate parameters, not an "
+                               "attachment's or the layerwise theory); fit it without --use-shapes (the shapes still "
+                               "pin the pairing)")
 
 
 def with_damping(result: FitResult) -> FitResult:

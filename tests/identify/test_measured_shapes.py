@@ -281,3 +281,14 @@ def test_shapes_in_the_objective_state_their_std_honestly(wood):
 def test_use_shapes_needs_shapes(capsys):
     assert identify_layers(["fit", "--use-shapes"]) == 2
     assert "--shapes" in capsys.readouterr().err
+
+
+def test_use_shapes_refuses_an_attachment_effect_before_any_fit(example_spec, bundled):
+    """A point mass's refit cannot take the shapes in (no shape sensitivities to its mass
+    and position): refused at once, not after the baseline fit."""
+    from fem.errors import LayerIdError
+    from identify.engine.updating import FitOptions
+
+    data = load_shapes(COATED_PLATE_SHAPES, example_spec, bundled)
+    with pytest.raises(LayerIdError, match="point_mass"):
+        fit(example_spec, data, ["point_mass"], options=FitOptions(use_shapes=True))
