@@ -155,6 +155,17 @@ class LaminateSolution:
         return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
                      for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
 
+    def coefficient_derivatives(self, kinds) -> tuple[np.ndarray, np.ndarray]:
+        """dX/dp and dI/dp of the laminate parameters ``kinds`` ((kind, target) pairs): the
+        derivatives of the weights of the unit stiffness and mass matrices as this theory
+        weighs them, (parameters, coefficients) and (parameters, inertia terms)."""
+        if self.layerwise is not None:
+            return self.layerwise.derivatives(kinds)
+        dx, di = (np.array(d) for d in zip(*(self.laminate.derivative(*kind) for kind in kinds)))
+        if self.transverse_shear:
+            dx = np.hstack([dx, self.laminate.shear_derivatives(kinds)])
+        return dx, di * self.inertia_terms
+
     def shape_derivatives(self, parameters: list[Parameter], indices) -> np.ndarray:
         """d phi_i / dp of the modes ``indices`` [per SI unit of p]: (n_dofs, modes,
         parameters), exact, for laminate parameters of a single-layer theory."""
@@ -167,15 +178,8 @@ class LaminateSolution:
             return np.zeros((len(self.modes.eigenvalues), 0))
         d_lambda = np.zeros((len(self.modes.eigenvalues), len(parameters)))
         laminate = [j for j, p in enumerate(parameters) if p.kind not in ATTACHMENT_PARAMETERS]
-        kinds = [(parameters[j].kind, parameters[j].target) for j in laminate]
-        if laminate and self.layerwise is not None:
-            dx, di = self.layerwise.derivatives(kinds)
-            d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, dx, di)
-        elif laminate:
-            dx, di = (np.array(d) for d in zip(*(self.laminate.derivative(*kind) for kind in kinds)))
-            if self.transverse_shear:
-                dx = np.hstack([dx, self.laminate.shear_derivatives(kinds)])
-            di = di * self.inertia_terms
+        if laminate:
+            dx, di = self.coefficient_derivatives([(parameters[j].kind, parameters[j].target) for j in laminate])
             d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, dx, di)
         by_label = {a.label: a for a in self.attachments}
         for j, p in enumerate(parameters):
@@ -197,14 +201,9 @@ def _shape_derivatives(solution: LaminateSolution, parameters: list[Parameter], 
                          "and position, or fit frequencies alone")
     units = solution.units
     coefficients, inertia = system_coefficients(solution.laminate, solution.transverse_shear, solution.inertia_terms)
-    stiffness, mass = _weighted(units, solution.transverse_shear, coefficients, inertia)
-    if solution.attachments:
-        extra_stiffness, extra_mass = attachment_data(units, solution.attachments)
-        stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
-    dx, di = (np.array(d) for d in zip(*(solution.laminate.derivative(p.kind, p.target) for p in parameters)))
-    if solution.transverse_shear:
-        dx = np.hstack([dx, solution.laminate.shear_derivatives([(p.kind, p.target) for p in parameters])])
-    di = di * solution.inertia_terms
+    stiffness, mass = _with_attachments(units, *_weighted(units, solution.transverse_shear, coefficients, inertia),
+                                        solution.attachments)
+    dx, di = solution.coefficient_derivatives([(p.kind, p.target) for p in parameters])
     d_stiffness, d_mass = [], []
     for x, i in zip(dx, di):
         dk, dm = _weighted(units, solution.transverse_shear, x, i)
@@ -238,6 +237,15 @@ def _weighted(units: UnitMatrices, transverse_shear: bool, coefficients: np.ndar
         return (units.combined_data(coefficients, units.element_stiffness),
                 units.combined_data(inertia, units.element_mass))
     return coefficients @ units.stiffness_data, inertia @ units.mass_data
+
+
+def _with_attachments(units: UnitMatrices, stiffness: np.ndarray, mass: np.ndarray,
+                      attachments: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The CSR data of K and M with the attachments' (point masses, springs) added."""
+    if not attachments:
+        return stiffness, mass
+    extra_stiffness, extra_mass = attachment_data(units, attachments)
+    return stiffness + extra_stiffness, mass + extra_mass
 
 
 def _solution_bytes(solution: LaminateSolution) -> int:
@@ -279,9 +287,7 @@ def solve_laminate(
     else:
         units = unit_matrices(mesh, ShearDifferencePlate if transverse_shear else HermitePlate)
         stiffness, mass = _weighted(units, transverse_shear, coefficients, inertia)
-    if attachments:
-        extra_stiffness, extra_mass = attachment_data(units, attachments)
-        stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
+    stiffness, mass = _with_attachments(units, stiffness, mass, attachments)
     suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
     modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
     return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments, stack)
