@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 
 from fem.solver.attachments import PointMass
@@ -141,7 +142,7 @@ def blind_pairing(name: str) -> pd.DataFrame:
         truth_solution = truth.with_options(modes=len(ranks) + 8).solve(name_)
         partners = np.array([m["plate_mode"] - 1 for m in conf["modes"]])
         mac = mac_matrix(_w_on_grid(truth_solution, specimen.length, specimen.width)[:, partners],
-                         _w_on_grid(start_solution, specimen.length, specimen.width), np.eye(PARTNER_GRID**2))
+                         _w_on_grid(start_solution, specimen.length, specimen.width), sp.identity(PARTNER_GRID**2))
         truth_rows, truth_cols = linear_sum_assignment(-mac)
         expected = truth_cols[np.argsort(truth_rows)]
         ways = {"rank": ([""] * len(ranks), None), "labels": (labels, None),

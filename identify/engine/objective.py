@@ -18,7 +18,7 @@ from fem.specimen import Parameter, Specimen
 
 from ..measurements import Measurements
 from . import ties
-from .pairing import CLOSE_MODES, ModePairing
+from .pairing import ModePairing, close_modes
 from .parameters import ParameterSpace
 from .statistics import FitStatistics, weighted_residuals
 
@@ -183,6 +183,8 @@ class ShapeObjective(Objective):
         self.shaped = [(row, shape) for row, shape in enumerate(measurements.shapes_of(table)) if shape is not None]
         self.used: list[tuple[int, object]] | None = None
         self.scatter: np.ndarray | None = None  # per shape used: of a point's amplitude, relative to its largest
+        self._measured: list[np.ndarray] = []  # per shape used: the measured shape, real and at unit length
+        self._operators: dict[int, tuple[object, object]] = {}  # row -> (unit matrices, deflection at its points)
         self._jacobian: tuple[Evaluation, np.ndarray] | None = None  # the last one asked for
 
     def _local(self, row: int) -> tuple[str, int]:
@@ -195,23 +197,23 @@ class ShapeObjective(Objective):
             self.used = []
             for row, shape in self.shaped:
                 name, local = self._local(row)
-                solution = self.solution(e.model.specimen, name)
-                f, j = solution.frequencies_hz, e.pairings[name].indices[local]
-                bending = np.asarray(solution.labels) != "in-plane"
-                if np.sum(bending & (np.abs(f / f[j] - 1) <= CLOSE_MODES)) == 1:
+                if len(close_modes(self.solution(e.model.specimen, name), e.pairings[name].indices[local])) == 1:
                     self.used.append((row, shape))
             self.scatter = np.full(len(self.used), SHAPE_SCATTER)
+            self._measured = [_real_unit(shape.amplitude) for _, shape in self.used]
         return self.used
 
-    def _model_shape(self, e: Evaluation, row: int, shape) -> tuple[np.ndarray, np.ndarray, object, int]:
-        """The paired mode at the points (unit length, the measured sign), the operator,
-        the solution and the mode's index."""
+    def _model_shape(self, e: Evaluation, row: int, shape) -> tuple[np.ndarray, object, object, int]:
+        """The paired mode at the shape's points, the deflection operator there (built once
+        per mesh), the solution and the mode's index."""
         name, local = self._local(row)
         solution = self.solution(e.model.specimen, name)
         j = int(e.pairings[name].indices[local])
-        at = deflection_operator(solution.units, shape.xy[:, 0], shape.xy[:, 1])
-        x = at @ solution.modes.shapes[:, j]
-        return x, at, solution, j
+        units, at = self._operators.get(row, (None, None))
+        if units is not solution.units:
+            at = deflection_operator(solution.units, shape.xy[:, 0], shape.xy[:, 1])
+            self._operators[row] = (solution.units, at)
+        return at @ solution.modes.shapes[:, j], at, solution, j
 
     def shape_residual(self, e: Evaluation) -> np.ndarray:
         return np.concatenate(self._shape_blocks(e)) if self.shapes_used(e) else np.zeros(0)
@@ -219,8 +221,7 @@ class ShapeObjective(Objective):
     def _shape_blocks(self, e: Evaluation) -> list[np.ndarray]:
         out = []
         for k, (row, shape) in enumerate(self.shapes_used(e)):
-            x = self._model_shape(e, row, shape)[0]
-            measured = _real_unit(shape.amplitude)
+            x, measured = self._model_shape(e, row, shape)[0], self._measured[k]
             unit = x / np.linalg.norm(x) * np.sign(x @ measured)
             out.append((unit - measured) / (self.scatter[k] * np.abs(measured).max()))
         return out
@@ -243,7 +244,7 @@ class ShapeObjective(Objective):
         rows = []
         for k, (row, shape) in enumerate(used):
             x, at, _, j = self._model_shape(e, row, shape)
-            measured = _real_unit(shape.amplitude)
+            measured = self._measured[k]
             norm, sign = np.linalg.norm(x), np.sign(x @ measured)
             unit = x / norm
             js, d_phi = derivatives[self._local(row)[0]]

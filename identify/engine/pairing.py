@@ -56,6 +56,13 @@ def shape_at_points(solution, shape: ModeShape) -> np.ndarray:
     return deflection_operator(solution.units, shape.xy[:, 0], shape.xy[:, 1]) @ solution.modes.shapes
 
 
+def close_modes(solution, j: int) -> np.ndarray:
+    """The bending modes (indices) within ``CLOSE_MODES`` of mode j's frequency, j
+    among them when it bends: the modes a measured shape of mode j may mix."""
+    f = solution.frequencies_hz
+    return np.flatnonzero((np.asarray(solution.labels) != "in-plane") & (np.abs(f / f[j] - 1) <= CLOSE_MODES))
+
+
 def point_mac(model_at_points: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
     """MAC of a measured (complex) shape with each model mode at the same points (modes,)."""
     cross = np.abs(amplitude.conj() @ model_at_points) ** 2
@@ -73,11 +80,10 @@ def shape_permits(solution, shape: ModeShape) -> tuple[np.ndarray, np.ndarray]:
     are told apart by frequency; never an in-plane mode."""
     at_points = shape_at_points(solution, shape)
     mac = point_mac(at_points, shape.amplitude)
-    f = solution.frequencies_hz
     bending = np.asarray(solution.labels) != "in-plane"
-    held, member = np.zeros(len(f)), np.zeros(len(f), dtype=bool)
+    held, member = np.zeros(len(mac)), np.zeros(len(mac), dtype=bool)
     for j in np.flatnonzero(bending):
-        group = np.flatnonzero(bending & (np.abs(f / f[j] - 1) <= CLOSE_MODES))
+        group = close_modes(solution, j)
         coefficients = np.linalg.lstsq(at_points[:, group], shape.amplitude, rcond=None)[0]
         projected = at_points[:, group] @ coefficients
         held[j] = np.vdot(projected, projected).real / np.vdot(shape.amplitude, shape.amplitude).real
@@ -169,7 +175,6 @@ def shape_correlation(solution, shapes: list[ModeShape], paired: np.ndarray) -> 
     xy = np.unique(np.round(np.concatenate([s.xy for s in shapes]), 9), axis=0)
     mac = np.array([point_mac(shape_at_points(solution, s), s.amplitude) for s in shapes])
     at_points = deflection_operator(solution.units, xy[:, 0], xy[:, 1]) @ solution.modes.shapes
-    f, bending = solution.frequencies_hz, np.asarray(solution.labels) != "in-plane"
     product, measured2, model2, left2 = (np.zeros(len(xy)) for _ in range(4))
     for shape, j in zip(shapes, paired):
         if j < 0:
@@ -179,14 +184,13 @@ def shape_correlation(solution, shapes: list[ModeShape], paired: np.ndarray) -> 
         product[where] += np.abs(a * x.conj())
         measured2[where] += np.abs(a) ** 2
         model2[where] += np.abs(x) ** 2
-        group = np.union1d([j], np.flatnonzero(bending & (np.abs(f / f[j] - 1) <= CLOSE_MODES)))
-        close = at_points[np.ix_(where, group)]
+        close = at_points[np.ix_(where, np.union1d([j], close_modes(solution, j)))]
         left2[where] += np.abs(a - close @ np.linalg.lstsq(close, a, rcond=None)[0]) ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         comac = np.where(measured2 > 0, product**2 / (measured2 * model2), np.nan)
         residual = np.where(measured2 > 0, np.sqrt(left2 / measured2), np.nan)
-    return ShapeCorrelation(shapes[0].configuration, tuple(shapes), f.copy(), mac, np.asarray(paired, dtype=int), xy,
-                            comac, residual)
+    return ShapeCorrelation(shapes[0].configuration, tuple(shapes), solution.frequencies_hz.copy(), mac,
+                            np.asarray(paired, dtype=int), xy, comac, residual)
 
 
 def monotone_assignment(targets: np.ndarray, slots: np.ndarray) -> np.ndarray:

@@ -34,9 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.model import SpecimenModel
-from fem.solver.mode_shapes import deflection_operator
 
-from ..engine.pairing import CLOSE_MODES
+from ..engine.pairing import close_modes, shape_at_points
 from ..measurements import Measurements
 
 #: A signature explaining more than this share of the misfit is reported as present.
@@ -104,16 +103,16 @@ def shape_point_map(model: SpecimenModel, measurements: Measurements, pairings) 
     for name, pairing in pairings.items():
         rows = measurements.of(name)
         solution = solver.solve(name)
-        units, lam, f = solution.units, solution.modes.eigenvalues, solution.frequencies_hz
+        units, lam = solution.units, solution.modes.eigenvalues
         xy = units.mesh.node_xy
         w_index = units.element_type.NODE_DOFS.index("w")
         at_nodes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, len(lam))[:, w_index, :]
         for shape, i in zip(measurements.shapes_of(rows), pairing.indices):
             if shape is None:
                 continue
-            at_points = deflection_operator(units, shape.xy[:, 0], shape.xy[:, 1]) @ solution.modes.shapes
+            at_points = shape_at_points(solution, shape)
             a = shape.amplitude / np.linalg.norm(shape.amplitude)  # every mode weighs alike
-            close = np.flatnonzero(np.abs(f / f[i] - 1) <= CLOSE_MODES)
+            close = np.union1d([i], close_modes(solution, i))
             basis = np.linalg.qr(at_points[:, close])[0]
             r = a - basis @ (basis.T @ a)
             scale = np.vdot(at_points[:, i], a) / np.vdot(at_points[:, i], at_points[:, i])
