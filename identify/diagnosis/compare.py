@@ -15,7 +15,7 @@ from ..engine.peak_lists import matched_at
 from ..engine.result import FitResult
 from ..engine.statistics import FitStatistics
 from ..fitting.driver import fit_holding_bounds
-from ..fitting.patterns import PATTERN_SHARE, Pattern, ShapePointMap, residual_patterns, shape_point_map
+from ..fitting.patterns import PATTERN_SHARE, Pattern, ShapePointMap, residual_patterns
 from ..measurements import Measurements
 from ..reporting import html_report as h
 from ..reporting.report import shown_residuals
@@ -121,12 +121,12 @@ def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True
         now, model_hz, pairings, jacobian = model, evaluation.model_hz, evaluation.pairings, None
         statistics = objective.statistics(evaluation)
     solver = solving_model(now, measurements)
-    patterns, shares, xy, hints = residual_patterns(solver, measurements, model_hz, pairings, jacobian)
+    patterns, shares, xy, hints, shape_map = residual_patterns(solver, measurements, model_hz, pairings, jacobian)
     table = residual_table(measurements, model_hz)
     paired = table.assign(mode=np.concatenate([pairings[c].indices + 1 for c in measurements.configurations]))
     shapes = shape_correlations(now, measurements, paired, measurements.shapes)
     return Comparison(with_macs(table, shapes), statistics, patterns, fitted, shares, xy, tuple(hints), shapes,
-                      shape_point_map(solver, measurements, pairings), solver)
+                      shape_map, solver)
 
 
 __all__ = ["Comparison", "compare"]

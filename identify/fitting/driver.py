@@ -984,7 +984,7 @@ def with_held_scatter(result: FitResult, held: list[Parameter]) -> FitResult:
 def point_mass_hints(state: FitResult) -> tuple:
     """Point-mass start positions from the residual scan of a fit (``compare``), ranked
     (``point_mass_starts``)."""
-    _, shares, xy, hints = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
+    _, shares, xy, hints, _ = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
                                              state.model_hz, state.pairings, state.jacobian)
     return point_mass_starts(state.model, hints, shares, xy)
 

@@ -167,7 +167,7 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
                       pairings=None, jacobian: np.ndarray | None = None):
     """Score every signature of the residuals of ``model`` (solved as the fit solved it);
     returns (patterns, per-node share map of the point signature, node coordinates,
-    point-mass hints best first)."""
+    point-mass hints best first, the measured shapes' point-mass map or None)."""
     specimen = model.specimen
     table = measurements.table
     measured = table["frequency_hz"].to_numpy()
@@ -235,7 +235,7 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
                             f"best at x = {1e3 * xy[best, 0]:.0f} mm, y = {1e3 * xy[best, 1]:.0f} mm "
                             f"({equivalent} points about as good), about {1e3 * masses[best]:.2g} g there",
                             ("point_mass",)))
-    return tuple(patterns), shares, xy, hints
+    return tuple(patterns), shares, xy, hints, by_shapes
 
 
 __all__ = ["Pattern", "ScoreTest", "ShapePointMap", "residual_patterns", "shape_point_map", "PATTERN_SHARE", "ABSORBED",

@@ -25,13 +25,20 @@ def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataF
     return out
 
 
-def fit_residuals(result, macs: bool = True) -> pd.DataFrame:
+def fit_residuals(result) -> pd.DataFrame:
     """The residual rows of a fit (``fit --json`` "residuals"): every measured frequency with the model
     mode it is paired with (1-based), measured and model frequency, relative error,
     matched, and a note (a peak left out has None for mode, model frequency and error,
     and its note says why, naming the nearest mode); ranked data also
     keep the rank given (``measured_mode``) and the error in std when std_hz is given;
-    with measured shapes (and ``macs``), each shape's MAC with its paired mode (``mac``)."""
+    with measured shapes, each shape's MAC with its paired mode (``mac``)."""
+    out = _paired_rows(result)
+    out.insert(2, "label", _model_labels(result, out))
+    return with_macs(out, _correlations(result, out))
+
+
+def _paired_rows(result) -> pd.DataFrame:
+    """The residual rows of a fit before the model modes' labels and the shapes' MACs."""
     if result.peaks is not None:
         out = peak_table(result.peaks)
     else:
@@ -45,8 +52,7 @@ def fit_residuals(result, macs: bool = True) -> pd.DataFrame:
         out.insert(1, "mode", modes)
         out["matched"] = True
         out["note"] = ""
-    out.insert(2, "label", _model_labels(result, out))
-    return with_macs(out, fit_correlations(result)) if macs else out
+    return out
 
 
 def shape_correlations(model, measurements: Measurements, rows: pd.DataFrame,
@@ -84,9 +90,12 @@ def with_macs(rows: pd.DataFrame, correlations: dict[str, ShapeCorrelation]) -> 
 
 def fit_correlations(result) -> dict[str, ShapeCorrelation]:
     """The shape correlations of a fit (duck-typed result), {} without measured shapes."""
+    return _correlations(result, _paired_rows(result))
+
+
+def _correlations(result, rows: pd.DataFrame) -> dict[str, ShapeCorrelation]:
     measurements = result.peaks.measurements if result.peaks is not None else result.measurements
-    return shape_correlations(result.model, result.measurements, fit_residuals(result, macs=False),
-                              measurements.shapes)
+    return shape_correlations(result.model, result.measurements, rows, measurements.shapes)
 
 
 def _model_labels(result, rows: pd.DataFrame) -> list[str]:
