@@ -397,18 +397,32 @@ def is_multi_point_uff(paths) -> bool:
     return len(responses) > 1 or len(references) > 1
 
 
-def _points_csv(points) -> pd.DataFrame:
-    """A points table (a DataFrame or a CSV path: point, x_mm, y_mm), its point names as node numbers."""
+def read_points(points) -> pd.DataFrame:
+    """A points table of a multi-point test: a DataFrame or a CSV path with the columns
+    point (a name, or a UFF node number), x_mm, y_mm [mm, from the plate's corner at the
+    origin]; its columns checked, its values as given."""
     if isinstance(points, (str, Path)):
+        path = Path(points)
         try:
-            points = pd.read_csv(points, dtype={"point": str}, skipinitialspace=True, comment="#")
+            points = pd.read_csv(path, dtype={"point": str}, skipinitialspace=True, comment="#")
+        except FileNotFoundError:
+            raise MeasurementError(f"points table {str(path)!r} does not exist") from None
         except (OSError, ValueError) as exc:
-            raise MeasurementError(f"points table {str(points)!r} cannot be read as a CSV ({exc}); give a table with "
+            raise MeasurementError(f"points table {str(path)!r} cannot be read as a CSV ({exc}); give a table with "
                                    "columns point, x_mm, y_mm") from None
+    if not isinstance(points, pd.DataFrame):
+        raise MeasurementError(f"points must be a table (columns point, x_mm, y_mm), not {type(points).__name__}")
     missing = [c for c in ("point", "x_mm", "y_mm") if c not in points.columns]
     if missing:
         raise MeasurementError(f"points: column {missing[0]!r} is missing (columns: {', '.join(map(str, points.columns))}"
-                               "); give point (the UFF node number), x_mm, y_mm")
+                               "); give point (a name, or the UFF node number), x_mm, y_mm (mm from the plate's "
+                               "corner at the origin)")
+    return points
+
+
+def _points_csv(points) -> pd.DataFrame:
+    """A points table (``read_points``), its point names as node numbers."""
+    points = read_points(points)
     return points.assign(point=points["point"].map(_node_name))
 
 

@@ -59,7 +59,7 @@ from fem.io import write_text
 
 from .peaks import CSV_COLUMNS as PEAK_COLUMNS
 from .peaks import PeakList, extract_peaks
-from .readers import READERS
+from .readers import READERS, read_points
 
 #: Power k of s = i w that turns a receptance into the response's FRF.
 POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
@@ -232,18 +232,7 @@ class ShapeEstimate:
 def _check_points(recordings_by_point, points) -> pd.DataFrame:
     """The points table (point, x_mm, y_mm; a DataFrame or a CSV path) matched to the
     recordings' points, in the table's order."""
-    if isinstance(points, (str, Path)):
-        try:
-            points = pd.read_csv(points, dtype={"point": str})
-        except (OSError, ValueError) as exc:
-            raise MeasurementError(f"points = {str(points)!r} cannot be read as a CSV ({exc}); give a table with "
-                                   "columns point, x_mm, y_mm") from None
-    if not isinstance(points, pd.DataFrame):
-        raise MeasurementError(f"points must be a table (columns point, x_mm, y_mm), not {type(points).__name__}")
-    missing = [c for c in ("point", "x_mm", "y_mm") if c not in points.columns]
-    if missing:
-        raise MeasurementError(f"points: column {missing[0]!r} is missing (columns: {', '.join(map(str, points.columns))}"
-                               "); give point, x_mm, y_mm (mm from the plate's corner at the origin)")
+    points = read_points(points)
     table = pd.DataFrame({"point": points["point"].astype(str)})
     for axis in ("x_mm", "y_mm"):
         table[axis] = pd.to_numeric(points[axis], errors="coerce").to_numpy()
@@ -316,17 +305,8 @@ def recordings_in_folders(points, folder: str | Path | None = None) -> tuple[dic
     in ``folder`` (default: the table's own folder), one sub-folder per point named as in
     the table holding that point's hits (as ``tap_simulation.write_roving`` writes them).
     Returns the recordings per point and the table read."""
-    path = Path(points)
-    try:
-        table = pd.read_csv(path, dtype={"point": str}, skipinitialspace=True, comment="#")
-    except FileNotFoundError:
-        raise MeasurementError(f"points table {str(path)!r} does not exist") from None
-    except (OSError, ValueError) as exc:
-        raise MeasurementError(f"points table {str(path)!r} cannot be read as a CSV ({exc}); give a table with "
-                               "columns point, x_mm, y_mm") from None
-    if "point" not in table.columns:
-        raise MeasurementError(f"points table {str(path)!r}: column 'point' is missing; give point, x_mm, y_mm")
-    root = Path(folder) if folder is not None else path.parent
+    table = read_points(points)
+    root = Path(folder) if folder is not None else Path(points).parent
     out = {}
     for name in table["point"].astype(str):
         where = root / name
