@@ -211,7 +211,6 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
         # weight of shapes against frequencies is the data's, not an assumption's.
         if abs(objective.rescaled(current) - 1) < SCATTER_SETTLED:
             break
-        current = objective.evaluate(current.values, current.pairings, track=False)
         current, stop, tracking = iterate(objective, current, history, options, progress)
         warnings += tracking
     twins, repaired = [], ""
