@@ -64,7 +64,8 @@ class Comparison:
         shapes = self.shapes or {}
         hint = self.shape_map.hint() if self.shape_map is not None else None
         return {"mac_matrix": {name: c.to_dict() for name, c in shapes.items()},
-                "worst_point_mm": {name: (1e3 * c.worst_point).tolist() for name, c in shapes.items()},
+                "worst_point_mm": {name: None if c.worst_point is None else (1e3 * c.worst_point).tolist()
+                                   for name, c in shapes.items()},
                 "point_mass_from_shapes": None if hint is None else {
                     "x_mm": 1e3 * hint["xy"][0], "y_mm": 1e3 * hint["xy"][1], "mass_g": 1e3 * hint["mass_kg"],
                     "share": hint["share"]}}

@@ -155,8 +155,11 @@ class ShapeCorrelation:
         return out
 
     @property
-    def worst_point(self) -> np.ndarray:
-        """The point [m] where the model's shapes fail most (largest ``residual``)."""
+    def worst_point(self) -> np.ndarray | None:
+        """The point [m] where the model's shapes fail most (largest ``residual``); None
+        when no shape was paired (every peak with a shape left out)."""
+        if not np.isfinite(self.residual).any():
+            return None
         return self.xy[int(np.nanargmax(self.residual))]
 
     def to_dict(self) -> dict:

@@ -19,11 +19,14 @@ def shape_lines(correlations: dict) -> list[str]:
     for name, c in correlations.items():
         macs = ", ".join(f"{f:.6g} Hz {m:.3f}" if np.isfinite(m) else f"{f:.6g} Hz -"
                          for f, m in zip(c.measured_hz, c.paired_mac))
+        lines.append(f"  {name}: MAC with the paired mode: {macs}")
+        if c.worst_point is None:
+            lines.append(f"  {name}: no peak with a shape is paired: no map of where the shapes disagree")
+            continue
         x, y = 1e3 * c.worst_point
-        lines += [f"  {name}: MAC with the paired mode: {macs}",
-                  f"  {name}: shapes disagree most at ({x:.0f}, {y:.0f}) mm (residual "
-                  f"{np.nanmax(c.residual):.2f} of the measured amplitude there; COMAC lowest "
-                  f"{np.nanmin(c.comac):.3f})"]
+        lines.append(f"  {name}: shapes disagree most at ({x:.0f}, {y:.0f}) mm (residual "
+                     f"{np.nanmax(c.residual):.2f} of the measured amplitude there; COMAC lowest "
+                     f"{np.nanmin(c.comac):.3f})")
     return lines
 
 
@@ -69,7 +72,8 @@ def plot_shape_maps(correlations: dict, length: float, width: float, path: Path)
             x, y = 1e3 * c.xy[:, 0], 1e3 * c.xy[:, 1]
             drawn = _filled(ax, x, y, values, cmap)
             ax.plot([0, 1e3 * length, 1e3 * length, 0, 0], [0, 0, 1e3 * width, 1e3 * width, 0], "k-", lw=0.8)
-            ax.plot(*(1e3 * c.worst_point), "r+", ms=14, mew=2)
+            if c.worst_point is not None:
+                ax.plot(*(1e3 * c.worst_point), "r+", ms=14, mew=2)
             ax.set_aspect("equal")
             ax.set_title(f"{name}: {title}", fontsize=9)
             ax.set_xlabel("x [mm]", fontsize=8)

@@ -292,3 +292,19 @@ def test_use_shapes_refuses_an_attachment_effect_before_any_fit(example_spec, bu
     data = load_shapes(COATED_PLATE_SHAPES, example_spec, bundled)
     with pytest.raises(LayerIdError, match="point_mass"):
         fit(example_spec, data, ["point_mass"], options=FitOptions(use_shapes=True))
+
+
+def test_a_configuration_whose_shaped_peaks_are_all_left_out(paper_model, tmp_path):
+    """Every peak with a shape left out (none paired): the MAC matrix stays, the maps of
+    where the shapes disagree are empty (no worst point, null in JSON terms), and the text
+    and the figures are still made."""
+    from identify.reporting.shape_plots import plot_shape_maps, shape_lines
+
+    data = synthetic_measurements(paper_model, modes=5, seed=1, shape_grid=(5, 4))
+    shapes = data.shapes_of(data.of("original"))
+    correlation = shape_correlation(paper_model.solve("original"), shapes, np.full(len(shapes), -1))
+    assert correlation.worst_point is None and np.isnan(correlation.paired_mac).all()
+    assert correlation.mac.shape[0] == len(shapes)
+    assert len(shape_lines({"original": correlation})) == 2
+    specimen = paper_model.specimen
+    assert plot_shape_maps({"original": correlation}, specimen.length, specimen.width, tmp_path / "maps.png").exists()
