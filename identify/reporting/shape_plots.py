@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from matplotlib.tri import Triangulation
 
 from fem.plotting import new_figure, save_figure
 
@@ -116,7 +115,7 @@ def plot_measured_shapes(estimate, path: Path) -> Path:
         shape = estimate.shapes[k].real
         _filled(ax, x, y, shape, "RdBu")
         try:
-            ax.tricontour(Triangulation(x, y), shape, levels=[0], colors="k", linestyles="--", linewidths=0.8)
+            ax.tricontour(x, y, shape, levels=[0], colors="k", linestyles="--", linewidths=0.8)
         except (ValueError, RuntimeError):
             pass  # too few points for a line
         ax.plot(x, y, "k.", ms=2)
@@ -131,7 +130,7 @@ def _filled(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cmap: str):
     """Filled contours over the points where they span an area, else the points coloured."""
     ok = np.isfinite(values)
     try:
-        return ax.tricontourf(Triangulation(x[ok], y[ok]), values[ok], levels=12, cmap=cmap)
+        return ax.tricontourf(x[ok], y[ok], values[ok], levels=12, cmap=cmap)
     except (ValueError, RuntimeError):  # too few points, or all on a line
         return ax.scatter(x[ok], y[ok], c=values[ok], cmap=cmap, s=40)
 
@@ -163,7 +162,7 @@ def plot_nodal_lines(correlations: dict, solutions: dict, path: Path) -> Path:
             model = shape_at_points(solution, shapes[k])[:, j]
             measured = shapes[k].amplitude * np.exp(-1j * np.angle(np.vdot(model, shapes[k].amplitude)))
             try:
-                ax.tricontour(Triangulation(*shapes[k].xy.T), measured.real, levels=[0], colors="tab:red",
+                ax.tricontour(*shapes[k].xy.T, measured.real, levels=[0], colors="tab:red",
                               linestyles="--", linewidths=1.0)
             except (ValueError, RuntimeError):
                 pass  # too few points for a line
