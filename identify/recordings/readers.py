@@ -352,6 +352,10 @@ METRES_BELOW = 5.0
 #: Decimals [mm] kept of converted node coordinates (1 nm, far below any measurement):
 #: the same grid in metres and in mm gives the same points (0.038 m is 38.00000000000001 mm).
 MM_DECIMALS = 6
+#: Two data sets' coordinates of one node agree within this [mm] plus ``UFF_X_PRECISION``
+#: of the coordinate (data set 15 prints 6 digits): the same grid exported in metres and
+#: in mm agrees, a node moved by a thousandth of a millimetre or more does not.
+SAME_NODE_MM = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -426,14 +430,20 @@ def _points_csv(points) -> pd.DataFrame:
     return points.assign(point=points["point"].map(_node_name))
 
 
-def _geometry(sets: list[tuple[str, dict]]) -> tuple[dict[str, tuple[float, float, float]], float | None]:
-    """Node coordinates (data sets 15 and 2411) in the files' units, and the units' length
-    factor (data set 164: file units per metre; None without one)."""
+#: Where a data set gives a node's position: the file, the data set type (15 or 2411) and
+#: the coordinates x, y, z in the file's length unit.
+NodePosition = tuple[str, int, tuple[float, float, float]]
+
+
+def _geometry(sets: list[tuple[str, dict]]) -> tuple[dict[str, list[NodePosition]], float | None]:
+    """Every position data sets 15 and 2411 give each node, in file order and the files'
+    units, and the units' length factor (data set 164: file units per metre; None without
+    one)."""
     nodes, factors = {}, {}
     for source, s in sets:
         if s.get("type") in (15, 2411):
             for n, x, y, z in zip(s["node_nums"], s["x"], s["y"], s["z"]):
-                nodes[_node_name(n)] = (float(x), float(y), float(z))
+                nodes.setdefault(_node_name(n), []).append((source, int(s["type"]), (float(x), float(y), float(z))))
         elif s.get("type") == 164:
             factors[float(s["length"])] = source
     if len(factors) > 1:
@@ -442,13 +452,34 @@ def _geometry(sets: list[tuple[str, dict]]) -> tuple[dict[str, tuple[float, floa
     return nodes, next(iter(factors), None)
 
 
+def _position_mm(name: str, given: list[NodePosition], to_mm: float) -> tuple[float, float]:
+    """Node ``name``'s x, y [mm] (z ignored), the same in every position ``given`` it
+    (``_geometry``) within ``SAME_NODE_MM`` plus ``UFF_X_PRECISION`` of the coordinate;
+    ``to_mm``: mm per file unit."""
+    (source, kind, xyz), *others = given
+    xy = np.array(xyz[:2]) * to_mm
+    for other_source, other_kind, other_xyz in others:
+        other_xy = np.array(other_xyz[:2]) * to_mm
+        if np.any(np.abs(other_xy - xy) > SAME_NODE_MM + UFF_X_PRECISION * np.maximum(abs(xy), abs(other_xy))):
+            shown = [", ".join(f"{round(float(c), 4):.10g}" for c in v) for v in (xy, other_xy)]
+            files = source if other_source == source else f"{source}, {other_source}"
+            raise _fail(files, f"node {name} is at (x_mm, y_mm) = ({shown[0]}) in {source} (data set {kind}) but "
+                        f"({shown[1]}) in {other_source} (data set {other_kind}); correct the wrong one, or give one "
+                        "points table for every node (--points POINTS.csv: point = node number, x_mm, y_mm), which "
+                        "replaces the files' geometry")
+    return round(float(xy[0]), MM_DECIMALS), round(float(xy[1]), MM_DECIMALS)
+
+
 def read_uff_points(paths, points=None) -> MultiPointUFF:
     """A multi-point test from universal files ``paths``: data set 58 FRFs (function type
     4) of several points along the plate normal (+Z or -Z, turned to +Z) with one
     reference (a vibrometer or roving sensor) or one response node (a roving hammer), and
     the points' coordinates from data sets 15 or 2411 in the files (units from data set
     164; z ignored) or from ``points`` (a table or CSV: point = node number, x_mm, y_mm
-    [mm] in the plate's frame), which then replace the files' geometry."""
+    [mm] in the plate's frame), which then replace the files' geometry.
+
+    A measured node placed twice (two files, or two data sets) must sit at the same x, y
+    (within ``SAME_NODE_MM`` [mm] plus ``UFF_X_PRECISION`` of the value)."""
     paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     sets = []
     for path in paths:
@@ -512,13 +543,13 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
     else:
         nodes, per_metre = _geometry(sets)
         measured = {n: nodes[n] for n in by_point if n in nodes}
-        values = np.abs([c for xyz in measured.values() for c in xyz])
+        values = np.abs([c for given in measured.values() for _, _, xyz in given for c in xyz])
         if per_metre is None and len(values) and values.max() < METRES_BELOW:
             per_metre = 1.0
             notes.append(f"no units data set (164) and every node coordinate below {METRES_BELOW:g}: taken as metres")
         to_mm = 1000.0 / per_metre if per_metre is not None else 1.0
-        frame = pd.DataFrame([(n, *(round(c * to_mm, MM_DECIMALS) for c in measured[n][:2]))
-                              for n in sorted(measured, key=int)], columns=["point", "x_mm", "y_mm"])
+        frame = pd.DataFrame([(n, *_position_mm(n, measured[n], to_mm)) for n in sorted(measured, key=int)],
+                             columns=["point", "x_mm", "y_mm"])
         missing_fix = "export the geometry (data set 15 or 2411) with the FRFs, or give a points table (--points)"
     for name, (source, record) in record_of.items():
         if name not in set(frame["point"]):

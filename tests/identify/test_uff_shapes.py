@@ -22,6 +22,8 @@ from .test_shapes_lsfd import BAND_HZ, MODES, PLATE, SENSOR_MM, mac
 LINES_HZ = np.arange(100.0, 1050.0, 0.25)
 #: A grid whose coordinates print exactly in E13.5 in metres and in mm.
 X_MM, Y_MM = np.linspace(15.0, 135.0, 5), np.array([14.0, 38.0, 62.0, 86.0])
+#: Damping ratios of the 8 solved modes ([model] modes = 8).
+DAMPING = np.linspace(0.004, 0.007, 8)
 FIXED_NODE = 100  # the fixed end (reference of a vibrometer test, sensor of a roving hammer): no coordinates needed
 SI = {"units_code": 1, "units_description": "SI", "length": 1.0}
 MM = {"units_code": 5, "units_description": "mm (milli newton)", "length": 1000.0}
@@ -30,7 +32,9 @@ MM = {"units_code": 5, "units_description": "mm (milli newton)", "length": 1000.
 @pytest.fixture(scope="module")
 def plate(tmp_path_factory):
     """The FE plate's accelerances at the grid's 20 nodes (numbered 1-20) for a force at
-    ``SENSOR_MM``: all 8 solved modes (the 8th above the band), damping 0.4-0.7 %."""
+    ``SENSOR_MM``: all 8 solved modes (the 8th above the band), damping ``DAMPING``; the
+    folder, points, FRFs by node, the first ``MODES`` shapes at the points (modes,
+    points), their frequencies [Hz] and their accelerance constants (modes, points)."""
     folder = tmp_path_factory.mktemp("uff")
     (folder / "plate.toml").write_text(PLATE)
     solution = load_spec(folder / "plate.toml").solve("original")
@@ -39,10 +43,10 @@ def plate(tmp_path_factory):
                           columns=["point", "x_mm", "y_mm"])
     at_points = deflection_operator(solution.units, points["x_mm"] / 1000, points["y_mm"] / 1000) @ field
     at_sensor = deflection_operator(solution.units, SENSOR_MM[0] / 1000, SENSOR_MM[1] / 1000) @ field
-    damping = np.linspace(0.004, 0.007, field.shape[1])
-    frfs = {int(p): Modes(solution.frequencies_hz, damping, row * at_sensor[0]).accelerance(LINES_HZ)
-            for p, row in zip(points["point"], at_points)}
-    return folder, points, frfs, at_points[:, :MODES].T, solution.frequencies_hz[:MODES]
+    constants = at_points * at_sensor[0]
+    frfs = {int(p): Modes(solution.frequencies_hz, DAMPING, row).accelerance(LINES_HZ)
+            for p, row in zip(points["point"], constants)}
+    return folder, points, frfs, at_points[:, :MODES].T, solution.frequencies_hz[:MODES], constants[:, :MODES].T
 
 
 def frf_record(node, h, roving="response", direction=3, func_type=4, lines=LINES_HZ):
@@ -85,7 +89,7 @@ def write(path, sets):
 @pytest.fixture(scope="module")
 def metres_file(plate):
     """A vibrometer test in one file: data set 164 (SI), the geometry in metres (15) and the 20 FRFs."""
-    folder, points, frfs, _, _ = plate
+    folder, points, frfs, *_ = plate
     return write(folder / "metres.uff",
                  [units(SI), geometry(points, 15, 1e-3), *(frf_record(n, h) for n, h in frfs.items())])
 
@@ -103,7 +107,7 @@ def test_shapes_from_a_multi_point_uff(plate, estimate):
     for the seventh, 951 Hz, nearest the band's top, where the upper residual term stands
     in for the 8th mode 1094 Hz away), the points in mm as the grid, the vibrometer's
     layout."""
-    _, points, _, exact, frequencies = plate
+    _, points, _, exact, frequencies, _ = plate
     measured, result = estimate
     assert measured.roving == "response" and measured.notes == ()
     pd.testing.assert_frame_equal(measured.points, points)
@@ -117,7 +121,7 @@ def test_roving_hammer_along_minus_z(plate, metres_file, tmp_path):
     nodes hit along -Z (their FRFs negated in the file), the geometry in a second file:
     turned back to +Z, exactly the vibrometer file's records (so its shapes); without the
     sign flip the -Z nodes' amplitudes would change sign."""
-    _, points, frfs, _, _ = plate
+    _, points, frfs, *_ = plate
     records = [frf_record(n, -h if n % 2 else h, "reference", -3 if n % 2 else 3) for n, h in frfs.items()]
     paths = [write(tmp_path / "frfs.uff", records), write(tmp_path / "grid.unv", [units(SI), geometry(points, 15, 1e-3)])]
     measured, reference = read_uff_points(paths), read_uff_points(metres_file)
@@ -139,7 +143,7 @@ def test_coordinates_in_any_length_unit(plate, dataset, system, scale, assumed, 
     coordinate is below 5, with a note; mm otherwise): the same points in mm.  Data set 15
     prints 6 digits, 2411 17: the grid (0.038 m, 15 / 25.4 in) comes back to the nanometre
     the reader rounds to."""
-    _, points, frfs, _, _ = plate
+    _, points, frfs, *_ = plate
     sets = [geometry(points, dataset, scale), frf_record(1, frfs[1]), frf_record(2, frfs[2])]
     measured = read_uff_points(write(tmp_path / "grid.uff", sets if system is None else [units(system), *sets]))
     pd.testing.assert_frame_equal(measured.points, points.iloc[:2])
@@ -149,7 +153,7 @@ def test_coordinates_in_any_length_unit(plate, dataset, system, scale, assumed, 
 def test_cli_mm_file_gives_the_metres_files_shapes(plate, estimate, tmp_path):
     """``peaks FILE.uff --shapes-out --out`` on the grid in mm (data sets 2411 and 164):
     the text SHAPES.csv and the peak list the library writes from the metres file; exit 0."""
-    _, points, frfs, _, _ = plate
+    _, points, frfs, *_ = plate
     path = write(tmp_path / "mm.uff", [units(MM), geometry(points, 2411), *(frf_record(n, h) for n, h in frfs.items())])
     code = identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--shapes-out",
                             str(tmp_path / "shapes.csv"), "--out", str(tmp_path / "peaks.csv")])
@@ -164,7 +168,7 @@ def test_cli_mm_file_gives_the_metres_files_shapes(plate, estimate, tmp_path):
 def test_points_csv_replaces_the_geometry(plate, metres_file, tmp_path):
     """A points table (point = node number) beside FRFs without geometry gives the
     vibrometer file's points and records; it also replaces a file's own geometry."""
-    _, points, frfs, _, _ = plate
+    _, points, frfs, *_ = plate
     bare = write(tmp_path / "bare.uff", [frf_record(n, h) for n, h in frfs.items()])
     points.to_csv(tmp_path / "points.csv", index=False)
     reference = read_uff_points(metres_file)
@@ -195,6 +199,9 @@ BAD_FILES = [
     ("both_ends_rove", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, "reference"),
                         frf_record(3, ONES, "reference")],
      r"FRFs of 2 response nodes and 3 reference nodes; a shape needs one fixed end"),
+    ("moved_node", [geometry(GRID), geometry(GRID.assign(x_mm=[10.0, 20.5, 30.0]), 2411), frf_record(1, ONES),
+                    frf_record(2, ONES)],
+     r"node 2\b.*\(20, 5\).*data set 15.*\(20\.5, 5\).*data set 2411"),
     ("two_units", [units(SI), geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), units(MM)],
      r"data sets 164 give different length units \(1, 1000 per metre\)"),
 ]
@@ -214,7 +221,7 @@ def test_bad_files_name_the_record_and_field(tmp_path, capsys, name, sets, messa
 def test_single_point_uff_stays_one_points_hits(plate, tmp_path):
     """FRFs of one node are averaged as one point's records, as before (exit 0); with
     --shapes-out they are refused (exit 2)."""
-    _, _, frfs, _, _ = plate
+    _, _, frfs, *_ = plate
     path = write(tmp_path / "one.uff", [frf_record(1, frfs[1]), frf_record(1, frfs[1])])
     assert identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--out", str(tmp_path / "p.csv")]) == 0
     assert len(pd.read_csv(tmp_path / "p.csv")) >= 5
@@ -224,7 +231,7 @@ def test_single_point_uff_stays_one_points_hits(plate, tmp_path):
 def test_coherences_beside_the_frfs_are_skipped(plate, metres_file, tmp_path):
     """A lab export with a coherence record per point beside its FRF (function type 6):
     the coherences are skipped, said in a note, and the FRFs read as without them."""
-    _, points, frfs, _, _ = plate
+    _, points, frfs, *_ = plate
     records = [units(SI), geometry(points, 15, 1e-3)]
     for n, h in frfs.items():
         records += [frf_record(n, h), frf_record(n, np.ones(len(h)), func_type=6)]
@@ -232,3 +239,36 @@ def test_coherences_beside_the_frfs_are_skipped(plate, metres_file, tmp_path):
     assert len(measured.notes) == 1 and reference.notes == ()
     for name, (record,) in measured.recordings_by_point.items():
         np.testing.assert_array_equal(record.frf, reference.recordings_by_point[name][0].frf)
+
+
+def test_a_node_placed_alike_by_two_files(plate, tmp_path):
+    """The grid in two files, 1/3 mm off the printed digits: in metres in data set 15 (6
+    digits: 15.3333 mm) beside the FRFs, and in data set 2411 (17 digits) in a second
+    file, which also places the fixed end's node elsewhere: the same points as the first
+    file alone (its printing, within 1 um plus 1e-5 of the value of the other's); the
+    fixed end is no point, so its place does not matter."""
+    _, points, frfs, *_ = plate
+    shifted = points.assign(x_mm=points["x_mm"] + 1 / 3, y_mm=points["y_mm"] + 1 / 3)
+    fixed = pd.DataFrame({"point": [str(FIXED_NODE)], "x_mm": [0.0], "y_mm": [0.0]})
+    frf_file = write(tmp_path / "frfs.uff", [units(SI), geometry(pd.concat([shifted, fixed]), 15, 1e-3),
+                                             *(frf_record(n, h) for n, h in frfs.items())])
+    grid = write(tmp_path / "grid.unv", [units(SI), geometry(pd.concat([shifted, fixed.assign(x_mm=9.0)]), 2411, 1e-3)])
+    alone = read_uff_points(frf_file)
+    assert np.abs(alone.points[["x_mm", "y_mm"]].to_numpy() - shifted[["x_mm", "y_mm"]].to_numpy()).max() > 1e-5
+    pd.testing.assert_frame_equal(read_uff_points([frf_file, grid]).points, alone.points)
+
+
+@pytest.mark.parametrize("moved_mm", [0.01, -5.0])
+def test_a_node_placed_apart_by_two_files_is_refused(plate, metres_file, tmp_path, moved_mm):
+    """A second file placing node 7 (45, 62 mm) 0.01 mm (above 1 um plus 1e-5 of the
+    value, data set 15's printing) or 5 mm away: refused, naming the node, both files and
+    both places in mm, in either order; a points table replaces both geometries."""
+    _, points, *_ = plate
+    moved = points.assign(x_mm=np.where(points["point"] == "7", points["x_mm"] + moved_mm, points["x_mm"]))
+    grid = write(tmp_path / "grid.unv", [units(SI), geometry(moved, 2411, 1e-3)])
+    place = rf"\({45 + moved_mm:g}, 62\)"
+    with pytest.raises(MeasurementError, match=rf"node 7\b.*\(45, 62\).*metres\.uff.*{place}.*grid\.unv"):
+        read_uff_points([metres_file, grid])
+    with pytest.raises(MeasurementError, match=rf"node 7\b.*{place}.*grid\.unv.*\(45, 62\).*metres\.uff"):
+        read_uff_points([grid, metres_file])
+    pd.testing.assert_frame_equal(read_uff_points([metres_file, grid], points).points, points)
