@@ -356,6 +356,8 @@ MM_DECIMALS = 6
 #: of the coordinate (data set 15 prints 6 digits): the same grid exported in metres and
 #: in mm agrees, a node moved by a thousandth of a millimetre or more does not.
 SAME_NODE_MM = 1e-3
+#: Points measured more than once that a note names with their records (the rest counted).
+REPEATS_SHOWN = 5
 
 
 @dataclass(frozen=True, eq=False)
@@ -470,6 +472,22 @@ def _position_mm(name: str, given: list[NodePosition], to_mm: float) -> tuple[fl
     return round(float(xy[0]), MM_DECIMALS), round(float(xy[1]), MM_DECIMALS)
 
 
+def _check_repeat(source: str, record: str, name: str, frf: MeasuredFRF, earlier_ids: list[tuple[str, str]],
+                  earlier: list[MeasuredFRF]) -> None:
+    """A repeated record ``record`` of node ``name`` (turned to +Z) against the node's
+    ``earlier`` records (their sources and ids ``earlier_ids``): averaged later, it must
+    measure the same quantity and must not be a copy of one of them."""
+    for (other_source, other_record), other in zip(earlier_ids, earlier, strict=True):
+        if other.quantity != frf.quantity:
+            raise _fail(source, f"record '{record}' (node {name}) measures {frf.quantity} but {other_source}'s record "
+                        f"'{other_record}' of the same node measures {other.quantity}; a point's repeated FRFs are "
+                        "averaged: export them as one quantity, or drop one")
+        if np.array_equal(other.frf, frf.frf):
+            raise _fail(source, f"record '{record}' (node {name}) holds the same FRF as {other_source}'s record "
+                        f"'{other_record}': one measurement read twice would pass for a repeat; give each file and "
+                        "each record once")
+
+
 def read_uff_points(paths, points=None) -> MultiPointUFF:
     """A multi-point test from universal files ``paths``: data set 58 FRFs (function type
     4) of several points along the plate normal (+Z or -Z, turned to +Z) with one
@@ -479,7 +497,10 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
     [mm] in the plate's frame), which then replace the files' geometry.
 
     A measured node placed twice (two files, or two data sets) must sit at the same x, y
-    (within ``SAME_NODE_MM`` [mm] plus ``UFF_X_PRECISION`` of the value)."""
+    (within ``SAME_NODE_MM`` [mm] plus ``UFF_X_PRECISION`` of the value). A point with
+    several FRF records keeps them all (``estimate_shapes`` averages them, each one hit),
+    said in a note; a record given twice, or a repeat of another response quantity, is
+    refused."""
     paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     sets = []
     for path in paths:
@@ -513,7 +534,7 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
     fixed_key = "ref_dir" if roving == "response" else "rsp_dir"
     first = _uff_frf(*records[0])
     by_point: dict[str, list[MeasuredFRF]] = {}
-    record_of = {}
+    record_of: dict[str, list[tuple[str, str]]] = {}
     for source, r in records:
         name = _node_name(r[node_key])
         direction = int(r[direction_key])
@@ -530,12 +551,20 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
                         f"Hz by {first.frequency_hz[1] - first.frequency_hz[0]:g} Hz; export every FRF on the same "
                         "frequency lines")
         sign = UFF_NORMAL[direction] * UFF_NORMAL.get(int(r[fixed_key]), 1.0)
-        by_point.setdefault(name, []).append(MeasuredFRF(f"{source} node {name}", frf.frequency_hz, sign * frf.frf,
-                                                         frf.quantity))
-        record_of.setdefault(name, (source, r.get("id1", "")))
+        turned = MeasuredFRF(f"{source} node {name}", frf.frequency_hz, sign * frf.frf, frf.quantity)
+        _check_repeat(source, r.get("id1", ""), name, turned, record_of.get(name, []), by_point.get(name, []))
+        by_point.setdefault(name, []).append(turned)
+        record_of.setdefault(name, []).append((source, r.get("id1", "")))
     notes = [f"skipped {len(beside)} record(s) of " + ", ".join(sorted({UFF_BESIDE_FRFS[int(r['func_type'])]
                                                                       for r in beside}))
              + " (the shapes come from the FRFs)"] if beside else []
+    repeated = {n: ids for n, ids in record_of.items() if len(ids) > 1}
+    if repeated:
+        shown = "; ".join(f"node {n}: " + ", ".join(f"{s} '{i}'" for s, i in ids)
+                          for n, ids in list(repeated.items())[:REPEATS_SHOWN])
+        more = f"; and {len(repeated) - REPEATS_SHOWN} more" if len(repeated) > REPEATS_SHOWN else ""
+        notes.append(f"{len(repeated)} point(s) measured more than once, their FRFs averaged (the mean on their "
+                     f"common frequency lines, each record counting as one hit): {shown}{more}")
     if points is not None:
         table = _points_csv(points)
         frame = table.loc[table["point"].isin(by_point), ["point", "x_mm", "y_mm"]].reset_index(drop=True)
@@ -551,7 +580,7 @@ def read_uff_points(paths, points=None) -> MultiPointUFF:
         frame = pd.DataFrame([(n, *_position_mm(n, measured[n], to_mm)) for n in sorted(measured, key=int)],
                              columns=["point", "x_mm", "y_mm"])
         missing_fix = "export the geometry (data set 15 or 2411) with the FRFs, or give a points table (--points)"
-    for name, (source, record) in record_of.items():
+    for name, ((source, record), *_) in record_of.items():
         if name not in set(frame["point"]):
             raise _fail(source, f"record '{record}': {node_key} = {name} has no coordinates; {missing_fix}")
     return MultiPointUFF({n: by_point[n] for n in frame["point"]}, frame, roving, tuple(notes))

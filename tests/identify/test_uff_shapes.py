@@ -11,6 +11,7 @@ from fem.errors import MeasurementError
 from fem.solver.mode_shapes import deflection_operator
 from fem.spec import load_spec
 from identify.cli import main as identify_layers
+from identify.recordings.peaks import extract_peaks
 from identify.recordings.readers import read_uff_points
 from identify.recordings.shapes import estimate_shapes
 from identify.recordings.tap_simulation import Modes
@@ -202,6 +203,11 @@ BAD_FILES = [
     ("moved_node", [geometry(GRID), geometry(GRID.assign(x_mm=[10.0, 20.5, 30.0]), 2411), frf_record(1, ONES),
                     frf_record(2, ONES)],
      r"node 2\b.*\(20, 5\).*data set 15.*\(20\.5, 5\).*data set 2411"),
+    ("record_twice", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), frf_record(2, ONES)],
+     r"'H2'.*node 2\b.*record_twice\.uff.*'H2'"),
+    ("repeat_as_velocity", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES),
+                            {**frf_record(2, 2 * ONES), "ordinate_spec_data_type": 11}],
+     r"'H2'.*node 2\b.*velocity.*'H2'.*acceleration"),
     ("two_units", [units(SI), geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), units(MM)],
      r"data sets 164 give different length units \(1, 1000 per metre\)"),
 ]
@@ -272,3 +278,24 @@ def test_a_node_placed_apart_by_two_files_is_refused(plate, metres_file, tmp_pat
     with pytest.raises(MeasurementError, match=rf"node 7\b.*{place}.*grid\.unv.*\(45, 62\).*metres\.uff"):
         read_uff_points([grid, metres_file])
     pd.testing.assert_frame_equal(read_uff_points([metres_file, grid], points).points, points)
+
+
+def test_a_point_measured_twice_is_averaged(plate, tmp_path):
+    """Node 7 measured again in a second file along -Z (its FRF negated), 10 % weaker where
+    the first file's record is 10 % stronger: both records kept, turned to +Z, and said in
+    a note; the point's peak list, as ``estimate_shapes`` makes it, averages them to the
+    plate's FRF (each printed to 12 digits: within 7.1e-12 of it) as two hits.  The first
+    file given twice is refused: copies would pass for repeats."""
+    _, points, frfs, *_ = plate
+    first = write(tmp_path / "first.uff", [units(SI), geometry(points, 15, 1e-3),
+                                           *(frf_record(n, 1.1 * h if n == 7 else h) for n, h in frfs.items())])
+    again = write(tmp_path / "again.uff", [frf_record(7, -0.9 * frfs[7], direction=-3)])
+    measured = read_uff_points([first, again])
+    assert len(measured.notes) == 1
+    assert {n: len(r) for n, r in measured.recordings_by_point.items()} == {n: 1 + (n == "7") for n in points["point"]}
+    pd.testing.assert_frame_equal(measured.points, points)
+    twice = extract_peaks(measured.recordings_by_point["7"], band_hz=BAND_HZ).frf
+    assert twice.n_hits == 2
+    np.testing.assert_allclose(twice.h1, frfs[7], rtol=1e-11)
+    with pytest.raises(MeasurementError, match=r"'H1'.*node 1\b.*first\.uff.*'H1'"):
+        read_uff_points([first, first])
