@@ -1,6 +1,6 @@
 """Mode shapes from multi-point universal files (``read_uff_points`` and ``peaks FILE.uff
 --shapes-out``): data set 58 FRFs of the project's FE plate on a 5 x 4 grid from an
-exact modal sum, with and without noise, the grid's
+exact modal sum, with and without noise, in ASCII and binary (58b), the grid's
 coordinates in data set 15 or 2411 (metres or mm, with or without data set 164, in one
 file or agreeing in two), a vibrometer's and a roving hammer's layout, -Z records, a
 point measured twice, and every bad input refused with the record and field named."""
@@ -13,7 +13,7 @@ from fem.solver.mode_shapes import deflection_operator
 from fem.spec import load_spec
 from identify.cli import main as identify_layers
 from identify.recordings.peaks import extract_peaks
-from identify.recordings.readers import read_uff_points
+from identify.recordings.readers import is_multi_point_uff, read_uff_points
 from identify.recordings.shapes import estimate_shapes
 from identify.recordings.tap_simulation import Modes
 
@@ -355,3 +355,27 @@ def test_noisy_frfs_give_shapes_within_the_noise(plate, estimate, tmp_path):
     assert np.all(to_exact <= clean_to_exact + 3 * expected), (np.cos(to_exact) ** 2, clean_to_exact, expected)
     assert np.all((to_clean >= expected / 3) & (to_clean <= 3 * expected)), to_clean / expected
 
+
+def test_binary_58b_reads_as_the_ascii_file(plate, metres_file, tmp_path):
+    """The vibrometer file with its FRFs in pyuff's binary form of data set 58 (58b: the
+    header in ASCII, the values as doubles; 'binary': 1 in the record, written after the
+    ASCII data sets, as pyuff's overwrite mode truncates a file whose first set is
+    binary): recognised as a multi-point test from its headers, the same points, layout
+    and notes as the ASCII file, the FRFs the written doubles exactly and the ASCII file's
+    within rtol 1e-11 (those print each part to 12 digits, %20.11e: within 5e-12 of it,
+    so within 7.1e-12 of |H|)."""
+    import pyuff
+
+    _, points, frfs, *_ = plate
+    binary = write(tmp_path / "binary.uff", [units(SI), geometry(points, 15, 1e-3),
+                                             *({**frf_record(n, h), "binary": 1} for n, h in frfs.items())])
+    if b"\n    58b" not in binary.read_bytes():
+        pytest.skip(f"pyuff {pyuff.__version__} wrote data set 58 in ASCII despite 'binary': 1: no 58b to read")
+    assert is_multi_point_uff(binary)
+    measured, reference = read_uff_points(binary), read_uff_points(metres_file)
+    assert (measured.roving, measured.notes) == (reference.roving, reference.notes)
+    pd.testing.assert_frame_equal(measured.points, reference.points)
+    for name, (record,) in measured.recordings_by_point.items():
+        np.testing.assert_array_equal(record.frequency_hz, reference.recordings_by_point[name][0].frequency_hz)
+        np.testing.assert_array_equal(record.frf, frfs[int(name)])
+        np.testing.assert_allclose(record.frf, reference.recordings_by_point[name][0].frf, rtol=1e-11, atol=0)
