@@ -396,8 +396,9 @@ def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: 
     p, r = problem.pole(x)[0], problem.residual(x)[0]
     rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
     inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
-    return LocalFit(p, np.abs(problem.residues(x)[0]) / np.abs(p.real) / rms,
-                    success and bool(np.all(np.isfinite(p)) and inside.all()))
+    decay = np.abs(p.real)
+    snr = np.abs(problem.residues(x)[0]) / np.where(decay > 0, decay, np.inf) / rms  # an undamped pole: 0, no peak
+    return LocalFit(p, snr, success and bool(np.all(np.isfinite(p)) and inside.all()))
 
 
 def refined_per_record(frequency_hz: np.ndarray, h: np.ndarray, pole: np.ndarray,
