@@ -15,7 +15,7 @@ from .laminates.laminate import Laminate
 from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
 from .laminates.layerwise import system as layerwise_system
 from .laminates.material import Material
-from .solver.assembly import UnitMatrices, unit_matrices
+from .solver.assembly import UNIT_CACHE, UnitMatrices, unit_matrices
 from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
 from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .solver.mesh import PlateMesh, edge_size
@@ -291,6 +291,11 @@ def solve_laminate(
     suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
     modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
     return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments, stack)
+
+
+# A unit set the unit cache lets go goes with the solves that hold it, so the two budgets
+# bound what the process keeps.
+UNIT_CACHE.on_drop.append(lambda units: solve_laminate.cache_discard(lambda solution: solution.units is units))
 
 
 @dataclass(frozen=True)

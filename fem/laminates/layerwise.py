@@ -68,12 +68,13 @@ and Trapp 1998, SIAM Review 40:110-112), as ``fem.laminates.laminate_shear`` doe
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 
 import numpy as np
 
 from ..elements.layerwise_plate import LayerwisePlate, basis_pairs
 from ..errors import ModelError
+from ..solver import assembly
 from ..solver.assembly import UnitMatrices
 from ..solver.mesh import PlateMesh
 from .laminate import COEFFICIENTS, Laminate
@@ -350,11 +351,10 @@ class LayerwiseLaminate:
         return stiffness.imag / COMPLEX_STEP, inertia.imag / COMPLEX_STEP
 
 
-@lru_cache(maxsize=8)
 def unit_matrices(mesh: PlateMesh, n_groups: int, n_normal: int = 0) -> UnitMatrices:
-    """The (cached) unit matrices of a mesh for the layerwise element (n_normal
-    normal-strain fields: two per stretching layer)."""
-    return UnitMatrices(mesh, LayerwisePlate.with_groups(n_groups, n_normal))
+    """The (cached, ``assembly.unit_matrices``) unit matrices of a mesh for the layerwise
+    element (n_normal normal-strain fields: two per stretching layer)."""
+    return assembly.unit_matrices(mesh, LayerwisePlate.with_groups(n_groups, n_normal))
 
 
 def system(stack: LayerwiseLaminate, mesh: PlateMesh) -> tuple[UnitMatrices, np.ndarray, np.ndarray]:

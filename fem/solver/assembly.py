@@ -11,7 +11,7 @@ element matrices (``combined_data``).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -20,6 +20,7 @@ from ..elements import HermitePlate
 from ..elements.hermite_plate import EnergyQuadrature, ProjectionQuadrature
 from ..laminates.laminate import VOIGT_PAIRS
 from .mesh import PlateMesh
+from .solve_cache import UNIT_CACHE_BYTES, SharedCache
 
 #: Columns (elements x fields) integrated at once: the strains at the quadrature points of
 #: a chunk take (quadrature points x strains x columns) floats, ~40 MB for a shear mesh.
@@ -55,25 +56,24 @@ class UnitMatrices:
         return self.mesh.n_nodes * self.dofs_per_node
 
     @cached_property
-    def element_stiffness(self) -> np.ndarray:
-        """(n_c, G, n_local, n_local) element unit stiffness matrices (18 CLT coefficients,
-        then any the element adds, e.g. transverse shear) of the G element sizes."""
+    def element_stiffness(self) -> sp.csr_matrix:
+        """(n_c, G n_local^2) element unit stiffness matrices (18 CLT coefficients, then any
+        the element adds, e.g. transverse shear) of the G element sizes, each flattened,
+        the sizes side by side (``_per_size``)."""
         return self._per_size(lambda e: e.unit_stiffness(VOIGT_PAIRS))
 
     @cached_property
-    def element_mass(self) -> np.ndarray:
-        """(3, G, n_local, n_local) element unit mass matrices (I0, I1, I2) of the G sizes."""
+    def element_mass(self) -> sp.csr_matrix:
+        """(n_inertia, G n_local^2) element unit mass matrices (I0, I1, I2, ...) of the G
+        sizes, laid out as ``element_stiffness``."""
         return self._per_size(lambda e: e.unit_mass())
 
-    def _per_size(self, matrices) -> np.ndarray:
-        """matrices(element) (n_c, n, n) of every element size, stacked on axis 1 in place
-        (a graded layerwise mesh holds ~400 MB of them: no second copy)."""
-        first = matrices(self.elements[0])
-        out = np.empty((first.shape[0], len(self.elements)) + first.shape[1:])
-        out[:, 0] = first
-        for g, element in enumerate(self.elements[1:], start=1):
-            out[:, g] = matrices(element)
-        return out
+    def _per_size(self, matrices) -> sp.csr_matrix:
+        """matrices(element) (n_c, n, n) of every element size as one sparse (n_c, G n^2)
+        array: a unit matrix couples few of an element's fields (2.4 % of the layerwise
+        element's entries are non-zero), so a graded layerwise sandwich's 169 MB of
+        stiffness units are 7 MB, and weighting them costs a sparse product."""
+        return sp.hstack([sp.csr_matrix(m.reshape(len(m), -1)) for m in map(matrices, self.elements)], format="csr")
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
@@ -99,15 +99,13 @@ class UnitMatrices:
     @cached_property
     def stiffness_data(self) -> np.ndarray:
         """(n_c, nnz) CSR data of the global unit stiffness matrices."""
-        aggregate = self._pattern[2]
-        return (aggregate @ self.element_stiffness.reshape(len(self.element_stiffness), -1).T).T
+        return (self._pattern[2] @ self.element_stiffness.T.toarray()).T
 
     @cached_property
     def mass_data(self) -> np.ndarray:
         """(n_inertia, nnz) CSR data of the global unit mass matrices (I0, I1, I2, and more
         for elements with more inertia terms)."""
-        aggregate = self._pattern[2]
-        return (aggregate @ self.element_mass.reshape(len(self.element_mass), -1).T).T
+        return (self._pattern[2] @ self.element_mass.T.toarray()).T
 
     @cached_property
     def first_unit_mass(self) -> sp.csr_matrix:
@@ -117,14 +115,14 @@ class UnitMatrices:
         the translational inertia couples only u-u, v-v and w-w, and the shape
         comparisons' products take 2.6x less time without the rest of the pattern (63
         modes of the paper's plate: 1.7 M stored entries to 0.57 M, 26 ms to 10 ms)."""
-        mass = self.matrix(self._pattern[2] @ self.element_mass[0].ravel()).copy()
+        mass = self.matrix(self._pattern[2] @ self.element_mass[0].toarray().ravel()).copy()
         mass.eliminate_zeros()
         return mass
 
-    def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray) -> np.ndarray:
+    def combined_data(self, weights: np.ndarray, element_matrices: sp.csr_matrix) -> np.ndarray:
         """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
         first: one aggregation instead of n_c unit data arrays in memory."""
-        return self._pattern[2] @ (weights @ element_matrices.reshape(len(element_matrices), -1))
+        return self._pattern[2] @ (element_matrices.T @ weights)
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """A global CSR matrix on the shared pattern from its data array."""
@@ -169,7 +167,8 @@ class UnitMatrices:
         cols = self.rank[indices]
         upper = np.flatnonzero(cols >= rows)
         flat = cols[upper] * (self.bandwidth + 1) + self.bandwidth + rows[upper] - cols[upper]
-        return upper, flat
+        index = np.int32 if (self.bandwidth + 1) * self.n_dofs < np.iinfo(np.int32).max else np.int64
+        return upper.astype(index), flat.astype(index)  # half the bytes of numpy's default
 
     def banded(self, data: np.ndarray) -> np.ndarray:
         """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
@@ -227,11 +226,25 @@ class UnitMatrices:
         return self.element_type.rigid_body_modes(self.mesh.node_xy)
 
 
+    @property
+    def nbytes(self) -> int:
+        """What the unit set holds so far [bytes] (its parts are made when first used)."""
+        return sum(_nbytes(part) for value in self.__dict__.values()
+                   for part in (value if isinstance(value, tuple) else (value,)))
+
+
+def _nbytes(part) -> int:
+    if isinstance(part, np.ndarray):
+        return part.nbytes
+    if sp.issparse(part):
+        return sum(getattr(part, name).nbytes for name in ("data", "indices", "indptr") if hasattr(part, name))
+    return 0
+
+
+#: Every unit set in use, within ``UNIT_CACHE_BYTES`` (``solve_cache.SharedCache``).
+UNIT_CACHE = SharedCache(UNIT_CACHE_BYTES, lambda units: units.nbytes)
+
+
 def unit_matrices(mesh: PlateMesh, element_type: type = HermitePlate) -> UnitMatrices:
     """The (cached) unit matrices of a mesh for an element type (default: Kirchhoff)."""
-    return _cached_unit_matrices(mesh, element_type)
-
-
-@lru_cache(maxsize=16)
-def _cached_unit_matrices(mesh: PlateMesh, element_type: type) -> UnitMatrices:
-    return UnitMatrices(mesh, element_type)
+    return UNIT_CACHE.get((mesh, element_type), lambda: UnitMatrices(mesh, element_type))

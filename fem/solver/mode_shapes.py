@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+import weakref
 from functools import lru_cache
 
 import numpy as np
@@ -95,12 +96,18 @@ def deflection_operator(units: UnitMatrices, x: np.ndarray, y: np.ndarray) -> sp
                          shape=(x.size, units.n_dofs))
 
 
-@lru_cache(maxsize=16)
 def deflection_sampler(units: UnitMatrices) -> sp.csr_matrix:
-    """w at the Gauss grid of the plate (x fastest outer, y inner: (POINTS^2, n_dofs))."""
-    xi, _, _ = _gauss()
-    x, y = np.meshgrid(xi * units.mesh.length, xi * units.mesh.width, indexing="ij")
-    return deflection_operator(units, x.ravel(), y.ravel())
+    """w at the Gauss grid of the plate (x fastest outer, y inner: (POINTS^2, n_dofs)),
+    kept while its unit set lives (a cache keyed strongly would keep the unit set)."""
+    sampler = _SAMPLERS.get(units)
+    if sampler is None:
+        xi, _, _ = _gauss()
+        x, y = np.meshgrid(xi * units.mesh.length, xi * units.mesh.width, indexing="ij")
+        sampler = _SAMPLERS[units] = deflection_operator(units, x.ravel(), y.ravel())
+    return sampler
+
+
+_SAMPLERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def beam_coefficients(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
