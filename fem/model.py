@@ -13,7 +13,7 @@ from .errors import ModelError, OptionsError
 from .inputs import InputStd
 from .laminates.laminate import Laminate
 from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
-from .laminates.layerwise import system as layerwise_system
+from .laminates.layerwise import unit_matrices as layerwise_units
 from .laminates.material import Material
 from .solver.assembly import UNIT_CACHE, UnitMatrices, unit_matrices
 from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
@@ -201,12 +201,11 @@ def _shape_derivatives(solution: LaminateSolution, parameters: list[Parameter], 
                          "and position, or fit frequencies alone")
     units = solution.units
     coefficients, inertia = system_coefficients(solution.laminate, solution.transverse_shear, solution.inertia_terms)
-    stiffness, mass = _with_attachments(units, *_weighted(units, solution.transverse_shear, coefficients, inertia),
-                                        solution.attachments)
+    stiffness, mass = system_data(units, coefficients, inertia, solution.attachments)
     dx, di = solution.coefficient_derivatives([(p.kind, p.target) for p in parameters])
     d_stiffness, d_mass = [], []
     for x, i in zip(dx, di):
-        dk, dm = _weighted(units, solution.transverse_shear, x, i)
+        dk, dm = system_data(units, x, i)
         d_stiffness.append(units.matrix(dk))
         d_mass.append(units.matrix(dm))
     k_matrix, m_matrix = units.matrix(stiffness), units.matrix(mass)
@@ -228,20 +227,18 @@ def system_coefficients(laminate: Laminate, transverse_shear: bool,
     return coefficients, laminate.inertia * np.array(inertia_terms)
 
 
-def _weighted(units: UnitMatrices, transverse_shear: bool, coefficients: np.ndarray,
-              inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """CSR data of sum_c coefficients_c K_c and sum_j inertia_j M_j of a single-layer
-    theory.  With transverse shear (80 x 80 elements) the element matrices are weighted
-    before one aggregation: memory for one data array instead of 21."""
-    if transverse_shear:
-        return (units.combined_data(coefficients, units.element_stiffness),
-                units.combined_data(inertia, units.element_mass))
-    return coefficients @ units.stiffness_data, inertia @ units.mass_data
-
-
-def _with_attachments(units: UnitMatrices, stiffness: np.ndarray, mass: np.ndarray,
-                      attachments: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """The CSR data of K and M with the attachments' (point masses, springs) added."""
+def system_data(units: UnitMatrices, coefficients: np.ndarray, inertia: np.ndarray,
+                attachments: tuple = ()) -> tuple[np.ndarray, np.ndarray]:
+    """CSR data of K = sum_c coefficients_c K_c and M = sum_j inertia_j M_j on ``units``
+    (weights from ``system_coefficients`` or a layerwise stack; complex ones for damping),
+    the attachments' point masses and springs added.  The thin plate's few unit data
+    arrays are kept assembled; the shear and layerwise elements' (21 to ~180 of them) are
+    weighted element by element before one aggregation: memory for one data array."""
+    if units.element_type is HermitePlate:
+        stiffness, mass = coefficients @ units.stiffness_data, inertia @ units.mass_data
+    else:
+        stiffness = units.combined_data(coefficients, units.element_stiffness)
+        mass = units.combined_data(inertia, units.element_mass)
     if not attachments:
         return stiffness, mass
     extra_stiffness, extra_mass = attachment_data(units, attachments)
@@ -283,11 +280,11 @@ def solve_laminate(
     coefficients, inertia = system_coefficients(laminate, transverse_shear, terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
     if stack is not None:
-        units, stiffness, mass = layerwise_system(stack, mesh)
+        units = layerwise_units(mesh, stack.n_groups, 2 * len(stack.stretch))
+        coefficients, inertia = stack.stiffness, stack.inertia
     else:
         units = unit_matrices(mesh, ShearDifferencePlate if transverse_shear else HermitePlate)
-        stiffness, mass = _weighted(units, transverse_shear, coefficients, inertia)
-    stiffness, mass = _with_attachments(units, stiffness, mass, attachments)
+    stiffness, mass = system_data(units, coefficients, inertia, attachments)
     suspended = any(isinstance(a, Suspension) and a.stiffness > 0 for a in attachments)
     modes = solve_modes(units, stiffness, mass, n_modes, shift, suspended=suspended)
     return LaminateSolution(laminate, units, modes, terms, transverse_shear, attachments, stack)

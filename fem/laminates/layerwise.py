@@ -355,10 +355,3 @@ def unit_matrices(mesh: PlateMesh, n_groups: int, n_normal: int = 0) -> UnitMatr
     """The (cached, ``assembly.unit_matrices``) unit matrices of a mesh for the layerwise
     element (n_normal normal-strain fields: two per stretching layer)."""
     return assembly.unit_matrices(mesh, LayerwisePlate.with_groups(n_groups, n_normal))
-
-
-def system(stack: LayerwiseLaminate, mesh: PlateMesh) -> tuple[UnitMatrices, np.ndarray, np.ndarray]:
-    """The unit matrices and the CSR data of K and M of a layerwise stack on a mesh."""
-    units = unit_matrices(mesh, stack.n_groups, 2 * len(stack.stretch))
-    return (units, units.combined_data(stack.stiffness, units.element_stiffness),
-            units.combined_data(stack.inertia, units.element_mass))

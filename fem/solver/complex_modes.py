@@ -23,8 +23,7 @@ from scipy.optimize import linear_sum_assignment
 from ..errors import ModelError
 from ..laminates.laminate import Laminate, plane_stress_stiffness, transformation
 from ..laminates.laminate_shear import rotated_shear_moduli, shear_stiffness
-from ..model import LaminateSolution, SpecimenModel, one_blas_thread
-from .attachments import attachment_data
+from ..model import LaminateSolution, SpecimenModel, one_blas_thread, system_data
 
 #: A complex mode is the damped version of a real one when their MAC exceeds this.
 PAIRING_MAC = 0.9
@@ -73,14 +72,7 @@ def _solve(real: LaminateSolution, coefficients: np.ndarray) -> np.ndarray:
     units, modes = real.units, real.modes
     n_modes = len(modes.eigenvalues)
     inertia = real.laminate.inertia * np.array(real.inertia_terms)
-    if real.transverse_shear:
-        stiffness = units.combined_data(coefficients, units.element_stiffness)
-        mass = units.combined_data(inertia, units.element_mass)
-    else:
-        stiffness, mass = coefficients @ units.stiffness_data, inertia @ units.mass_data
-    if real.attachments:
-        extra_stiffness, extra_mass = attachment_data(units, real.attachments)
-        stiffness, mass = stiffness + extra_stiffness, mass + extra_mass
+    stiffness, mass = system_data(units, coefficients, inertia, real.attachments)
     k_matrix, m_matrix = units.matrix(stiffness), units.matrix(mass)
     rigid = units.rigid_body_modes
     m_rigid = m_matrix @ rigid

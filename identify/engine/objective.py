@@ -276,12 +276,15 @@ class ShapeObjective(Objective):
 class RitzObjective(Objective):
     """``objective`` evaluated on Ritz models of every configuration
     (``fem.solver.reduced_basis``) at the point ``at`` (full solves), their bases
-    enlarged by the modes at the point ``also``."""
+    enlarged by the modes at the point ``also``; assembled at each point (a screen
+    evaluates a few: projecting every unit matrix would cost more than the full solves it
+    saves on the layerwise element)."""
 
     def __init__(self, objective: Objective, at: Evaluation, also: Evaluation):
         self.__dict__.update(objective.__dict__)
         solved = objective.solved.with_specimen(at.model.specimen)
-        self.reanalyses = {name: Reanalysis.of(solved, name, objective.solution(also.model.specimen, name).modes.shapes)
+        self.reanalyses = {name: Reanalysis.of(solved, name, objective.solution(also.model.specimen, name).modes.shapes,
+                                               assembled=True)
                            for name in self.configurations}
 
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:

@@ -91,6 +91,25 @@ def test_upper_bounds_that_an_enlarged_basis_tightens(theory):
     assert np.max(both / full - 1) < 2e-4
 
 
+@pytest.mark.parametrize("theory", THEORIES)
+def test_assembled_and_projected_reanalyses_agree(theory):
+    """An assembled reanalysis (each point's K and M projected, what the trial screen
+    uses) is the projected one by another road: at a moved point, on a basis of both
+    ends, the frequencies agree to 1e-10 (measured 2e-12 to 6e-12 on a 12,672-DOF
+    sandwich: the round-off of two summation orders) and the sensitivities, which the
+    assembled one takes from its expanded shapes, to 1e-7 of each column's largest
+    (measured 1e-10 to 2e-9: the quadrature of expanded shapes against projected
+    quadratures)."""
+    model = _model(theory)
+    extra = model.solve("original").modes.shapes
+    projected, assembled = (Reanalysis.of(_moved(model), "original", extra, assembled=a) for a in (False, True))
+    halfway = _moved(model, 0.5).specimen
+    assert assembled.frequencies_hz(halfway) == pytest.approx(projected.frequencies_hz(halfway), rel=1e-10)
+    one, other = (r.solve(halfway).derivatives(PARAMETERS) for r in (projected, assembled))
+    scale = np.maximum(np.abs(one).max(axis=0), 1e-300)
+    assert np.max(np.abs(other - one) / scale) < 1e-7
+
+
 #: A long spruce plate at handbook values (the shape of a public tap-test data set's).
 SPRUCE = {"specimen": {"length_mm": 580.0, "width_mm": 213.0, "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
           "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.80, "G12_GPa": 0.62, "nu12": 0.40,
