@@ -43,7 +43,10 @@ class Effect:
     the effects it ``refines`` (tried only where one of those pays), whether it
     ``frees_shear`` moduli (G13, G23: restarts, continuation and the held-moduli rule
     apply), whether it ``restarts_from_spec`` when the thin-plate fit it would start from
-    is degenerate, and the ``sign`` an implausible estimate of it is reported as."""
+    is degenerate, the ``sign`` an implausible estimate of it is reported as, and the
+    selected effects it ``completes`` at the selection's end (in their place when it
+    ``replaces`` them: a fuller theory of the same physics; else beside them), and whether
+    its refit runs from ``independent_starts`` that the residual scan ``hinted``."""
 
     kind = ""
     description = ""
@@ -53,11 +56,25 @@ class Effect:
     frees_shear = False
     restarts_from_spec = False
     sign = "read it as a sign of what is missing"
+    completes: tuple[str, ...] = ()
+    replaces = False
+    #: Its refit is several independent ones from starts over the plate, side by side
+    #: where worker processes are open, the lowest misfit kept (a sensor's positions).
+    independent_starts = False
+    #: What it may explain is bounded by the residual scan's hints (each start's share of
+    #: the misfit) as well as by the linearised step, which at a wrong position explains
+    #: little.
+    hinted = False
 
     @property
     def physics(self) -> frozenset[str]:
         """The effects this one is the same physics as (``covers``), or itself."""
         return self.covers or frozenset({self.kind})
+
+    def adds_nothing(self, model: SpecimenModel) -> bool:
+        """True where switching this effect on gives ``model`` the same model as an
+        effect it completes (then it is not tried as a completion)."""
+        return False
 
     def fixed(self, model: SpecimenModel, table: dict) -> SwitchedOn:
         """The model with the effect on, its parameters fixed by the spec's table."""
@@ -166,6 +183,11 @@ class Layerwise(Effect):
     #: single-layer model's: tried in a round only where one of these paid (or is selected).
     refines = ("transverse_shear", "thick_plate")
     frees_shear = True
+    #: Judged in the round where the shear first enters, with other effects still missing,
+    #: its ply shear moduli can run out and it loses to the single shear layer; refitted
+    #: in its place from the selection's end it can win (``identify.diagnosis``).
+    completes = refines
+    replaces = True
 
     def _soft(self, model):
         """(soft specimen layers' materials, soft added layers' materials), by name."""
@@ -187,6 +209,9 @@ class Layerwise(Effect):
         stacks = [LayerwiseLaminate.of(specimen.laminate(c), options.layer_groups, options.core_stretch)
                   for c in specimen.configurations]
         return all(stack.n_groups == 1 and not stack.stretch for stack in stacks)
+
+    def adds_nothing(self, model: SpecimenModel) -> bool:
+        return self.single_shear_layer(model)
 
     def _on(self, model, free=()):
         own, added = self._soft(model)
@@ -218,6 +243,10 @@ class Layerwise(Effect):
 class RotaryInertia(Effect):
     kind = "rotary_inertia"
     description = "rotary inertia of the plate (I1, I2 terms)"
+    #: Every real plate has it beside its transverse shear; a Mindlin candidate judged
+    #: early, with a sensor still missing, can be implausible and never selected, and
+    #: shear alone then lets the moduli absorb the rotary inertia.
+    completes = ("transverse_shear",)
 
     def fixed(self, model, table):
         self._check(table)
@@ -239,6 +268,8 @@ class PointMassEffect(Effect):
     sign = ("the misfit grows with the mode number like shear, or a sensor heavier than plausible: transverse "
             "shear, or a mass measured and given in the spec?")
     keys = ("mass_g", "x_mm", "y_mm", "label", "base_mm")
+    independent_starts = True
+    hinted = True
 
     def fixed(self, model, table):
         self._check(table)

@@ -533,14 +533,15 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
 
 
 def _added(jobs: list[dict], pool) -> list:
-    """The refits of ``jobs`` (``_add``), in the pool when there is one.  A point mass is
-    refitted here, its starts' refits in the pool beside the other jobs: its refit is
-    several independent ones, and as one job it kept one process busy while the other
-    waited (a long spruce plate's second round: 128 s beside a 15 s candidate)."""
+    """The refits of ``jobs`` (``_add``), in the pool when there is one.  An effect with
+    ``independent_starts`` (a point mass) is refitted here, its starts' refits in the pool
+    beside the other jobs: as one job it kept one process busy while the other waited (a
+    long spruce plate's second round: 128 s beside a 15 s candidate)."""
     if pool is None:
         return [_add(job) for job in jobs]
-    pending = {i: pool.submit(_add, job) for i, job in enumerate(jobs) if job["kind"] != "point_mass"}
-    here = {i: _add({**job, "pool": pool}) for i, job in enumerate(jobs) if job["kind"] == "point_mass"}
+    apart = [effect(job["kind"]).independent_starts for job in jobs]
+    pending = {i: pool.submit(_add, job) for i, job in enumerate(jobs) if not apart[i]}
+    here = {i: _add({**job, "pool": pool}) for i, job in enumerate(jobs) if apart[i]}
     return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
 
 
@@ -685,10 +686,11 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         else None
     if completion is not None:
         before = tuple(c.kind for c in selected)
+        completed = " + ".join(sorted(set(before) & set(effect(completion.kind).completes)))
         reason = (f"add {completion.kind} in place of the single shear layer (gain / c = "
                   f"{completion.scaled_gain:.1f}): the more complete theory, refitted from the selection's end"
-                  if completion.kind == "layerwise" else
-                  f"add {completion.kind} beside transverse_shear (gain / c = {completion.scaled_gain:.1f}): "
+                  if effect(completion.kind).replaces else
+                  f"add {completion.kind} beside {completed} (gain / c = {completion.scaled_gain:.1f}): "
                   "the physics every real plate has besides, with no parameter more, and the misfit falls")
         steps.append(Step(len(steps) + 1, before, state, (completion,), completion, reason,
                           seconds=time.perf_counter() - completion_started))
@@ -754,65 +756,43 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
 
 
 def _completed(state: FitResult, selected, kinds, measurements: Measurements, nominal, say) -> Candidate | None:
-    """The more complete physics beside or in place of a selected shear theory, from the
-    selection's end: the layerwise model (``_layerwise_instead``), else rotary inertia
-    (``_rotary_inertia``)."""
-    return (_layerwise_instead(state, selected, kinds, measurements, nominal, say)
-            or _rotary_inertia(state, selected, kinds, measurements, nominal, say))
+    """The more complete physics from the selection's end: each effect that ``completes`` a
+    selected one (``Effect.completes``), a fuller theory in its place first
+    (``Effect.replaces``), then what joins it; the first kept is returned.
 
-
-def _layerwise_instead(state: FitResult, selected, kinds, measurements: Measurements, nominal,
-                       say) -> Candidate | None:
-    """The layerwise model in place of a selected transverse_shear or thick_plate, refitted
-    from the selection's end with every other effect found, kept when its criterion is
-    lower at all (gain / c above 0, its extra shear moduli paid for: it is the same effect's
-    more complete theory, not a new effect that must bring ``MIN_GAIN``) or, with no more
-    free parameters, within ``COMPLETE_MARGIN`` x c of the state's (``_more_complete``).
-    On blind19 it ends at 0.0439 % against 0.0572 % with two moduli more, gain / c 2.2.
-    Needed because the layerwise candidate is judged in the round where the shear first
-    enters, with other effects still missing: its ply shear moduli run out and are held,
-    it loses to the single shear layer and is not refitted again (``_held_back``).  blind19
-    (a hybrid with a sensor and turned plies): transverse_shear + point_mass + orientation
-    reached the floor's misfit with a property 4.9 std off; the oracle's single-shear-layer
-    model is 3.1 std off, its layerwise model 2.1.  Not where the layerwise theory is the
-    single shear layer itself (``Layerwise.single_shear_layer``: a single homogeneous plate
-    in every configuration): there it is the same model, and a criterion within the margin
-    would add it to the selection for nothing."""
+    A fuller theory (the layerwise model in place of a single shear layer) is kept when its
+    criterion is lower at all (gain / c above 0, any extra shear moduli paid for: it is the
+    same effect's more complete theory, not a new effect that must bring ``MIN_GAIN``) or,
+    with no more free parameters, within ``COMPLETE_MARGIN`` x c of the state's; what joins
+    (rotary inertia beside transverse shear, no parameter more) when the misfit falls.
+    Not tried where an effect selected already covers its physics, where no candidate
+    kind has it, or where it ``adds_nothing`` to the state's model.  Why these exist and
+    the cases behind them: docs/diagnosis.md."""
     names = {c.kind for c in selected}
-    if "layerwise" not in kinds or "layerwise" in names or not names & set(effect("layerwise").refines) \
-            or effect("layerwise").single_shear_layer(state.model):
-        return None
-    say(f"trying layerwise in place of {' + '.join(sorted(names & set(effect('layerwise').refines)))} "
-        "(the more complete theory, from the selection's end)")
-    candidate = _candidate(state, add_effect(state, "layerwise", measurements, nominal, options=CANDIDATE_OPTIONS))
-    if candidate.fit is None or not candidate.selectable:
-        return None
-    c_hat = _over_dispersion(min(candidate.fit, state, key=lambda f: f.statistics.bic))
-    fuller = (candidate.fit.statistics.k <= state.statistics.k
-              and candidate.fit.statistics.bic - state.statistics.bic < COMPLETE_MARGIN * c_hat)
-    return candidate if candidate.scaled_gain > 0 or fuller else None
-
-
-def _rotary_inertia(state: FitResult, selected, kinds, measurements: Measurements, nominal,
-                    say) -> Candidate | None:
-    """Rotary inertia beside a selected transverse shear, when the candidates allow the
-    Mindlin plate and the refit is plausible and lowers the misfit (it adds no parameter:
-    a real plate has rotary inertia, so with it the misfit falls; data without it, such as
-    a shear-only model's, do not ask for it).  Needed because a
-    Mindlin candidate judged in an early round, with another effect still missing (a
-    sensor), can be implausible and so never selected, while shear alone then lets the
-    moduli absorb the rotary inertia at the noise level (a hidden sensor on a thick plate:
-    a layer property 6.9 std off)."""
-    names = {c.kind for c in selected}
-    if ("transverse_shear" not in names or names & {"rotary_inertia", "thick_plate", "layerwise"}
-            or not {"rotary_inertia", "thick_plate"} & set(kinds)):
-        return None
-    say("trying rotary_inertia beside transverse_shear (the more complete physics)")
-    candidate = _candidate(state, add_effect(state, "rotary_inertia", measurements, nominal,
-                                             options=CANDIDATE_OPTIONS))
-    if candidate.fit is None or not candidate.selectable:
-        return None
-    return candidate if candidate.gain > 0 else None
+    order = sorted((k for k in REGISTRY if effect(k).completes), key=lambda k: not effect(k).replaces)
+    for kind in order:
+        completing = effect(kind)
+        completed = sorted(names & set(completing.completes))
+        offered = kind in kinds or any(kind in effect(k).physics and not effect(k).refines for k in kinds)
+        if (not completed or not offered or completing.adds_nothing(state.model)
+                or any(completing.physics <= effect(n).physics for n in names)):
+            continue
+        why = "in place of {} (the more complete theory, from the selection's end)" if completing.replaces \
+            else "beside {} (the more complete physics)"
+        say(f"trying {kind} " + why.format(" + ".join(completed)))
+        candidate = _candidate(state, add_effect(state, kind, measurements, nominal, options=CANDIDATE_OPTIONS))
+        if candidate.fit is None or not candidate.selectable:
+            continue
+        if not completing.replaces:
+            if candidate.gain > 0:
+                return candidate
+            continue
+        c_hat = _over_dispersion(min(candidate.fit, state, key=lambda f: f.statistics.bic))
+        fuller = (candidate.fit.statistics.k <= state.statistics.k
+                  and candidate.fit.statistics.bic - state.statistics.bic < COMPLETE_MARGIN * c_hat)
+        if candidate.scaled_gain > 0 or fuller:
+            return candidate
+    return None
 
 
 def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, nominal, say,

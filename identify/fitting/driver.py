@@ -285,7 +285,7 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
         baseline = comparison.fitted
         hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
                                   comparison.node_xy)
-    worth_it = ("point_mass" in kinds or not measurements.ranked) and (
+    worth_it = (any(effect(k).independent_starts for k in kinds) or not measurements.ranked) and (
         comparison is not None or time.perf_counter() - started >= PARALLEL_FROM_S)
     with independent_refits(workers, worth_it) as pool:
         return _fit_with_effects(model, measurements, kinds, baseline, hints, progress, options, pool)
@@ -507,7 +507,7 @@ def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | Non
         bound = max(0.0, now - sensitivities.predicted_sum_squares(base + new))  # linearised: may undershoot 0
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), error=str(exc))
-    if kind == "point_mass":
+    if effect(kind).hinted:
         bound = max([bound] + [h.get("share", 0.0) * now for h in hints])
     if start is not None:
         notes.append(f"started from the {' + '.join(sorted(set(start.effect_of.values()))) or 'spec'}'s values")
@@ -671,14 +671,14 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, 
     if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), pruned=True,
                            error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
-                                 f"(linearised{', residual scan' if kind == 'point_mass' else ''}), less than 1/"
+                                 f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
                                  f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
     base = list(ready.base)
     refit = replace(refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}})
     if progress:
         progress(f"fitting with {kind}")
     try:
-        if kind == "point_mass":
+        if effect(kind).independent_starts:
             result, rivals = _point_mass(refit, hints, base + shear_moduli_in(new), progress)
             notes += rivals
         else:

@@ -225,7 +225,7 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     lets it stretch through its thickness, E3 = E2, which the single shear layer does not.)"""
     from fem.effects import effect
     from fem.spec import parse_spec
-    from identify.diagnosis.diagnose import _layerwise_instead
+    from identify.diagnosis.diagnose import _completed
 
     single = parse_spec({"specimen": {"name": "board", "length_mm": 580.0, "width_mm": 213.0,
                                       "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
@@ -242,7 +242,7 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     monkeypatch.setattr(diagnose_module, "add_effect", refitted)
     state = SimpleNamespace(model=single.with_options(transverse_shear=True, rotary_inertia=True))
     selected = [SimpleNamespace(kind="thick_plate")]
-    assert _layerwise_instead(state, selected, ["thick_plate", "layerwise"], None, None, print) is None
+    assert _completed(state, selected, ["thick_plate", "layerwise"], None, None, print) is None
 
 
 def test_a_user_registered_effect_takes_part_in_a_diagnosis(paper_model):
