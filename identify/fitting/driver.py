@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fem.effects import effect
+from fem.effects import SwitchedOn, effect
 from fem.errors import LayerIdError, NotApplicableError
 from fem.inputs import InputStd
 from fem.laminates.material import MATERIAL_PARAMETERS, SHEAR_MODULI
@@ -679,7 +679,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, 
         progress(f"fitting with {kind}")
     try:
         if effect(kind).independent_starts:
-            result, rivals = _point_mass(refit, hints, base + shear_moduli_in(new), progress)
+            result, rivals = _from_starts(refit, kind, hints, base + shear_moduli_in(new), progress)
             notes += rivals
         else:
             result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
@@ -1006,8 +1006,9 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
     return (by_shapes + tuple(sorted(starts, key=lambda start: -share(start))))[:POINT_MASS_STARTS]
 
 
-def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
-    """The point mass from several starts (the measured shapes' first, when there are
+def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitResult, list]:
+    """An effect with ``independent_starts`` (a point mass: its mass, x and y free) from
+    several starts (the measured shapes' first, when there are
     shapes): each ranked by the misfit one linearised
     Gauss-Newton step from it would leave (one evaluation, ``Sensitivities``; a bare peak
     list, which has no mode numbers to linearise with, keeps the scan's order), the best
@@ -1020,7 +1021,7 @@ def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
     starts = tuple(hints) if hints else point_mass_starts(state.model, ())
     ranked = []
     for hint in starts:
-        for on in effect("point_mass").free(state.model, hint):
+        for on in effect(kind).free(state.model, hint):
             try:
                 left = Sensitivities.at_start(on.model, measurements, base + list(on.free),
                                               state.pairings).predicted_sum_squares(base + list(on.free))
@@ -1031,27 +1032,24 @@ def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
     # Where measured shapes place the mass (``shape_point_map``), that start is fitted
     # whatever the frequencies' linearised step says: the shapes see the position, the
     # step only a frequency misfit that a wrong position can share.
-    chosen = [on for hint in starts[:1] if hint.get("from_shapes") for on in effect("point_mass").free(state.model, hint)][:1]
+    chosen = [on for hint in starts[:1] if hint.get("from_shapes") for on in effect(kind).free(state.model, hint)][:1]
     for _, on in ranked:
-        position = [p for p in on.free if p.kind in ("x", "y")]
-        if all(_differs(on.model, other.model, position) for other in chosen):
+        if all(_differs(on.model, other.model, _position(on)) for other in chosen):
             chosen.append(on)
         if len(chosen) == POINT_MASS_CONTINUED:
             break
     # The Ritz screen's best start over the whole plate too, where it is at another position
     # and scores better than each of those on the screen.
-    xy, mass = [Parameter(k, "point_mass") for k in ("x", "y")], Parameter("mass", "point_mass")
     screen = PointMassScreen.of(state)
     screened = []
     if screen is not None:
         best = screen.best(1)[0]
-        screened = [on for on in effect("point_mass").free(state.model, best)
-                    if all(_differs(on.model, other.model, xy) and best["left"] < screen.score(
-                        other.model.value(xy[0]), other.model.value(xy[1]), other.model.value(mass))
-                           for other in chosen)]
+        screened = [on for on in effect(kind).free(state.model, best)
+                    if all(_differs(on.model, other.model, _position(on)) and best["left"] < screen.score(
+                        *(other.model.value(p) for p in _position(on) + [_mass(on)])) for other in chosen)]
     chosen += screened
     if progress:
-        progress(f"point_mass: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
+        progress(f"{kind}: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
                  f"{len(chosen)} fitted")
 
     def job(on) -> dict:
@@ -1063,7 +1061,7 @@ def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
     if ended_worse(result, state):
         # Every start ended above the fit the mass is added to: once more from the mass
         # all but gone at the best one's start, from where the refit can only descend.
-        gone = replace(on, model=on.model.with_values({mass: VANISHING_MASS * plate_mass(state.model.specimen)}))
+        gone = replace(on, model=on.model.with_values({_mass(on): VANISHING_MASS * plate_mass(state.model.specimen)}))
         trials.append((_fitted(job(gone)), gone))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
     rivals = [t for t, o in trials if t is not result and t.finished
@@ -1072,9 +1070,19 @@ def _point_mass(refit: Refit, hints, base, progress) -> tuple[FitResult, list]:
     notes = []
     if rivals:
         described = "; ".join(", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals)
-        notes.append(f"point_mass: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
+        notes.append(f"{kind}: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
                      "parameters are not unique with these modes; measure more modes to separate them")
     return result, notes
+
+
+def _position(on: SwitchedOn) -> list[Parameter]:
+    """The free x and y of a switched-on point mass."""
+    return [p for p in on.free if p.kind in ("x", "y")]
+
+
+def _mass(on: SwitchedOn) -> Parameter:
+    """The free mass of a switched-on point mass."""
+    return next(p for p in on.free if p.kind == "mass")
 
 
 def _fitted(job: dict) -> FitResult:
