@@ -25,6 +25,9 @@ from .solve_cache import UNIT_CACHE_BYTES, SharedCache
 #: Columns (elements x fields) integrated at once: the strains at the quadrature points of
 #: a chunk take (quadrature points x strains x columns) floats, ~40 MB for a shear mesh.
 GATHERED_COLUMNS = 20_000
+#: Element unit matrices are kept sparse above this [bytes] of dense storage (the
+#: layerwise element's 90-170 MB; the thin and shear elements' are a few MB).
+SPARSE_UNITS_ABOVE = 32 << 20
 
 
 @dataclass(frozen=True)
@@ -56,24 +59,35 @@ class UnitMatrices:
         return self.mesh.n_nodes * self.dofs_per_node
 
     @cached_property
-    def element_stiffness(self) -> sp.csr_matrix:
+    def element_stiffness(self) -> np.ndarray | sp.csr_matrix:
         """(n_c, G n_local^2) element unit stiffness matrices (18 CLT coefficients, then any
         the element adds, e.g. transverse shear) of the G element sizes, each flattened,
-        the sizes side by side (``_per_size``)."""
+        the sizes side by side, dense or sparse (``_per_size``)."""
         return self._per_size(lambda e: e.unit_stiffness(VOIGT_PAIRS))
 
     @cached_property
-    def element_mass(self) -> sp.csr_matrix:
+    def element_mass(self) -> np.ndarray | sp.csr_matrix:
         """(n_inertia, G n_local^2) element unit mass matrices (I0, I1, I2, ...) of the G
         sizes, laid out as ``element_stiffness``."""
         return self._per_size(lambda e: e.unit_mass())
 
-    def _per_size(self, matrices) -> sp.csr_matrix:
-        """matrices(element) (n_c, n, n) of every element size as one sparse (n_c, G n^2)
-        array: a unit matrix couples few of an element's fields (2.4 % of the layerwise
-        element's entries are non-zero), so a graded layerwise sandwich's 169 MB of
-        stiffness units are 7 MB, and weighting them costs a sparse product."""
-        return sp.hstack([sp.csr_matrix(m.reshape(len(m), -1)) for m in map(matrices, self.elements)], format="csr")
+    def _per_size(self, matrices) -> np.ndarray | sp.csr_matrix:
+        """matrices(element) (n_c, n, n) of every element size as one (n_c, G n^2) array,
+        sparse where the dense one would hold more than ``SPARSE_UNITS_ABOVE`` bytes: a
+        unit matrix couples few of an element's fields (2.4 % of the layerwise element's
+        entries are non-zero), so a graded layerwise sandwich's 169 MB of stiffness units
+        are 7 MB.  The thin and first-order shear elements' (a few MB) stay dense, their
+        sums to the last bit as before (a sparse sum's order changes round-off, which a
+        fit along an undetermined direction can follow elsewhere)."""
+        first = matrices(self.elements[0]).reshape(-1, self.element_dofs.shape[1] ** 2)
+        if first.nbytes * len(self.elements) <= SPARSE_UNITS_ABOVE:
+            out = np.empty((first.shape[0], len(self.elements) * first.shape[1]))
+            out[:, :first.shape[1]] = first
+            for g, element in enumerate(self.elements[1:], start=1):
+                out[:, g * first.shape[1]:(g + 1) * first.shape[1]] = matrices(element).reshape(first.shape)
+            return out
+        rest = (sp.csr_matrix(matrices(e).reshape(first.shape)) for e in self.elements[1:])
+        return sp.hstack([sp.csr_matrix(first), *rest], format="csr")
 
     @cached_property
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
@@ -99,13 +113,13 @@ class UnitMatrices:
     @cached_property
     def stiffness_data(self) -> np.ndarray:
         """(n_c, nnz) CSR data of the global unit stiffness matrices."""
-        return (self._pattern[2] @ self.element_stiffness.T.toarray()).T
+        return (self._pattern[2] @ _dense(self.element_stiffness).T).T
 
     @cached_property
     def mass_data(self) -> np.ndarray:
         """(n_inertia, nnz) CSR data of the global unit mass matrices (I0, I1, I2, and more
         for elements with more inertia terms)."""
-        return (self._pattern[2] @ self.element_mass.T.toarray()).T
+        return (self._pattern[2] @ _dense(self.element_mass).T).T
 
     @cached_property
     def first_unit_mass(self) -> sp.csr_matrix:
@@ -115,14 +129,15 @@ class UnitMatrices:
         the translational inertia couples only u-u, v-v and w-w, and the shape
         comparisons' products take 2.6x less time without the rest of the pattern (63
         modes of the paper's plate: 1.7 M stored entries to 0.57 M, 26 ms to 10 ms)."""
-        mass = self.matrix(self._pattern[2] @ self.element_mass[0].toarray().ravel()).copy()
+        mass = self.matrix(self._pattern[2] @ _dense(self.element_mass[:1])[0]).copy()
         mass.eliminate_zeros()
         return mass
 
-    def combined_data(self, weights: np.ndarray, element_matrices: sp.csr_matrix) -> np.ndarray:
+    def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray | sp.csr_matrix) -> np.ndarray:
         """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
         first: one aggregation instead of n_c unit data arrays in memory."""
-        return self._pattern[2] @ (element_matrices.T @ weights)
+        combined = element_matrices.T @ weights if sp.issparse(element_matrices) else weights @ element_matrices
+        return self._pattern[2] @ combined
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """A global CSR matrix on the shared pattern from its data array."""
@@ -239,6 +254,10 @@ def _nbytes(part) -> int:
     if sp.issparse(part):
         return sum(getattr(part, name).nbytes for name in ("data", "indices", "indptr") if hasattr(part, name))
     return 0
+
+
+def _dense(units: np.ndarray | sp.csr_matrix) -> np.ndarray:
+    return units.toarray() if sp.issparse(units) else units
 
 
 #: Every unit set in use, within ``UNIT_CACHE_BYTES`` (``solve_cache.SharedCache``).

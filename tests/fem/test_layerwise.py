@@ -8,6 +8,7 @@ import tomllib
 import numpy as np
 import pytest
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from fem.effects import effect
 from fem.elements import LayerwisePlate
@@ -263,3 +264,25 @@ def test_layerwise_effect():
     assert np.all(frequencies < model.frequencies()["original"])  # the soft core lowers every mode
     plain = parse_spec(tomllib.loads(SPEC.replace("G12_GPa = 0.035", "G12_GPa = 3.5")))
     assert effect("layerwise").free(plain) == []
+
+
+def test_sparse_unit_matrices_sum_as_the_dense_ones(monkeypatch):
+    """Element unit matrices kept sparse (above ``SPARSE_UNITS_ABOVE``, the layerwise
+    element's ~180) give the dense ones' K and M data to round-off (1e-13 of the largest
+    entry: two summation orders of 179 terms), and the same Gauss-grid-free quantities
+    made from them (the first unit mass)."""
+    from fem.solver import assembly
+    from fem.solver.assembly import UnitMatrices
+
+    stack = LayerwiseLaminate.of(sandwich().laminate("al_bottom"))
+    element = LayerwisePlate.with_groups(stack.n_groups, 2 * len(stack.stretch))
+    mesh = PlateMesh(0.08, 0.06, 3, 2)
+    forms = {}
+    for above in (0, 1 << 40):
+        monkeypatch.setattr(assembly, "SPARSE_UNITS_ABOVE", above)
+        units = UnitMatrices(mesh, element)
+        assert sp.issparse(units.element_stiffness) == (above == 0)
+        forms[above] = (units.combined_data(stack.stiffness, units.element_stiffness),
+                        units.combined_data(stack.inertia, units.element_mass), units.first_unit_mass.toarray())
+    for sparse, dense in zip(forms[0], forms[1 << 40], strict=True):
+        assert np.abs(sparse - dense).max() <= 1e-13 * np.abs(dense).max()
