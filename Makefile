@@ -22,7 +22,8 @@ test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/pytest -n auto --dist loadfile
 
 lint: $(STAMP)
-	$(BIN)/ruff check fem identify designer studies benchmarks tests
+	$(BIN)/ruff format --check fem identify designer studies benchmarks tests docs/examples
+	$(BIN)/ruff check fem identify designer studies benchmarks tests docs/examples
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m benchmarks

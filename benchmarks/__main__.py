@@ -8,6 +8,7 @@ named benchmark modules and replaces their sections of the page, keeping the oth
 section says when, and under what load, it was measured.  (Guarded: the designer's and the
 diagnosis's worker processes are spawned and import the main module.)
 """
+
 import contextlib
 import io
 import os
@@ -22,14 +23,16 @@ from fem.io import tool_version, write_text
 from . import core, damping, designer, diagnosis, identification, layerwise, peaks, startup
 
 #: The benchmarks in the order they run, each with the heading of its section.
-SECTIONS = (("Start-up of the command lines", startup),
-            ("Physics core: accuracy against time, solve and sensitivity cost", core),
-            ("Test planner", designer),
-            ("Identification", identification),
-            ("Diagnosis against one baseline fit", diagnosis),
-            ("Layerwise plate model", layerwise),
-            ("Measurement front end: recordings to peak lists", peaks),
-            ("Damping of the layers", damping))
+SECTIONS = (
+    ("Start-up of the command lines", startup),
+    ("Physics core: accuracy against time, solve and sensitivity cost", core),
+    ("Test planner", designer),
+    ("Identification", identification),
+    ("Diagnosis against one baseline fit", diagnosis),
+    ("Layerwise plate model", layerwise),
+    ("Measurement front end: recordings to peak lists", peaks),
+    ("Damping of the layers", damping),
+)
 PAGE = Path(__file__).parent.parent / "docs" / "generated" / "benchmarks.md"
 
 
@@ -47,8 +50,10 @@ class _Tee(io.TextIOBase):
 
 def _machine() -> str:
     load = " / ".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
-            f"{platform.python_version()}, layer-id {tool_version()}; load average (1/5/15 min) {load}")
+    return (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
+        f"{platform.python_version()}, layer-id {tool_version()}; load average (1/5/15 min) {load}"
+    )
 
 
 def _measured(module) -> str:
@@ -65,7 +70,10 @@ def _peak_memory() -> str:
     2 GB for any command)."""
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # kB on Linux
     workers = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return f"peak memory so far (target 2048 MB a process): {own:.0f} MB this process, {workers:.0f} MB its largest worker"
+    return (
+        f"peak memory so far (target 2048 MB a process): {own:.0f} MB this process, "
+        f"{workers:.0f} MB its largest worker"
+    )
 
 
 def _sections(text: str) -> dict[str, str]:
@@ -78,7 +86,9 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
     ``page`` (Markdown, atomically); with ``only`` the other sections are kept as they were."""
     names = {module.__name__.split(".")[-1] for _, module in SECTIONS}
     if only is not None and not only <= names:
-        raise SystemExit(f"--only {' '.join(sorted(only - names))}: no such benchmark; allowed: {', '.join(sorted(names))}")
+        raise SystemExit(
+            f"--only {' '.join(sorted(only - names))}: no such benchmark; allowed: {', '.join(sorted(names))}"
+        )
     start = f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC on {_machine()}"
     previous = page.read_text() if only is not None and page.exists() else ""
     kept = _sections(previous)
@@ -88,18 +98,26 @@ def run(page: Path = PAGE, only: set[str] | None = None) -> None:
             parts.append(kept[heading])
             continue
         block = _measured(module)
-        parts.append(f"## {heading}\n\n```\n{block}\n```\n\nMeasured {datetime.now(UTC):%Y-%m-%d %H:%M} UTC "
-                     f"on {_machine()}.\n")
+        parts.append(
+            f"## {heading}\n\n```\n{block}\n```\n\nMeasured {datetime.now(UTC):%Y-%m-%d %H:%M} UTC "
+            f"on {_machine()}.\n"
+        )
     if only is None:
         runs = f"- started: {start}\n- finished: {datetime.now(UTC):%Y-%m-%d %H:%M} UTC on {_machine()}\n"
     else:  # the last full run's times stay, for the sections kept from it
-        runs = "".join(line + "\n" for line in previous.splitlines() if line.startswith(("- started:", "- finished:")))
+        runs = "".join(
+            line + "\n" for line in previous.splitlines() if line.startswith(("- started:", "- finished:"))
+        )
         runs += f"- re-measured with --only {' '.join(sorted(only))}: {start}\n"
-    text = ("# Accuracy and speed\n\n"
-            "Written by `make bench` (`python -m benchmarks`); do not edit by hand. Each section is the\n"
-            "output of one benchmark module, with its targets. Timings are wall times on the machine\n"
-            "below; a busy machine (load average above its cores) makes them longer.\n\n" + runs + "\n"
-            + "\n".join(parts))
+    text = (
+        "# Accuracy and speed\n\n"
+        "Written by `make bench` (`python -m benchmarks`); do not edit by hand. Each section is the\n"
+        "output of one benchmark module, with its targets. Timings are wall times on the machine\n"
+        "below; a busy machine (load average above its cores) makes them longer.\n\n"
+        + runs
+        + "\n"
+        + "\n".join(parts)
+    )
     page.parent.mkdir(parents=True, exist_ok=True)
     write_text(page, text)
     print(f"written to {page}")
@@ -110,5 +128,5 @@ if __name__ == "__main__":
     chosen = None
     if "--only" in arguments:
         at = arguments.index("--only")
-        chosen, arguments = set(arguments[at + 1:]), arguments[:at]
+        chosen, arguments = set(arguments[at + 1 :]), arguments[:at]
     run(Path(arguments[0]) if arguments else PAGE, chosen)

@@ -1,4 +1,5 @@
 """Shared pieces of the benchmarks: the paper's plate and a best-of timer."""
+
 import time
 from pathlib import Path
 

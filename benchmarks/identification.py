@@ -5,6 +5,7 @@ example's data with and without its mode column, start-up included); a long spru
 plate's peak list from simulated recordings (``studies.long_plates``, 30 peaks, handbook
 start): ``fit`` as a process, with its peak memory.  Solutions are cached by content, so
 the cache is cleared before each timed fit."""
+
 import subprocess
 import sys
 import tempfile
@@ -41,21 +42,35 @@ def main() -> None:
     print("== identification: paper plate, 3 configurations x 5 modes, 12 unknowns, Table 6 start ==")
     labelled = synthetic_measurements(true_model(), modes=5, labels="close")
     ranked, iterations = timed_fit(labelled)
-    print(f"close modes labelled (the lab's usual data): {ranked:.2f} s, {iterations} iterations (target < 1 s)")
+    print(
+        f"close modes labelled (the lab's usual data): {ranked:.2f} s, {iterations} iterations (target < 1 s)"
+    )
     seconds, iterations = timed_fit(synthetic_measurements(true_model(), modes=5, labels="none"))
-    print(f"frequencies only (every assignment of the 3 close pairs refitted): {seconds:.2f} s, "
-          f"{iterations} iterations on the winning branch")
+    print(
+        f"frequencies only (every assignment of the 3 close pairs refitted): {seconds:.2f} s, "
+        f"{iterations} iterations on the winning branch"
+    )
     peaks = Measurements(labelled.table.assign(mode=0), "<peak list>")
     seconds, iterations = timed_fit(peaks)
-    print(f"the labelled data as a peak list (no mode numbers: matched, fitted, matched again): {seconds:.2f} s, "
-          f"{seconds / ranked:.2f}x the ranked fit (target <= {TARGET_RATIO:g}x)")
+    print(
+        f"the labelled data as a peak list (no mode numbers: matched, fitted, matched again): {seconds:.2f} "
+        "s, "
+        f"{seconds / ranked:.2f}x the ranked fit (target <= {TARGET_RATIO:g}x)"
+    )
     labelled_s, peaks_s = command_line_pair()
-    print(f"identify-layers fit on the bundled example: labelled {labelled_s:.2f} s, as a bare peak list (mode column "
-          f"dropped) {peaks_s:.2f} s: {peaks_s / labelled_s:.2f}x (target <= {TARGET_RATIO:g}x; whole processes, "
-          "medians of 3 taken in turn, start-up included)")
+    print(
+        f"identify-layers fit on the bundled example: labelled {labelled_s:.2f} s, as a bare peak list (mode "
+        "column "
+        f"dropped) {peaks_s:.2f} s: {peaks_s / labelled_s:.2f}x (target <= {TARGET_RATIO:g}x; whole "
+        "processes, "
+        "medians of 3 taken in turn, start-up included)"
+    )
     n_peaks, seconds, mib = long_plate()
-    print(f"identify-layers fit on a long spruce plate's peak list ({n_peaks} peaks from 5 simulated hits, handbook "
-          f"start, screened): {seconds:.1f} s, peak memory {mib:.0f} MiB")
+    print(
+        f"identify-layers fit on a long spruce plate's peak list ({n_peaks} peaks from 5 simulated hits, "
+        "handbook "
+        f"start, screened): {seconds:.1f} s, peak memory {mib:.0f} MiB"
+    )
 
 
 def long_plate(seed: int = 0) -> tuple[int, float, float]:
@@ -65,16 +80,22 @@ def long_plate(seed: int = 0) -> tuple[int, float, float]:
         folder = Path(folder)
         plate = long_plates.simulate(seed, folder, real_like=False)
         table = extract_peaks(list(plate.recordings), "original").to_frame()
-        (folder / "peaks.csv").write_text(table[["configuration", "frequency_hz", "std_hz"]].to_csv(index=False))
+        (folder / "peaks.csv").write_text(
+            table[["configuration", "frequency_hz", "std_hz"]].to_csv(index=False)
+        )
         spec = folder / "spruce.toml"
         spec.write_text(long_plates.spec_text())
         # The fit in a process of its own, whose peak memory its parent reports.
         command = _command("fit", spec, folder / "peaks.csv")
-        probe = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], capture_output=True, check=True); "
-                 "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+        probe = (
+            "import resource, subprocess, sys; subprocess.run(sys.argv[1:], capture_output=True, "
+            "check=True); "
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
+        )
         start = time.perf_counter()
-        done = subprocess.run([sys.executable, "-c", probe, *map(str, command)], capture_output=True, text=True,
-                              check=True)
+        done = subprocess.run(
+            [sys.executable, "-c", probe, *map(str, command)], capture_output=True, text=True, check=True
+        )
         seconds = time.perf_counter() - start
     return len(table), seconds, int(done.stdout.split()[-1]) / 1024
 

@@ -7,6 +7,7 @@ Run: ``python -m benchmarks.layerwise``.  Solutions are cached by content, so th
 cleared before every timed solve and fit; the unit matrices of the mesh stay assembled
 (they are built once per mesh and element type, like in any session).
 """
+
 import time
 import tomllib
 
@@ -68,7 +69,10 @@ name = "original"
 
 [[configurations]]
 name = "al_bottom"
-bottom = [ { material = "soft_adhesive", thickness_mm = 0.1 }, { material = "aluminium", thickness_mm = 1.0 } ]
+bottom = [
+  { material = "soft_adhesive", thickness_mm = 0.1 },
+  { material = "aluminium", thickness_mm = 1.0 },
+]
 
 [[configurations]]
 name = "al_top"
@@ -78,10 +82,19 @@ top = [ { material = "soft_adhesive", thickness_mm = 0.1 }, { material = "alumin
 modes = 10
 """
 #: Handbook-like start values: skins 10-20 % off, the foam's shear moduli 20 % low.
-START = {("E1", "cfrp_fabric"): 55e9, ("E2", "cfrp_fabric"): 52e9, ("G12", "cfrp_fabric"): 4.0e9,
-         ("nu12", "cfrp_fabric"): 0.06, ("G13", "pvc_foam"): 28e6, ("G23", "pvc_foam"): 28e6}
-MODELS = {"FSDT": {"transverse_shear": True, "rotary_inertia": True}, "layerwise": {"theory": "layerwise"},
-          "layerwise, one group per layer": {"theory": "layerwise", "layer_groups": "layers"}}
+START = {
+    ("E1", "cfrp_fabric"): 55e9,
+    ("E2", "cfrp_fabric"): 52e9,
+    ("G12", "cfrp_fabric"): 4.0e9,
+    ("nu12", "cfrp_fabric"): 0.06,
+    ("G13", "pvc_foam"): 28e6,
+    ("G23", "pvc_foam"): 28e6,
+}
+MODELS = {
+    "FSDT": {"transverse_shear": True, "rotary_inertia": True},
+    "layerwise": {"theory": "layerwise"},
+    "layerwise, one group per layer": {"theory": "layerwise", "layer_groups": "layers"},
+}
 
 
 def sandwich(**options):
@@ -107,8 +120,11 @@ def fit_cost(model) -> tuple[float, int, float]:
     start = model.with_values({Parameter(kind, target): value for (kind, target), value in START.items()})
     if model.options.theory != "layerwise":  # the FSDT cannot read the core's shear apart: fit the skins only
         start = start.with_values({Parameter(k, "pvc_foam"): 35e6 for k in ("G13", "G23")})
-    parameters = [p for p in start.specimen.material_parameters()
-                  if model.options.theory == "layerwise" or p.target != "pvc_foam"]
+    parameters = [
+        p
+        for p in start.specimen.material_parameters()
+        if model.options.theory == "layerwise" or p.target != "pvc_foam"
+    ]
     solve_laminate.cache_clear()
     t0 = time.perf_counter()
     result = fit(start, data, parameters=parameters)
@@ -130,16 +146,23 @@ def reanalysis_cost(model) -> tuple[float, float, float, float]:
     reanalyses = [Reanalysis.of(start, name) for name in names]
     built = time.perf_counter() - built
 
-    seconds = best_time(lambda: [r.solve(start.specimen).derivatives(parameters) for r in reanalyses], repeat=5)
+    seconds = best_time(
+        lambda: [r.solve(start.specimen).derivatives(parameters) for r in reanalyses], repeat=5
+    )
     at_basis = 0.0
     for r, name in zip(reanalyses, names):
         ritz, full = r.solve(start.specimen), start.solve(name)
         exact = full.derivatives(parameters)
         scale = np.maximum(np.abs(exact).max(axis=0), 1e-300)
-        at_basis = max(at_basis, float(np.max(np.abs(ritz.frequencies_hz / full.frequencies_hz - 1))),
-                       float(np.max(np.abs(ritz.derivatives(parameters) - exact) / scale)))
-    at_truth = max(float(np.max(r.solve(model.specimen).frequencies_hz / model.solve(n).frequencies_hz - 1))
-                   for r, n in zip(reanalyses, names))
+        at_basis = max(
+            at_basis,
+            float(np.max(np.abs(ritz.frequencies_hz / full.frequencies_hz - 1))),
+            float(np.max(np.abs(ritz.derivatives(parameters) - exact) / scale)),
+        )
+    at_truth = max(
+        float(np.max(r.solve(model.specimen).frequencies_hz / model.solve(n).frequencies_hz - 1))
+        for r, n in zip(reanalyses, names)
+    )
     return built, seconds, at_basis, at_truth
 
 
@@ -152,18 +175,26 @@ def main() -> None:
             dofs, seconds = solve_cost(model, configuration)
             stack = model.solve(configuration).layerwise
             extra = f", {stack.n_groups} shear groups, {len(stack.stretch)} stretching core" if stack else ""
-            print(f"one solve, {name:32s} {configuration:9s}: {1e3 * seconds:7.0f} ms, {dofs} DOFs "
-                  f"({mesh.nx} x {mesh.ny} elements{extra})")
+            print(
+                f"one solve, {name:32s} {configuration:9s}: {1e3 * seconds:7.0f} ms, {dofs} DOFs "
+                f"({mesh.nx} x {mesh.ny} elements{extra})"
+            )
     for name in ("FSDT", "layerwise"):
         built, seconds, at_basis, at_truth = reanalysis_cost(sandwich(**MODELS[name]))
-        print(f"reduced basis, {name:9s}: built in {1e3 * built:.0f} ms; one evaluation of the 3 configurations "
-              f"(frequencies and 6 sensitivities) {1e3 * seconds:.1f} ms (target 5 ms); off the full solve by "
-              f"{at_basis:.1e} at its basis point (target 1e-6), {100 * at_truth:.2f} % at the truth (10-20 % away)")
+        print(
+            f"reduced basis, {name:9s}: built in {1e3 * built:.0f} ms; one evaluation of the 3 "
+            "configurations "
+            f"(frequencies and 6 sensitivities) {1e3 * seconds:.1f} ms (target 5 ms); off the full solve by "
+            f"{at_basis:.1e} at its basis point (target 1e-6), {100 * at_truth:.2f} % at the truth (10-20 % "
+            "away)"
+        )
     for name in ("FSDT", "layerwise"):
         what = "skins' E1, E2, G12, nu12" + (" + foam G13, G23" if name == "layerwise" else "")
         seconds, iterations, rms = fit_cost(sandwich(**MODELS[name]))
-        print(f"identification, {name:9s} ({what}), 3 configurations x 10 modes from the handbook start: "
-              f"{seconds:.1f} s, {iterations} iterations, RMS {100 * rms:.2g} %")
+        print(
+            f"identification, {name:9s} ({what}), 3 configurations x 10 modes from the handbook start: "
+            f"{seconds:.1f} s, {iterations} iterations, RMS {100 * rms:.2g} %"
+        )
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ reference machine): ratios to numpy's import of <= 2.7 and <= 5.5.  The verdict 
 the median ratio of CPU times (user + sys of the process), which other load on the
 machine changes far less than wall time; the table gives both.
 """
+
 import resource
 import statistics
 import subprocess
@@ -44,22 +45,32 @@ def paired(command: list[str], pairs: int = PAIRS) -> dict:
     CPU times and the ratios pair by pair."""
     run(REFERENCE), run(command)
     times = [(run(REFERENCE), run(command)) for _ in range(pairs)]
-    return {"command_wall_s": statistics.median(c[0] for _, c in times),
-            "command_cpu_s": statistics.median(c[1] for _, c in times),
-            "reference_cpu_s": statistics.median(r[1] for r, _ in times),
-            "wall_ratio": statistics.median(c[0] / r[0] for r, c in times),
-            "cpu_ratio": statistics.median(c[1] / r[1] for r, c in times)}
+    return {
+        "command_wall_s": statistics.median(c[0] for _, c in times),
+        "command_cpu_s": statistics.median(c[1] for _, c in times),
+        "reference_cpu_s": statistics.median(r[1] for r, _ in times),
+        "wall_ratio": statistics.median(c[0] / r[0] for r, c in times),
+        "cpu_ratio": statistics.median(c[1] / r[1] for r, c in times),
+    }
 
 
 def main() -> None:
-    print(f"== start-up of the command lines: medians of {PAIRS} runs paired with python -c 'import numpy' ==")
-    print(f"{'command':26s} {'wall [s]':>8s} {'cpu [s]':>8s} {'numpy cpu':>9s} {'wall x':>7s} {'cpu x':>6s} "
-          f"{'goal cpu x':>16s}  verdict")
+    print(
+        f"== start-up of the command lines: medians of {PAIRS} runs paired with python -c 'import numpy' =="
+    )
+    print(
+        f"{'command':26s} {'wall [s]':>8s} {'cpu [s]':>8s} {'numpy cpu':>9s} {'wall x':>7s} {'cpu x':>6s} "
+        f"{'goal cpu x':>16s}  verdict"
+    )
     for name, command, goal_s, goal_ratio in COMMANDS:
         row = paired(command)
         verdict = "met" if row["cpu_ratio"] <= goal_ratio else "MISSED"
-        print(f"{name:26s} {row['command_wall_s']:8.3f} {row['command_cpu_s']:8.3f} {row['reference_cpu_s']:9.3f} "
-              f"{row['wall_ratio']:7.2f} {row['cpu_ratio']:6.2f} {f'<= {goal_ratio:g} ({goal_s:g} s)':>16s}  {verdict}")
+        print(
+            f"{name:26s} {row['command_wall_s']:8.3f} {row['command_cpu_s']:8.3f} "
+            f"{row['reference_cpu_s']:9.3f} "
+            f"{row['wall_ratio']:7.2f} {row['cpu_ratio']:6.2f} {f'<= {goal_ratio:g} ({goal_s:g} s)':>16s}  "
+            f"{verdict}"
+        )
 
 
 if __name__ == "__main__":

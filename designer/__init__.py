@@ -19,18 +19,35 @@ how to carry out the test, ``spec_file`` writes a design as a spec; ``cli`` is p
 The names are imported when first used, so that ``plan-tests --help`` starts without
 loading the planner.
 """
+
 from fem.lazy import lazy_package
 
 #: Public name -> the module that defines it.
 _HOMES = {
-    "CheckResult": "designer.check", "check": "designer.check", "Problem": "designer.problem",
-    "refine": "designer.search.refine", "Recommendation": "designer.search.ranking", "recommend": "designer.search.ranking",
-    "TestSheet": "designer.sheet", "write_spec": "designer.spec_file", "SweepResult": "designer.sweep",
+    "CheckResult": "designer.check",
+    "check": "designer.check",
+    "Problem": "designer.problem",
+    "refine": "designer.search.refine",
+    "Recommendation": "designer.search.ranking",
+    "recommend": "designer.search.ranking",
+    "TestSheet": "designer.sheet",
+    "write_spec": "designer.spec_file",
+    "SweepResult": "designer.sweep",
     "sweep": "designer.sweep",
 }
 
-__all__ = ["check", "recommend", "sweep", "refine", "write_spec", "Problem", "CheckResult", "Recommendation",
-           "SweepResult", "TestSheet"]
+__all__ = [
+    "check",
+    "recommend",
+    "sweep",
+    "refine",
+    "write_spec",
+    "Problem",
+    "CheckResult",
+    "Recommendation",
+    "SweepResult",
+    "TestSheet",
+]
 
 __getattr__ = lazy_package(__name__, _HOMES)
 

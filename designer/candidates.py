@@ -1,5 +1,6 @@
 """Candidate configurations: one known plate (material x thickness x placement) bonded to
 the specimen with the design's adhesive."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -10,8 +11,9 @@ from fem.laminates.material import Material
 from fem.specimen import Configuration, Specimen
 
 
-def plate_configuration(material: Material, thickness: float, placement: str, adhesive: Layer | None,
-                        name: str | None = None) -> Configuration:
+def plate_configuration(
+    material: Material, thickness: float, placement: str, adhesive: Layer | None, name: str | None = None
+) -> Configuration:
     """The specimen with a ``thickness`` [m] plate of ``material`` bonded on ``placement``.
 
     Layers are listed from the specimen outward (adhesive first) and labelled as the spec
@@ -20,7 +22,9 @@ def plate_configuration(material: Material, thickness: float, placement: str, ad
     """
     name = name or f"{material.name}_{thickness * 1e3:g}mm_{placement}"
     layers = ([adhesive] if adhesive is not None else []) + [Layer(material, thickness)]
-    labelled = tuple(Layer(l.material, l.thickness, l.angle, f"{name}.{placement}{j + 1}") for j, l in enumerate(layers))
+    labelled = tuple(
+        Layer(l.material, l.thickness, l.angle, f"{name}.{placement}{j + 1}") for j, l in enumerate(layers)
+    )
     return Configuration(name, **{placement: labelled})
 
 
@@ -29,13 +33,17 @@ def outer_face(configuration: Configuration) -> str:
     return "top" if configuration.top else "bottom"
 
 
-def with_plate_thickness(configuration: Configuration, thickness: float, rename: bool = False) -> Configuration:
+def with_plate_thickness(
+    configuration: Configuration, thickness: float, rename: bool = False
+) -> Configuration:
     """The configuration with its outermost added layer ``thickness`` [m] thick; with
     ``rename`` named after it (e.g. 'brass_1.37mm_top')."""
     face = outer_face(configuration)
     layers = getattr(configuration, face)
     name = f"{layers[-1].material.name}_{thickness * 1e3:.3g}mm_{face}" if rename else configuration.name
-    return replace(configuration, name=name, **{face: layers[:-1] + (replace(layers[-1], thickness=thickness),)})
+    return replace(
+        configuration, name=name, **{face: layers[:-1] + (replace(layers[-1], thickness=thickness),)}
+    )
 
 
 @dataclass(frozen=True)

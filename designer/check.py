@@ -1,4 +1,5 @@
 """``check``: is the spec's own set of configurations a feasible test (paper section 4.6)?"""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -36,7 +37,11 @@ class CheckResult:
     @property
     def feasible(self) -> bool:
         """Not singular, within every limit, and every parameter meets its target std."""
-        return self.design.scores.verdict != Verdict.SINGULAR and not self.violations and self.design.meets_targets
+        return (
+            self.design.scores.verdict != Verdict.SINGULAR
+            and not self.violations
+            and self.design.meets_targets
+        )
 
     @cached_property
     def test_sheet(self) -> TestSheet | None:
@@ -51,11 +56,16 @@ class CheckResult:
 
     def to_dict(self) -> dict:
         sheet = self.test_sheet
-        return {**self.design.to_dict(), "feasible": self.feasible, "warnings": list(self.warnings),
-                "violations": list(self.violations), "poisson_plate": self.poisson.to_dict(),
-                "limits": self.limits.to_dict() if self.limits is not None else None,
-                "test_sheet": sheet.to_dict() if sheet is not None else None,
-                "damping": self.damping.to_dict() if self.damping is not None else None}
+        return {
+            **self.design.to_dict(),
+            "feasible": self.feasible,
+            "warnings": list(self.warnings),
+            "violations": list(self.violations),
+            "poisson_plate": self.poisson.to_dict(),
+            "limits": self.limits.to_dict() if self.limits is not None else None,
+            "test_sheet": sheet.to_dict() if sheet is not None else None,
+            "damping": self.damping.to_dict() if self.damping is not None else None,
+        }
 
     def report(self) -> str:
         lines = [self.design.report(), "", self.poisson.report()]
@@ -76,8 +86,11 @@ class CheckResult:
             reasons.append("a limit is broken")
         if not self.design.meets_targets:
             misses = self.design.target_misses()
-            reasons.append(f"{len(misses)} parameter(s) miss their target std: "
-                           + ", ".join(p.name for p, _, _ in misses[:4]) + (" ..." if len(misses) > 4 else ""))
+            reasons.append(
+                f"{len(misses)} parameter(s) miss their target std: "
+                + ", ".join(p.name for p, _, _ in misses[:4])
+                + (" ..." if len(misses) > 4 else "")
+            )
         lines += ["", "feasible: " + ("yes" if self.feasible else "NO (" + "; ".join(reasons) + ")")]
         return "\n".join(lines)
 
@@ -93,22 +106,30 @@ def mode_warnings(problem: Problem, solved: Solved) -> list[str]:
     for i in range(min(n, f.size - 1)):
         gap = (f[i + 1] - f[i]) / f[i]
         if gap < threshold:
-            action = ("both are dropped (min_separation_rel)" if gap < limits.min_separation else
-                      "pair them by mode shape (measure where they differ) or set [design] min_separation_rel")
+            action = (
+                "both are dropped (min_separation_rel)"
+                if gap < limits.min_separation
+                else "pair them by mode shape (measure where they differ) or set [design] min_separation_rel"
+            )
             which = f"modes {i + 1} and {i + 2}" if i + 1 < n else f"mode {n} and the unmeasured mode {n + 1}"
-            out.append(f"{which} of '{name}' are {100 * gap:.3g} % apart ({f[i]:.2f}, {f[i + 1]:.2f} Hz, "
-                       f"shapes {solved.labels[i]}, {solved.labels[i + 1]}): {action}")
+            out.append(
+                f"{which} of '{name}' are {100 * gap:.3g} % apart ({f[i]:.2f}, {f[i + 1]:.2f} Hz, "
+                f"shapes {solved.labels[i]}, {solved.labels[i + 1]}): {action}"
+            )
     if limits.band is not None:
         outside = [i for i in range(min(n, f.size)) if not limits.band[0] <= f[i] <= limits.band[1]]
         if outside:
             listed = ", ".join(f"{i + 1} ({f[i]:.1f} Hz)" for i in outside)
-            out.append(f"'{name}': modes {listed} lie outside the band {limits.band[0]:g}..{limits.band[1]:g} Hz "
-                       "and are not measured")
+            out.append(
+                f"'{name}': modes {listed} lie outside the band {limits.band[0]:g}..{limits.band[1]:g} Hz "
+                "and are not measured"
+            )
     return out
 
 
-def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
-          progress: Progress | None = None) -> CheckResult:
+def check(
+    problem: Problem | SpecimenModel, configurations=None, pool=None, progress: Progress | None = None
+) -> CheckResult:
     """Score the spec's configurations (or the given ones) as one test set (over the
     prior range too when ``[design] prior_range_rel`` is set).  ``problem``: a planning
     problem, or a model (its ``[design]`` table makes the problem).  The result's
@@ -122,15 +143,29 @@ def check(problem: Problem | SpecimenModel, configurations=None, pool=None,
         if not problem.measured(s).any():
             raise unmeasurable(problem, s)
         warnings += mode_warnings(problem, s)
-        violations += [f"'{s.configuration.name}' {v}" for v in problem.space.limits.violations(s.configuration,
-                                                                                             problem.area)]
+        violations += [
+            f"'{s.configuration.name}' {v}"
+            for v in problem.space.limits.violations(s.configuration, problem.area)
+        ]
     design = Design.of(problem, solved, prior or None)
     if design.n_measured < len(design.parameters):
-        warnings.append(f"{design.n_measured} measured frequencies for {len(design.parameters)} parameters: "
-                        "singular whatever the plates; measure more modes ([model] modes) or add configurations")
+        warnings.append(
+            f"{design.n_measured} measured frequencies for {len(design.parameters)} parameters: "
+            "singular whatever the plates; measure more modes ([model] modes) or add configurations"
+        )
     damping = damping_scores(problem.model, configurations, problem.space.damping_std_rel)
     if damping is not None and damping.useless:
-        warnings.append(f"the design does not determine the loss factors {', '.join(damping.useless)} (predicted std "
-                        "above the value): add configurations that change the layers' share of the strain energy")
-    return CheckResult(design, poisson_plate(problem.specimen), tuple(warnings), tuple(violations),
-                       problem.space.limits, problem, tuple(prior), damping)
+        warnings.append(
+            f"the design does not determine the loss factors {', '.join(damping.useless)} (predicted std "
+            "above the value): add configurations that change the layers' share of the strain energy"
+        )
+    return CheckResult(
+        design,
+        poisson_plate(problem.specimen),
+        tuple(warnings),
+        tuple(violations),
+        problem.space.limits,
+        problem,
+        tuple(prior),
+        damping,
+    )

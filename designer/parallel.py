@@ -4,6 +4,7 @@ All three go through one ``concurrent.futures.Executor`` interface (Dask's
 ``Client.get_executor()`` provides it), so the planner's code is the same on a laptop
 and on a cluster.
 """
+
 from __future__ import annotations
 
 import concurrent.futures as cf
@@ -30,21 +31,27 @@ def executor(workers: int = 1, scheduler: str | None = None, tasks: int = 0, tim
         try:
             from distributed import Client
         except ImportError:
-            raise DesignError(f"--scheduler {scheduler}: Dask is not installed; "
-                              "install the extra: pip install 'layer-id[dask]'") from None
+            raise DesignError(
+                f"--scheduler {scheduler}: Dask is not installed; "
+                "install the extra: pip install 'layer-id[dask]'"
+            ) from None
         try:
             client = Client(scheduler, timeout=timeout)
         except (OSError, TimeoutError) as exc:
-            raise DesignError(f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc}); "
-                              "check the address and that the scheduler runs") from None
+            raise DesignError(
+                f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc}); "
+                "check the address and that the scheduler runs"
+            ) from None
         try:
             yield client.get_executor()
         finally:
             client.close()
         return
     if not isinstance(workers, int) or workers < 0:
-        raise DesignError(f"--workers {workers!r}: need a whole number >= 1, or 0 for automatic "
-                          f"(this machine has {os.cpu_count()} cores)")
+        raise DesignError(
+            f"--workers {workers!r}: need a whole number >= 1, or 0 for automatic "
+            f"(this machine has {os.cpu_count()} cores)"
+        )
     workers = workers or auto_workers(tasks)
     if workers == 1:
         yield None
@@ -67,8 +74,15 @@ def chunked(items: list, pieces: int) -> list[list]:
     return [items[a:b] for a, b in zip(bounds, bounds[1:])]
 
 
-def run_chunks(function, chunks: list[list], *args, pool: cf.Executor | None = None,
-               progress: Progress | None = None, label: str = "", done=None) -> list:
+def run_chunks(
+    function,
+    chunks: list[list],
+    *args,
+    pool: cf.Executor | None = None,
+    progress: Progress | None = None,
+    label: str = "",
+    done=None,
+) -> list:
     """``function(*args, chunk)`` for every chunk, results concatenated in chunk order;
     a progress bar counts items as chunks complete; ``done(i, result)`` is called as
     each chunk completes (e.g. to store it, so an interruption loses only chunks in work)."""

@@ -1,5 +1,6 @@
 """A planning problem: the model at its nominal properties and the design space;
 configurations solved once each, cached by content, possibly in parallel."""
+
 from __future__ import annotations
 
 from collections import OrderedDict
@@ -26,6 +27,8 @@ _CACHE: OrderedDict = OrderedDict()
 MAX_TASKS = 64
 #: Model options that choose the plate theory, passed on to the solve when the model has them.
 THEORY_OPTIONS = ("theory", "layer_groups", "core_stretch")
+
+
 @dataclass(frozen=True)
 class Solved:
     """One configuration at one parameter point (the nominal one unless scored over a
@@ -44,19 +47,36 @@ def content_key(specimen: Specimen, configuration: Configuration) -> tuple:
     return tuple((l.material, l.thickness, l.angle) for l in specimen.laminate(configuration).layers)
 
 
-def _solution(specimen: Specimen, options: ModelOptions, mesh: PlateMesh, n_modes: int, configuration: Configuration,
-              attachments: tuple = ()):
+def _solution(
+    specimen: Specimen,
+    options: ModelOptions,
+    mesh: PlateMesh,
+    n_modes: int,
+    configuration: Configuration,
+    attachments: tuple = (),
+):
     """The model ``SpecimenModel`` solves (effects, attachments, plate theory), cached by
     content."""
     theory = {key: getattr(options, key) for key in THEORY_OPTIONS if hasattr(options, key)}
-    return solve_laminate(specimen.laminate(configuration), mesh, n_modes, transverse_shear=options.transverse_shear,
-                          rotary_inertia=options.rotary_inertia, attachments=specimen.attachments + tuple(attachments),
-                          **theory)
+    return solve_laminate(
+        specimen.laminate(configuration),
+        mesh,
+        n_modes,
+        transverse_shear=options.transverse_shear,
+        rotary_inertia=options.rotary_inertia,
+        attachments=specimen.attachments + tuple(attachments),
+        **theory,
+    )
 
 
 @one_blas_thread
-def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters: tuple[Parameter, ...],
-                pairs: list[tuple[Specimen, Configuration, bool]]) -> list[tuple]:
+def solve_pairs(
+    options: ModelOptions,
+    mesh: PlateMesh,
+    n_modes: int,
+    parameters: tuple[Parameter, ...],
+    pairs: list[tuple[Specimen, Configuration, bool]],
+) -> list[tuple]:
     """(frequencies, labels, relative sensitivities) of each (specimen, configuration,
     with labels): the task run by workers (a module-level function, so it pickles to
     processes and Dask workers); the specimens may differ in their material values
@@ -68,8 +88,13 @@ def solve_pairs(options: ModelOptions, mesh: PlateMesh, n_modes: int, parameters
         values = np.array([specimen.value(p) for p in parameters])
         solution = _solution(specimen, options, mesh, n_modes, configuration)
         f = solution.frequencies_hz
-        out.append((f, solution.labels if labelled else None,
-                    normalised(f, solution.derivatives(list(parameters)), values)))
+        out.append(
+            (
+                f,
+                solution.labels if labelled else None,
+                normalised(f, solution.derivatives(list(parameters)), values),
+            )
+        )
     return out
 
 
@@ -88,8 +113,10 @@ class Problem:
 
     def __post_init__(self):
         if not self.specimen.identified_materials:
-            raise DesignError("spec: no material has identify = true, so there is nothing to identify and no "
-                              "test to plan; set identify = true on the layer materials to find")
+            raise DesignError(
+                "spec: no material has identify = true, so there is nothing to identify and no "
+                "test to plan; set identify = true on the layer materials to find"
+            )
         # the mass and thickness limits [design] leaves open: the defaults relative to the specimen
         limits = self.space.limits.with_defaults(self.specimen_mass, self.specimen_thickness)
         if limits != self.space.limits:
@@ -106,25 +133,38 @@ class Problem:
         return sum(layer.thickness for layer in self.specimen.layers)
 
     @classmethod
-    def of(cls, model: SpecimenModel | Problem, modes: int | None = None, criterion: str | None = None,
-           prior_range: float | None = None, store=None) -> Problem:
+    def of(
+        cls,
+        model: SpecimenModel | Problem,
+        modes: int | None = None,
+        criterion: str | None = None,
+        prior_range: float | None = None,
+        store=None,
+    ) -> Problem:
         """The planning problem of a model (its ``[design]`` table, or the defaults);
         ``modes`` overrides ``[model] modes``, ``criterion`` the design's criterion,
         ``prior_range`` its ``prior_range_rel``, ``store`` the disk store of solves."""
         if isinstance(model, Problem):
             problem = model if store is None else replace(model, store=store)
         else:
-            space = model.design or parse_design({}, model.defined_materials, len(model.specimen.identified_materials))
+            space = model.design or parse_design(
+                {}, model.defined_materials, len(model.specimen.identified_materials)
+            )
             problem = cls(model, space, store)
         if modes is not None:
             problem = problem.with_options(modes=modes)
         if criterion is not None:
             problem = replace(problem, space=replace(problem.space, criterion=criterion))
         if prior_range is not None:
-            if isinstance(prior_range, bool) or not isinstance(prior_range, (int, float)) \
-                    or not 0.0 <= prior_range <= 0.9:
-                raise DesignError(f"--prior-range {prior_range!r}: need 0..0.9, relative (e.g. 0.3 for +-30 % of the "
-                                  "identified properties; 0 for the nominal values only)")
+            if (
+                isinstance(prior_range, bool)
+                or not isinstance(prior_range, (int, float))
+                or not 0.0 <= prior_range <= 0.9
+            ):
+                raise DesignError(
+                    f"--prior-range {prior_range!r}: need 0..0.9, relative (e.g. 0.3 for +-30 % of the "
+                    "identified properties; 0 for the nominal values only)"
+                )
             problem = replace(problem, space=replace(problem.space, prior_range=float(prior_range)))
         return problem
 
@@ -162,8 +202,13 @@ class Problem:
     def area(self) -> float:
         return self.specimen.length * self.specimen.width
 
-    def solve(self, configurations, pool=None, progress: Progress | None = None,
-              label: str = "solving configurations") -> list[Solved]:
+    def solve(
+        self,
+        configurations,
+        pool=None,
+        progress: Progress | None = None,
+        label: str = "solving configurations",
+    ) -> list[Solved]:
         """Each configuration solved once (cached by content in this process); the rest
         on ``pool`` (a ``concurrent.futures`` executor) when given."""
         return solve_points([self], configurations, pool, progress, label)[0]
@@ -179,8 +224,14 @@ class Problem:
         values: the very solve ``solve`` ran (``fem.model.solve_laminate`` keeps it in
         this process), so it costs nothing after ``solve`` here.  ``attachments``: more
         point masses or springs than the spec's (e.g. a sensor), a new solve."""
-        return _solution(self.specimen, self.options, self.mesh, self.solved_modes,
-                         configuration_at(self, configuration), attachments)
+        return _solution(
+            self.specimen,
+            self.options,
+            self.mesh,
+            self.solved_modes,
+            configuration_at(self, configuration),
+            attachments,
+        )
 
     def at(self, values: dict[Parameter, float]) -> Problem:
         """The same problem with the identified parameters at other values (SI)."""
@@ -211,16 +262,25 @@ def configuration_at(problem: Problem, configuration: Configuration) -> Configur
     materials = problem.specimen.materials
 
     def at(layers):
-        return tuple(replace(l, material=materials[l.material.name]) if l.material.identify
-                     and l.material.name in materials else l for l in layers)
+        return tuple(
+            replace(l, material=materials[l.material.name])
+            if l.material.identify and l.material.name in materials
+            else l
+            for l in layers
+        )
 
     if not any(l.material.identify for l in configuration.bottom + configuration.top):
         return configuration
     return replace(configuration, bottom=at(configuration.bottom), top=at(configuration.top))
 
 
-def solve_points(problems: list[Problem], configurations, pool=None, progress: Progress | None = None,
-                 label: str = "solving configurations") -> list[list[Solved]]:
+def solve_points(
+    problems: list[Problem],
+    configurations,
+    pool=None,
+    progress: Progress | None = None,
+    label: str = "solving configurations",
+) -> list[list[Solved]]:
     """The configurations solved at every problem's parameter values (problems that share
     the specimen's geometry, model options and design: the nominal one and its prior
     samples), in one batch: cached by content in this process, the rest on ``pool``.
@@ -232,8 +292,12 @@ def solve_points(problems: list[Problem], configurations, pool=None, progress: P
     at = [[configuration_at(p, c) for c in configurations] for p in problems]
     keys = [[(content_key(p.specimen, c),) + model for c in cs] for p, cs in zip(problems, at)]
     labelled = set(keys[0])
-    found = {key: _CACHE[key] for row in keys for key in row
-             if key in _CACHE and (_CACHE[key][1] is not None or key not in labelled)}
+    found = {
+        key: _CACHE[key]
+        for row in keys
+        for key in row
+        if key in _CACHE and (_CACHE[key][1] is not None or key not in labelled)
+    }
     store = first.store
     if store is not None:
         for row in keys:
@@ -255,26 +319,42 @@ def solve_points(problems: list[Problem], configurations, pool=None, progress: P
             for (key, _), result in zip(chunks[i], results):
                 store.put(key, result)
 
-        results = run_chunks(solve_pairs, [[task for _, task in chunk] for chunk in chunks], first.options,
-                             first.mesh, n_solve, first.parameters, pool=pool, progress=progress, label=label,
-                             done=keep if store is not None else None)
+        results = run_chunks(
+            solve_pairs,
+            [[task for _, task in chunk] for chunk in chunks],
+            first.options,
+            first.mesh,
+            n_solve,
+            first.parameters,
+            pool=pool,
+            progress=progress,
+            label=label,
+            done=keep if store is not None else None,
+        )
         found.update(zip(todo, results))
     for key, result in found.items():
         _CACHE[key] = result
         _CACHE.move_to_end(key)
     while len(_CACHE) > CACHE_SIZE:
         _CACHE.popitem(last=False)
-    return [[Solved(c, found[k][0], tuple(found[k][1] or ()), found[k][2]) for k, c in zip(row, configurations)]
-            for row in keys]
+    return [
+        [Solved(c, found[k][0], tuple(found[k][1] or ()), found[k][2]) for k, c in zip(row, configurations)]
+        for row in keys
+    ]
 
 
 def unmeasurable(problem: Problem, solved: Solved) -> DesignError:
     """The error for a configuration of which no mode would be measured."""
     f = solved.frequencies_hz[: problem.modes]
     limits = problem.space.limits
-    where = f"configuration '{solved.configuration.name}' (its {f.size} modes lie at {f.min():.4g}..{f.max():.4g} Hz)"
+    modes_lie = f"its {f.size} modes lie at {f.min():.4g}..{f.max():.4g} Hz"
+    where = f"configuration '{solved.configuration.name}' ({modes_lie})"
     if limits.band is not None and not np.any((f >= limits.band[0]) & (f <= limits.band[1])):
-        return DesignError(f"[design].band_hz = [{limits.band[0]:g}, {limits.band[1]:g}] excludes every mode of "
-                           f"{where}; widen the band or change [model] modes")
-    return DesignError(f"[design].min_separation_rel = {limits.min_separation:g} (with band_hz) leaves no mode of "
-                       f"{where} to measure; lower min_separation_rel or widen the band")
+        return DesignError(
+            f"[design].band_hz = [{limits.band[0]:g}, {limits.band[1]:g}] excludes every mode of "
+            f"{where}; widen the band or change [model] modes"
+        )
+    return DesignError(
+        f"[design].min_separation_rel = {limits.min_separation:g} (with band_hz) leaves no mode of "
+        f"{where} to measure; lower min_separation_rel or widen the band"
+    )

@@ -1,4 +1,5 @@
 """A one-line progress bar for long runs (on stderr, so --json output stays clean)."""
+
 from __future__ import annotations
 
 import time
@@ -42,15 +43,19 @@ class Bar:
     def update(self, n: int = 1) -> None:
         self.done += n
         now = time.perf_counter()
-        if self.stream is not None and now - self.start >= self.show_after and (
-            now - self.last >= REDRAW_EVERY or self.done >= self.total
+        if (
+            self.stream is not None
+            and now - self.start >= self.show_after
+            and (now - self.last >= REDRAW_EVERY or self.done >= self.total)
         ):
             self._draw(now)
 
     def _draw(self, now: float) -> None:
         filled = int(WIDTH * min(self.done / self.total, 1.0))
-        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (WIDTH - filled)}] "
-                          f"{self.done}/{self.total}  {now - self.start:.1f} s")
+        self.stream.write(
+            f"\r{self.label} [{'#' * filled}{'.' * (WIDTH - filled)}] "
+            f"{self.done}/{self.total}  {now - self.start:.1f} s"
+        )
         self.stream.flush()
         self.last, self.drawn = now, True
 

@@ -30,6 +30,7 @@ peak |w| over the plate), following impact-test practice for free plates:
   and the shift of every mode reported (exactly, since for a close pair the first-order
   formula fails: the sensor loads one combination of the two and leaves the other).
 """
+
 from __future__ import annotations
 
 import math
@@ -97,19 +98,33 @@ class ClosePair:
     ratios: tuple[float, float]
 
     def to_dict(self) -> dict:
-        return {"modes": list(self.modes), "frequencies_hz": [round(f, 4) for f in self.frequencies_hz],
-                "gap_rel": self.gap_rel, "labels": list(self.labels), "measured": list(self.measured),
-                "tell_apart": [{"touch_point_mm": _mm(p), "damps_mode": m, "damps_label": label,
-                                "amplitude_ratio": _ratio(r)}
-                               for p, m, label, r in zip(self.touch_points, self.modes, self.labels, self.ratios)]}
+        return {
+            "modes": list(self.modes),
+            "frequencies_hz": [round(f, 4) for f in self.frequencies_hz],
+            "gap_rel": self.gap_rel,
+            "labels": list(self.labels),
+            "measured": list(self.measured),
+            "tell_apart": [
+                {
+                    "touch_point_mm": _mm(p),
+                    "damps_mode": m,
+                    "damps_label": label,
+                    "amplitude_ratio": _ratio(r),
+                }
+                for p, m, label, r in zip(self.touch_points, self.modes, self.labels, self.ratios)
+            ],
+        }
 
     def report(self) -> str:
         (i, j), (li, lj) = self.modes, self.labels
         (pi, pj), (ri, rj) = self.touch_points, self.ratios
-        return (f"modes {i} {li} and {j} {lj} are {100 * self.gap_rel:.3g} % apart ({self.frequencies_hz[0]:.2f}, "
-                f"{self.frequencies_hz[1]:.2f} Hz): one peak or two overlapping - give them a label column "
-                f"({li}, {lj}); to tell them apart touch lightly at {_point(pi)}: mode {i} {li} damps (it moves "
-                f"{_ratio_text(ri)} as much there), or at {_point(pj)}: mode {j} {lj} damps ({_ratio_text(rj)})")
+        return (
+            f"modes {i} {li} and {j} {lj} are {100 * self.gap_rel:.3g} % apart "
+            f"({self.frequencies_hz[0]:.2f}, "
+            f"{self.frequencies_hz[1]:.2f} Hz): one peak or two overlapping - give them a label column "
+            f"({li}, {lj}); to tell them apart touch lightly at {_point(pi)}: mode {i} {li} damps (it moves "
+            f"{_ratio_text(ri)} as much there), or at {_point(pj)}: mode {j} {lj} damps ({_ratio_text(rj)})"
+        )
 
 
 def _mm(point) -> list[float]:
@@ -157,7 +172,8 @@ class ConfigurationSheet:
     lowest_mode: int
     sensor_mass: float | None = None
     sensor_shift_rel: np.ndarray | None = None
-    grid: tuple = field(default=(), repr=False, compare=False)  # (xs, ys, w (x, y, modes) normalised) for plots
+    # (xs, ys, w (x, y, modes) normalised) for plots
+    grid: tuple = field(default=(), repr=False, compare=False)
 
     def to_dict(self) -> dict:
         return {
@@ -165,7 +181,9 @@ class ConfigurationSheet:
             "modes": list(self.modes),
             "labels": list(self.labels),
             "frequencies_hz": [round(float(f), 4) for f in self.frequencies_hz],
-            "frequency_range_hz": [[round(float(lo), 2), round(float(hi), 2)] for lo, hi in self.frequency_range_hz],
+            "frequency_range_hz": [
+                [round(float(lo), 2), round(float(hi), 2)] for lo, hi in self.frequency_range_hz
+            ],
             "frequency_spread": self.spread,
             "support_points_mm": [_mm(p) for p in self.support_points],
             "support_nodal_distance_mm": [round(1e3 * float(d), 2) for d in self.support_distances],
@@ -177,31 +195,50 @@ class ConfigurationSheet:
             "edge_margin_mm": _mm(self.edge_margin),
             "close_pairs": [p.to_dict() for p in self.close_pairs],
             "sensor_mass_g": None if self.sensor_mass is None else self.sensor_mass * 1e3,
-            "sensor_shift_rel": None if self.sensor_shift_rel is None else [float(s) for s in self.sensor_shift_rel],
+            "sensor_shift_rel": None
+            if self.sensor_shift_rel is None
+            else [float(s) for s in self.sensor_shift_rel],
         }
 
     def report(self) -> str:
-        lines = [f"'{self.configuration}' ({1e3 * self.length:g} x {1e3 * self.width:g} mm; points from the corner at "
-                 f"the origin, x along the length)"]
-        lines.append("  supports (foam pads or elastic cords; or hang by threads at two of them): "
-                     + ", ".join(_point(p) for p in self.support_points)
-                     + f" - on the nodal lines of mode {self.lowest_mode} (within "
-                       f"{max(1e3 * float(np.max(self.support_distances)), 0.01):.2g} mm)")
-        lines.append(f"  sensor at {_point(self.sensor_point)}, tap at {_point(self.excitation_point)} "
-                     f"(at least {100 * EDGE_MARGIN:g} % of each side from the edges)")
-        lines.append(f"  {'mode':>4s}  {'label':<12s}  {'expected [Hz]':>13s}  {'over the prior [Hz]':>19s}  "
-                     f"{'at sensor':>9s}  {'at tap':>6s}" + ("  sensor shift" if self.sensor_shift_rel is not None
-                                                             else ""))
-        for k, (mode, label, f, (lo, hi)) in enumerate(zip(self.modes, self.labels, self.frequencies_hz,
-                                                           self.frequency_range_hz)):
-            shift = (f"  {100 * self.sensor_shift_rel[k]:+10.3g} %" if self.sensor_shift_rel is not None else "")
-            lines.append(f"  {mode:>4d}  {label:<12s}  {f:>13.1f}  {lo:>8.1f} .. {hi:<8.1f}  "
-                         f"{100 * self.sensor_amplitudes[k]:>7.0f} %  {100 * self.excitation_amplitudes[k]:>4.0f} %"
-                         + shift)
+        lines = [
+            f"'{self.configuration}' ({1e3 * self.length:g} x {1e3 * self.width:g} mm; points from the "
+            "corner at "
+            f"the origin, x along the length)"
+        ]
+        lines.append(
+            "  supports (foam pads or elastic cords; or hang by threads at two of them): "
+            + ", ".join(_point(p) for p in self.support_points)
+            + f" - on the nodal lines of mode {self.lowest_mode} (within "
+            f"{max(1e3 * float(np.max(self.support_distances)), 0.01):.2g} mm)"
+        )
+        lines.append(
+            f"  sensor at {_point(self.sensor_point)}, tap at {_point(self.excitation_point)} "
+            f"(at least {100 * EDGE_MARGIN:g} % of each side from the edges)"
+        )
+        lines.append(
+            f"  {'mode':>4s}  {'label':<12s}  {'expected [Hz]':>13s}  {'over the prior [Hz]':>19s}  "
+            f"{'at sensor':>9s}  {'at tap':>6s}"
+            + ("  sensor shift" if self.sensor_shift_rel is not None else "")
+        )
+        for k, (mode, label, f, (lo, hi)) in enumerate(
+            zip(self.modes, self.labels, self.frequencies_hz, self.frequency_range_hz)
+        ):
+            shift = (
+                f"  {100 * self.sensor_shift_rel[k]:+10.3g} %" if self.sensor_shift_rel is not None else ""
+            )
+            lines.append(
+                f"  {mode:>4d}  {label:<12s}  {f:>13.1f}  {lo:>8.1f} .. {hi:<8.1f}  "
+                f"{100 * self.sensor_amplitudes[k]:>7.0f} %  {100 * self.excitation_amplitudes[k]:>4.0f} %"
+                + shift
+            )
         lines.append(f"  (amplitudes relative to each mode's peak; spread: {self.spread})")
         if self.sensor_shift_rel is not None:
-            lines.append(f"  a {1e3 * self.sensor_mass:g} g sensor at that point shifts the modes as listed (solved with "
-                         "it as a point mass): model it as a point_mass effect in the spec, or use a lighter sensor")
+            lines.append(
+                f"  a {1e3 * self.sensor_mass:g} g sensor at that point shifts the modes as listed (solved "
+                "with "
+                "it as a point mass): model it as a point_mass effect in the spec, or use a lighter sensor"
+            )
         for pair in self.close_pairs:
             lines.append("  " + pair.report())
         return "\n".join(lines)
@@ -220,20 +257,50 @@ class ConfigurationSheet:
             if k >= n:
                 ax.axis("off")
                 continue
-            ax.imshow(w[:, :, k].T, origin="lower", extent=(0, 1e3 * self.length, 0, 1e3 * self.width), cmap="RdBu_r",
-                      vmin=-1, vmax=1, interpolation="bilinear")
+            ax.imshow(
+                w[:, :, k].T,
+                origin="lower",
+                extent=(0, 1e3 * self.length, 0, 1e3 * self.width),
+                cmap="RdBu_r",
+                vmin=-1,
+                vmax=1,
+                interpolation="bilinear",
+            )
             ax.contour(X, Y, w[:, :, k], levels=[0.0], colors="k", linewidths=1.2)
-            ax.plot(*(1e3 * self.support_points.T), "^", color="k", markersize=8, markerfacecolor="yellow",
-                    label="support")
-            ax.plot(*(1e3 * self.sensor_point), "o", color="k", markersize=9, markerfacecolor="tab:green",
-                    label="sensor")
-            ax.plot(*(1e3 * self.excitation_point), "X", color="k", markersize=10, markerfacecolor="tab:red",
-                    label="tap")
-            ax.set_title(f"mode {self.modes[k]} {self.labels[k]}: {self.frequencies_hz[k]:.1f} Hz", fontsize=9)
+            ax.plot(
+                *(1e3 * self.support_points.T),
+                "^",
+                color="k",
+                markersize=8,
+                markerfacecolor="yellow",
+                label="support",
+            )
+            ax.plot(
+                *(1e3 * self.sensor_point),
+                "o",
+                color="k",
+                markersize=9,
+                markerfacecolor="tab:green",
+                label="sensor",
+            )
+            ax.plot(
+                *(1e3 * self.excitation_point),
+                "X",
+                color="k",
+                markersize=10,
+                markerfacecolor="tab:red",
+                label="tap",
+            )
+            ax.set_title(
+                f"mode {self.modes[k]} {self.labels[k]}: {self.frequencies_hz[k]:.1f} Hz", fontsize=9
+            )
             ax.set_aspect("equal")
             ax.tick_params(labelsize=7)
-        fig.suptitle(f"test sheet '{self.configuration}' [mm]: nodal lines black, supports yellow triangles, "
-                     "sensor green circle, tap red cross", fontsize=9)
+        fig.suptitle(
+            f"test sheet '{self.configuration}' [mm]: nodal lines black, supports yellow triangles, "
+            "sensor green circle, tap red cross",
+            fontsize=9,
+        )
         return save_figure(fig, path)
 
 
@@ -261,21 +328,24 @@ class TestSheet:
         return [c.plot(folder / f"test_sheet_{c.configuration}.png") for c in self.configurations]
 
 
-def _spread(problem: Problem, solved: Solved, modes: np.ndarray,
-            prior: list[Solved] | None) -> tuple[np.ndarray, str]:
+def _spread(
+    problem: Problem, solved: Solved, modes: np.ndarray, prior: list[Solved] | None
+) -> tuple[np.ndarray, str]:
     """(modes, 2) frequency range over the prior and how it was obtained."""
     f0 = solved.frequencies_hz[modes]
     if prior:
         f = np.array([s.frequencies_hz[modes] for s in prior] + [f0])
         r = problem.space.prior_range
         return np.column_stack([f.min(axis=0), f.max(axis=0)]), (
-            f"extremes over the prior (+-{100 * r:g} %, {len(prior)} samples, exact solves)")
+            f"extremes over the prior (+-{100 * r:g} %, {len(prior)} samples, exact solves)"
+        )
     factors = prior_factors(len(problem.parameters), SPREAD_SAMPLES, SPREAD_RANGE)
     logs = np.log(factors) @ solved.sensitivities[modes].T  # (samples, modes)
     f = f0 * np.exp(logs)
     return np.column_stack([f.min(axis=0), f.max(axis=0)]), (
         f"linearised over +-{100 * SPREAD_RANGE:g} % of the identified properties ({SPREAD_SAMPLES} samples; "
-        "set [design] prior_range_rel for exact solves over your range)")
+        "set [design] prior_range_rel for exact solves over your range)"
+    )
 
 
 def _best(score: np.ndarray, points: np.ndarray, reference: np.ndarray | None) -> int:
@@ -288,8 +358,9 @@ def _best(score: np.ndarray, points: np.ndarray, reference: np.ndarray | None) -
     return int(near[np.argmin(np.hypot(*(points[near] - reference).T))])
 
 
-def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | None = None,
-                        reference: tuple | None = None) -> ConfigurationSheet:
+def configuration_sheet(
+    problem: Problem, solved: Solved, prior: list[Solved] | None = None, reference: tuple | None = None
+) -> ConfigurationSheet:
     """The test sheet of one configuration (``solved`` at the nominal values; ``prior``:
     the same configuration at each prior sample, for the frequency spread; ``reference``:
     the (sensor, tap) points [m] of another configuration to stay near when as good)."""
@@ -306,8 +377,12 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
     peak = np.abs(phi).max(axis=0)
     amplitude = np.abs(phi[:, modes]) / peak[modes]
     margin = (EDGE_MARGIN * L, EDGE_MARGIN * W)
-    inside = ((X.ravel() >= margin[0] - 1e-12) & (X.ravel() <= L - margin[0] + 1e-12)
-              & (Y.ravel() >= margin[1] - 1e-12) & (Y.ravel() <= W - margin[1] + 1e-12))
+    inside = (
+        (X.ravel() >= margin[0] - 1e-12)
+        & (X.ravel() <= L - margin[0] + 1e-12)
+        & (Y.ravel() >= margin[1] - 1e-12)
+        & (Y.ravel() <= W - margin[1] + 1e-12)
+    )
     points = np.column_stack([X.ravel(), Y.ravel()])
     short = min(L, W)
 
@@ -321,8 +396,12 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
     lowest = bending[0]
     f = solution.frequencies_hz
     on_line = nodal_points(xs, ys, phi[:, lowest].reshape(GRID, GRID))
-    keep = ((on_line[:, 0] >= margin[0]) & (on_line[:, 0] <= L - margin[0])
-            & (on_line[:, 1] >= margin[1]) & (on_line[:, 1] <= W - margin[1]))
+    keep = (
+        (on_line[:, 0] >= margin[0])
+        & (on_line[:, 0] <= L - margin[0])
+        & (on_line[:, 1] >= margin[1])
+        & (on_line[:, 1] <= W - margin[1])
+    )
     on_line = on_line[keep] if keep.any() else on_line
     at_line = np.abs(deflection_operator(units, *on_line.T) @ shapes) / peak
     weights = (f[lowest] / f[modes]) ** 2
@@ -347,11 +426,21 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
         pi = int(np.argmax(np.where(inside, a2 - b2, -np.inf)))
         pj = int(np.argmax(np.where(inside, b2 - a2, -np.inf)))
         with np.errstate(divide="ignore"):
-            ratios = (float(a2[pi] / b2[pi]) if b2[pi] > 0 else math.inf,
-                      float(b2[pj] / a2[pj]) if a2[pj] > 0 else math.inf)
-        pairs.append(ClosePair((int(i) + 1, int(j) + 1), (float(f[i]), float(f[j])), float(gaps[i]),
-                               (solution.labels[i], solution.labels[j]), (bool(i in measured), bool(j in measured)),
-                               (tuple(points[pi]), tuple(points[pj])), ratios))
+            ratios = (
+                float(a2[pi] / b2[pi]) if b2[pi] > 0 else math.inf,
+                float(b2[pj] / a2[pj]) if a2[pj] > 0 else math.inf,
+            )
+        pairs.append(
+            ClosePair(
+                (int(i) + 1, int(j) + 1),
+                (float(f[i]), float(f[j])),
+                float(gaps[i]),
+                (solution.labels[i], solution.labels[j]),
+                (bool(i in measured), bool(j in measured)),
+                (tuple(points[pi]), tuple(points[pj])),
+                ratios,
+            )
+        )
 
     shift = None
     mass = problem.space.sensor_mass
@@ -362,9 +451,28 @@ def configuration_sheet(problem: Problem, solved: Solved, prior: list[Solved] | 
     frange, spread = _spread(problem, solved, modes, prior)
     signed = (phi[:, modes] / peak[modes]).reshape(GRID, GRID, len(modes))
     return ConfigurationSheet(
-        solved.configuration.name, L, W, tuple(int(m) + 1 for m in modes), tuple(solution.labels[m] for m in modes),
-        f[modes], frange, spread, supports, distances, at_line[chosen][:, modes], points[tap], amplitude[tap],
-        points[sensor], amplitude[sensor], margin, tuple(pairs), lowest + 1, mass, shift, (xs, ys, signed))
+        solved.configuration.name,
+        L,
+        W,
+        tuple(int(m) + 1 for m in modes),
+        tuple(solution.labels[m] for m in modes),
+        f[modes],
+        frange,
+        spread,
+        supports,
+        distances,
+        at_line[chosen][:, modes],
+        points[tap],
+        amplitude[tap],
+        points[sensor],
+        amplitude[sensor],
+        margin,
+        tuple(pairs),
+        lowest + 1,
+        mass,
+        shift,
+        (xs, ys, signed),
+    )
 
 
 def _distance_to_node(units: UnitMatrices, shape: np.ndarray, point: np.ndarray) -> float:

@@ -12,6 +12,7 @@ before it is written: a spec that would not give the same laminates and scoring 
 model whose values were changed in code after loading) is refused.  Written with
 tomli-w, atomically.
 """
+
 from __future__ import annotations
 
 import copy
@@ -56,17 +57,26 @@ def configuration_table(configuration: Configuration) -> dict:
 
 def material_table(material: Material) -> dict:
     """A ``[materials.NAME]`` table of a known material (GPa, kg/m^3)."""
-    out = {"E1_GPa": material.E1 / GPA, "E2_GPa": material.E2 / GPA, "G12_GPa": material.G12 / GPA,
-           "nu12": material.nu12, "density_kg_m3": material.density}
+    out = {
+        "E1_GPa": material.E1 / GPA,
+        "E2_GPa": material.E2 / GPA,
+        "G12_GPa": material.G12 / GPA,
+        "nu12": material.nu12,
+        "density_kg_m3": material.density,
+    }
     for key in ("G13", "G23"):
         if getattr(material, key) is not None:
             out[f"{key}_GPa"] = getattr(material, key) / GPA
     bounds = getattr(material, "bounds", ())  # (kind, lower, upper) [SI] a spec may set
     if bounds:
         units = {"nu12": ("nu12", 1.0), "density": ("density_kg_m3", 1.0)}
-        out["bounds"] = {units.get(kind, (f"{kind}_GPa", GPA))[0]: [lo / units.get(kind, (None, GPA))[1],
-                                                                     hi / units.get(kind, (None, GPA))[1]]
-                         for kind, lo, hi in bounds}
+        out["bounds"] = {
+            units.get(kind, (f"{kind}_GPa", GPA))[0]: [
+                lo / units.get(kind, (None, GPA))[1],
+                hi / units.get(kind, (None, GPA))[1],
+            ]
+            for kind, lo, hi in bounds
+        }
     stock = stock_name(material.name)
     if stock is not None and STOCK[stock].material(material.name) == material:
         out["note"] = f"built-in stock ({stock}): {STOCK[stock].source}"
@@ -89,13 +99,20 @@ def _identify(material: Material):
 
 def design_table(space: DesignSpace) -> dict:
     """The ``[design]`` table of a design space (limits only where given, not defaulted)."""
-    out: dict = {"materials": [m.name for m in space.materials],
-                 "thicknesses_mm": [round(t / MM, 9) for t in space.thicknesses],
-                 "placements": list(space.placements),
-                 "adhesive": False if space.adhesive is None else {
-                     "material": space.adhesive.material.name, "thickness_mm": round(space.adhesive.thickness / MM, 9)},
-                 "configurations": space.size, "frequency_std_rel": space.frequency_std_rel,
-                 "criterion": space.criterion}
+    out: dict = {
+        "materials": [m.name for m in space.materials],
+        "thicknesses_mm": [round(t / MM, 9) for t in space.thicknesses],
+        "placements": list(space.placements),
+        "adhesive": False
+        if space.adhesive is None
+        else {
+            "material": space.adhesive.material.name,
+            "thickness_mm": round(space.adhesive.thickness / MM, 9),
+        },
+        "configurations": space.size,
+        "frequency_std_rel": space.frequency_std_rel,
+        "criterion": space.criterion,
+    }
     limits = space.limits
     if limits.max_added_mass is not None and "mass" not in limits.defaults:
         out["max_added_mass_g"] = limits.max_added_mass * 1e3
@@ -118,8 +135,10 @@ def model_document(problem: Problem) -> dict:
     """A spec document rebuilt from the problem's model (built in code, no spec file)."""
     model = problem.model
     if model.effects:
-        raise DesignError(f"--write-spec: the model has effects switched on ({', '.join(model.effects)}) but no spec "
-                          "file to copy their tables from; load the model from a spec file (fem.load_spec)")
+        raise DesignError(
+            f"--write-spec: the model has effects switched on ({', '.join(model.effects)}) but no spec "
+            "file to copy their tables from; load the model from a spec file (fem.load_spec)"
+        )
     specimen = model.specimen
     materials = {}
     for m in list(model.materials) + list(specimen.materials.values()):
@@ -128,9 +147,16 @@ def model_document(problem: Problem) -> dict:
             if m.identify:
                 table["identify"] = _identify(m)
             materials[m.name] = table
-    data = {"specimen": {"name": specimen.name, "length_mm": specimen.length / MM, "width_mm": specimen.width / MM,
-                         "layers": [_layer(l) for l in specimen.layers]},
-            "materials": materials, "model": {"modes": model.options.modes}}
+    data = {
+        "specimen": {
+            "name": specimen.name,
+            "length_mm": specimen.length / MM,
+            "width_mm": specimen.width / MM,
+            "layers": [_layer(l) for l in specimen.layers],
+        },
+        "materials": materials,
+        "model": {"modes": model.options.modes},
+    }
     if model.options.divisions is not None:
         data["model"]["divisions"] = model.options.divisions
     data["design"] = design_table(problem.space)
@@ -140,12 +166,24 @@ def model_document(problem: Problem) -> dict:
 def _same(a: tuple, b: tuple) -> bool:
     return len(a) == len(b) and all(
         x == y if not isinstance(x, float) or not isinstance(y, float) else math.isclose(x, y, rel_tol=1e-12)
-        for x, y in zip(a, b))
+        for x, y in zip(a, b)
+    )
 
 
 def _stack(problem: Problem, configuration: Configuration) -> list[tuple]:
-    m = [(l.material.E1, l.material.E2, l.material.G12, l.material.nu12, l.material.density, l.thickness, l.angle,
-          l.material.identify) for l in problem.specimen.laminate(configuration).layers]
+    m = [
+        (
+            l.material.E1,
+            l.material.E2,
+            l.material.G12,
+            l.material.nu12,
+            l.material.density,
+            l.thickness,
+            l.angle,
+            l.material.identify,
+        )
+        for l in problem.specimen.laminate(configuration).layers
+    ]
     return m
 
 
@@ -157,19 +195,27 @@ def verify(problem: Problem, design: Design, data: dict) -> None:
         mine = _stack(problem, s.configuration)
         theirs = _stack(back, back.specimen.configuration(s.configuration.name))
         if len(mine) != len(theirs) or not all(_same(a, b) for a, b in zip(mine, theirs)):
-            raise DesignError(f"--write-spec: configuration '{s.configuration.name}' would not read back as the same "
-                              "laminate (was the model changed in code after loading its spec?); write the design "
-                              "from the model as loaded")
+            raise DesignError(
+                f"--write-spec: configuration '{s.configuration.name}' would not read back as the same "
+                "laminate (was the model changed in code after loading its spec?); write the design "
+                "from the model as loaded"
+            )
     a, b = problem.space, back.space
-    checks = {"[model] modes": (problem.modes, back.modes), "[design] frequency_std_rel":
-              (a.frequency_std_rel, b.frequency_std_rel), "[design] criterion": (a.criterion, b.criterion),
-              "[design] prior_range_rel": (a.prior_range, b.prior_range), "[design] limits": (a.limits, b.limits),
-              "model options": (problem.options, back.options), "attachments":
-              (problem.specimen.attachments, back.specimen.attachments)}
+    checks = {
+        "[model] modes": (problem.modes, back.modes),
+        "[design] frequency_std_rel": (a.frequency_std_rel, b.frequency_std_rel),
+        "[design] criterion": (a.criterion, b.criterion),
+        "[design] prior_range_rel": (a.prior_range, b.prior_range),
+        "[design] limits": (a.limits, b.limits),
+        "model options": (problem.options, back.options),
+        "attachments": (problem.specimen.attachments, back.specimen.attachments),
+    }
     for what, (x, y) in checks.items():
         if x != y:
-            raise DesignError(f"--write-spec: {what} would read back as {y!r}, not {x!r}; write the design from the "
-                              "model as loaded from its spec")
+            raise DesignError(
+                f"--write-spec: {what} would read back as {y!r}, not {x!r}; write the design from the "
+                "model as loaded from its spec"
+            )
 
 
 def design_document(problem: Problem, design: Design) -> dict:
@@ -203,13 +249,19 @@ def write_spec(problem: Problem, design: Design, path: str | Path) -> Path:
     sc = design.scores
     robust = ""
     if design.robust is not None:
-        robust = (f"; over the prior (+-{100 * design.robust.range_rel:g} %): worst "
-                  f"{design.robust.worst(problem.space.criterion):.5g} ({problem.space.criterion})")
-    header = (f"# Test plan written by plan-tests recommend on {date.today().isoformat()} from "
-              f"{problem.model.source}\n"
-              f"# configurations: {' + '.join(design.names)}\n"
-              f"# condition number {sc.condition_number:.4g} ({sc.verdict}), log det F {sc.logdet_fisher:.5g}{robust}\n"
-              "# check it with: plan-tests check THIS_FILE; after the test: identify-layers fit THIS_FILE DATA.csv\n\n")
+        robust = (
+            f"; over the prior (+-{100 * design.robust.range_rel:g} %): worst "
+            f"{design.robust.worst(problem.space.criterion):.5g} ({problem.space.criterion})"
+        )
+    header = (
+        f"# Test plan written by plan-tests recommend on {date.today().isoformat()} from "
+        f"{problem.model.source}\n"
+        f"# configurations: {' + '.join(design.names)}\n"
+        f"# condition number {sc.condition_number:.4g} ({sc.verdict}), log det F "
+        f"{sc.logdet_fisher:.5g}{robust}\n"
+        "# check it with: plan-tests check THIS_FILE; after the test: identify-layers fit THIS_FILE "
+        "DATA.csv\n\n"
+    )
     path = Path(path)
     write_text(path, header + tomli_w.dumps(data))
     return path

@@ -8,6 +8,7 @@ sensitivities: a few kB), written atomically, so a killed run leaves whole entri
 none.  Leftover temporary files of a killed run are cleared when the store is opened.
 The default folder is ``$XDG_CACHE_HOME/layer-id/solves`` (``~/.cache/...``).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -40,8 +41,10 @@ class SolveStore:
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise OutputError(f"solve cache folder {str(self.folder)!r} cannot be made ({exc.strerror}); give "
-                              "--cache DIR elsewhere or --no-cache") from None
+            raise OutputError(
+                f"solve cache folder {str(self.folder)!r} cannot be made ({exc.strerror}); give "
+                "--cache DIR elsewhere or --no-cache"
+            ) from None
         for stale in self.folder.glob(".*.tmp"):
             try:
                 stale.unlink(missing_ok=True)
@@ -75,18 +78,26 @@ class SolveStore:
         try:
             fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=".", suffix=".tmp")
         except OSError as exc:
-            self.failed = self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
+            self.failed = (
+                self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
+            )
             return
         os.close(fd)
         try:
             with open(tmp, "wb") as handle:
-                np.savez(handle, frequencies=frequencies, sensitivities=sensitivities,
-                         labels=np.array(labels if labels is not None else (), dtype=str),
-                         labelled=np.array(labels is not None))
+                np.savez(
+                    handle,
+                    frequencies=frequencies,
+                    sensitivities=sensitivities,
+                    labels=np.array(labels if labels is not None else (), dtype=str),
+                    labelled=np.array(labels is not None),
+                )
             os.replace(tmp, self._path(key))
             self.written += 1
         except OSError as exc:
-            self.failed = self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
+            self.failed = (
+                self.failed or f"solve cache {str(self.folder)!r} cannot be written ({exc.strerror})"
+            )
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)

@@ -13,6 +13,7 @@ Values: ``0.5,1,2`` or ``START:STOP:COUNT`` (inclusive, evenly spaced); without
 values the design space's (or a default set) are used.  The report folder gets
 ``sweep.csv``, one plot per variable and ``summary.md``, each written atomically.
 """
+
 from __future__ import annotations
 
 import math
@@ -89,30 +90,40 @@ def parse_variable(text: str, problem: Problem) -> Variable:
     where = f"--vary {text!r}"
     name, equals, values = text.partition("=")
     if equals and not values.strip():
-        raise DesignError(f"{where}: no values after '='; give them (e.g. {name}=0.5,1,2) or leave out '=' for the "
-                          "defaults")
+        raise DesignError(
+            f"{where}: no values after '='; give them (e.g. {name}=0.5,1,2) or leave out '=' for the defaults"
+        )
     target, _, kind = name.rpartition(".")
     if kind not in KINDS:
         hint = (did_you_mean(kind, KINDS) + " ").lstrip()
-        raise DesignError(f"{where}: unknown variable '{kind}'; {hint}allowed: {', '.join(KINDS)} "
-                          "(optionally CONFIG.KIND)")
+        raise DesignError(
+            f"{where}: unknown variable '{kind}'; {hint}allowed: {', '.join(KINDS)} (optionally CONFIG.KIND)"
+        )
     added = [c for c in problem.specimen.configurations if not c.is_original]
     if kind != "modes":
         if target:
             names = [c.name for c in added]
             if target not in names:
-                raise DesignError(f"{where}: '{target}' is not an added configuration of the spec; "
-                                  f"known: {', '.join(names) or 'none'}")
+                raise DesignError(
+                    f"{where}: '{target}' is not an added configuration of the spec; "
+                    f"known: {', '.join(names) or 'none'}"
+                )
         elif not added:
-            raise DesignError(f"{where}: the spec has no added configuration to vary; add [[configurations]] "
-                              "with top or bottom layers (or use plan-tests recommend)")
+            raise DesignError(
+                f"{where}: the spec has no added configuration to vary; add [[configurations]] "
+                "with top or bottom layers (or use plan-tests recommend)"
+            )
     elif target:
         raise DesignError(f"{where}: modes apply to every plate; use --vary modes")
     space = problem.space
     if not values:
-        defaults = {"thickness": tuple(t * 1e3 for t in space.thicknesses), "adhesive_thickness": DEFAULT_ADHESIVE_MM,
-                    "material": tuple(m.name for m in space.materials), "placement": ("top", "bottom"),
-                    "modes": DEFAULT_MODES}
+        defaults = {
+            "thickness": tuple(t * 1e3 for t in space.thicknesses),
+            "adhesive_thickness": DEFAULT_ADHESIVE_MM,
+            "material": tuple(m.name for m in space.materials),
+            "placement": ("top", "bottom"),
+            "modes": DEFAULT_MODES,
+        }
         parsed = defaults[kind]
     elif kind in NUMERIC:
         parsed = _numbers(kind, values, where)
@@ -151,8 +162,10 @@ def vary(problem: Problem, variable: Variable, value) -> tuple[Problem, tuple[Co
                 c = replace(c, **{face: (replace(layers[0], thickness=value * 1e-3),) + layers[1:]})
         elif variable.kind == "placement":
             if c.top and c.bottom:
-                raise DesignError(f"--vary {variable.name}: '{c.name}' has layers on both faces; "
-                                  "placement moves one-sided additions only")
+                raise DesignError(
+                    f"--vary {variable.name}: '{c.name}' has layers on both faces; "
+                    "placement moves one-sided additions only"
+                )
             c = Configuration(c.name, **{value: _relabelled(layers, c.name, value)})
         out.append(c)
     return problem, tuple(out)
@@ -184,45 +197,69 @@ class SweepResult:
         for point in (SweepPoint("base", "", self.base),) + self.points:
             d = point.design
             sc = d.scores
-            row = {"variable": point.variable, "value": point.value, "condition_number": sc.condition_number,
-                   "verdict": sc.verdict, "logdet_fisher": sc.logdet_fisher,
-                   "min_eigenvalue_fisher": sc.min_eigenvalue_fisher, "n_measured": d.n_measured,
-                   "max_added_mass_g": 1e3 * max(d.added_mass)}
+            row = {
+                "variable": point.variable,
+                "value": point.value,
+                "condition_number": sc.condition_number,
+                "verdict": sc.verdict,
+                "logdet_fisher": sc.logdet_fisher,
+                "min_eigenvalue_fisher": sc.min_eigenvalue_fisher,
+                "n_measured": d.n_measured,
+                "max_added_mass_g": 1e3 * max(d.added_mass),
+            }
             row.update({f"std_rel.{p.name}": s for p, s in zip(d.parameters, sc.std_rel)})
             for s, measured in zip(d.solved, d.measured):
-                row.update({f"{s.configuration.name}.f{i + 1}_hz": f
-                            for i, f in enumerate(s.frequencies_hz[: measured.size])})
+                row.update(
+                    {
+                        f"{s.configuration.name}.f{i + 1}_hz": f
+                        for i, f in enumerate(s.frequencies_hz[: measured.size])
+                    }
+                )
             rows.append(row)
         return pd.DataFrame(rows)
 
     def to_dict(self) -> dict:
-        table = self.table.astype(object).where(np.isfinite(self.table.select_dtypes("number")).reindex(
-            columns=self.table.columns, fill_value=True), None)  # JSON has no infinities
+        table = self.table.astype(object).where(
+            np.isfinite(self.table.select_dtypes("number")).reindex(
+                columns=self.table.columns, fill_value=True
+            ),
+            None,
+        )  # JSON has no infinities
         return {"base": self.base.to_dict(), "table": table.to_dict("records")}
 
     def report(self) -> str:
         """The readable summary (Markdown)."""
         b = self.base.scores
-        lines = [f"# Sweep of the test design of {self.name}", "",
-                 f"Base design (the spec's configurations): {' + '.join(self.base.names)}, condition number "
-                 f"{b.condition_number:.4g} ({b.verdict}), log det F {b.logdet_fisher:.5g}. Verdicts: good below "
-                 f"{GOOD_BELOW:g}, ill-conditioned up to {SINGULAR_ABOVE:g}, singular above (paper section 4.6).", ""]
+        lines = [
+            f"# Sweep of the test design of {self.name}",
+            "",
+            f"Base design (the spec's configurations): {' + '.join(self.base.names)}, condition number "
+            f"{b.condition_number:.4g} ({b.verdict}), log det F {b.logdet_fisher:.5g}. Verdicts: good below "
+            f"{GOOD_BELOW:g}, ill-conditioned up to {SINGULAR_ABOVE:g}, singular above (paper section 4.6).",
+            "",
+        ]
         table = self.table
         for variable in self.variables:
             part = table[table.variable == variable.name]
             best = part.loc[part.condition_number.idxmin()]
             worst = part.loc[part.condition_number.idxmax()]
             verdicts = ", ".join(f"{v} ({n})" for v, n in part.verdict.value_counts().items())
-            lines += [f"## {variable.name}: {KINDS[variable.kind]}", "",
-                      f"Best {best.value}: condition number {best.condition_number:.4g}; worst {worst.value}: "
-                      f"{worst.condition_number:.4g}. Verdicts: {verdicts}. Plot: `{plot_name(variable)}`.", "",
-                      "| value | condition number | verdict | log det F | largest predicted std |",
-                      "|---|---|---|---|---|"]
+            lines += [
+                f"## {variable.name}: {KINDS[variable.kind]}",
+                "",
+                f"Best {best.value}: condition number {best.condition_number:.4g}; worst {worst.value}: "
+                f"{worst.condition_number:.4g}. Verdicts: {verdicts}. Plot: `{plot_name(variable)}`.",
+                "",
+                "| value | condition number | verdict | log det F | largest predicted std |",
+                "|---|---|---|---|---|",
+            ]
             stds = part.filter(like="std_rel.")
             for (_, row), (_, std) in zip(part.iterrows(), stds.iterrows()):
-                worst_p = std.idxmax()[len("std_rel."):]
-                lines.append(f"| {row.value} | {row.condition_number:.4g} | {row.verdict} | {row.logdet_fisher:.5g} | "
-                             f"{worst_p} {100 * std.max():.3g} % |")
+                worst_p = std.idxmax()[len("std_rel.") :]
+                lines.append(
+                    f"| {row.value} | {row.condition_number:.4g} | {row.verdict} | {row.logdet_fisher:.5g} | "
+                    f"{worst_p} {100 * std.max():.3g} % |"
+                )
             lines.append("")
         return "\n".join(lines)
 
@@ -257,14 +294,20 @@ def plot_variable(part: pd.DataFrame, variable: Variable, path: Path) -> None:
     top.set_ylim(1, high)
     top.set_ylabel("condition number")
     stds = part.filter(like="std_rel.")
-    names = [c[len("std_rel."):] for c in stds]
+    names = [c[len("std_rel.") :] for c in stds]
     materials = list(dict.fromkeys(n.rsplit(".", 1)[0] for n in names))
     kinds = list(dict.fromkeys(n.rsplit(".", 1)[1] for n in names))
     for column, name in zip(stds, names):  # colour: the property; line style: the material
         material, kind = name.rsplit(".", 1)
         values = 100 * stds[column].to_numpy(dtype=float)
-        bottom.semilogy(x, np.where(np.isfinite(values), values, np.nan), marker=".", label=name,
-                        color=f"C{kinds.index(kind)}", linestyle=LINE_STYLES[materials.index(material) % 4])
+        bottom.semilogy(
+            x,
+            np.where(np.isfinite(values), values, np.nan),
+            marker=".",
+            label=name,
+            color=f"C{kinds.index(kind)}",
+            linestyle=LINE_STYLES[materials.index(material) % 4],
+        )
     bottom.set_ylabel("predicted std [% of value]")
     bottom.set_xlabel(KINDS[variable.kind] + (f" ({variable.target})" if variable.target else ""))
     bottom.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
@@ -275,8 +318,12 @@ def plot_variable(part: pd.DataFrame, variable: Variable, path: Path) -> None:
     save_figure(fig, path)
 
 
-def sweep(problem: Problem | SpecimenModel, variables: list[Variable | str], pool=None,
-          progress: Progress | None = None) -> SweepResult:
+def sweep(
+    problem: Problem | SpecimenModel,
+    variables: list[Variable | str],
+    pool=None,
+    progress: Progress | None = None,
+) -> SweepResult:
     """Score the spec's design and every one-at-a-time variation of it; ``variables`` as
     ``Variable`` or as the command line gives them (e.g. ``"thickness=0.5:3:6"``)."""
     problem = Problem.of(problem)
@@ -288,8 +335,9 @@ def sweep(problem: Problem | SpecimenModel, variables: list[Variable | str], poo
     for _, _, p, configurations in plan:  # one parallel batch per model (modes change the model)
         by_options.setdefault(p.options, []).extend(configurations)
     for options, configurations in by_options.items():
-        replace(problem, model=replace(problem.model, options=options)).solve(configurations, pool=pool,
-                                                                              progress=progress)
+        replace(problem, model=replace(problem.model, options=options)).solve(
+            configurations, pool=pool, progress=progress
+        )
     for solved in problem.solve(problem.specimen.configurations):  # the base design must be measurable
         if not problem.measured(solved).any():
             raise unmeasurable(problem, solved)

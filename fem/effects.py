@@ -9,6 +9,7 @@ formulas in ``fem.solver.attachments``).
 Registering a new kind (see the README, "Adding an effect"): subclass ``Effect``, give
 it a ``kind`` and implement ``fixed`` and ``free``, then call ``register(MyEffect())``.
 """
+
 from __future__ import annotations
 
 import math
@@ -93,8 +94,12 @@ class Effect:
         if len(variants) == 1:
             return variants[0]
         starts = {p: v.model.value(p) for v in variants for p in v.free}
-        return SwitchedOn(self.kind, replace(variants[0].model, specimen=model.specimen.with_values(starts)),
-                          tuple(starts), "; ".join(v.note for v in variants if v.note))
+        return SwitchedOn(
+            self.kind,
+            replace(variants[0].model, specimen=model.specimen.with_values(starts)),
+            tuple(starts),
+            "; ".join(v.note for v in variants if v.note),
+        )
 
     def other_starts(self, switched: SwitchedOn) -> list[SpecimenModel]:
         """Other start models of the free parameters of ``switched`` worth one linearised
@@ -122,8 +127,10 @@ class Effect:
 
 class TransverseShear(Effect):
     kind = "transverse_shear"
-    description = ("first-order shear deformation; free: G13, G23 of the identified materials (G12 where not given, "
-                   "stated)")
+    description = (
+        "first-order shear deformation; free: G13, G23 of the identified materials (G12 where not given, "
+        "stated)"
+    )
     options = {"transverse_shear": True}
     frees_shear = True
     #: Refitted from the spec's values too when the thin-plate fit is degenerate
@@ -137,8 +144,12 @@ class TransverseShear(Effect):
     @staticmethod
     def shear_parameters(model) -> list[Parameter]:
         """G13 and G23 of every identified material that does not identify them already."""
-        return [Parameter(kind, m.name) for m in model.specimen.identified_materials
-                for kind in ("G13", "G23") if kind not in m.identify]
+        return [
+            Parameter(kind, m.name)
+            for m in model.specimen.identified_materials
+            for kind in ("G13", "G23")
+            if kind not in m.identify
+        ]
 
     def _on(self, model, free=()):
         freed = {p.target for p in free}
@@ -146,13 +157,18 @@ class TransverseShear(Effect):
         for m in model.specimen.materials.values():
             if m.defaulted_shear_moduli and m.name not in freed:
                 by_defaults.setdefault(" = ".join(m.defaulted_shear_moduli), []).append(m.name)
-        notes = [f"{names} = G12 assumed for {', '.join(materials)} (exact for isotropic layers)"
-                 for names, materials in by_defaults.items()]
+        notes = [
+            f"{names} = G12 assumed for {', '.join(materials)} (exact for isotropic layers)"
+            for names, materials in by_defaults.items()
+        ]
         if free:
             materials = model.specimen.materials
             started = sorted({p.target for p in free if p.kind in materials[p.target].defaulted_shear_moduli})
-            notes.insert(0, f"free: {', '.join(p.name for p in free)}"
-                         + (f" (starting at G12 for {', '.join(started)})" if started else ""))
+            notes.insert(
+                0,
+                f"free: {', '.join(p.name for p in free)}"
+                + (f" (starting at G12 for {', '.join(started)})" if started else ""),
+            )
         return SwitchedOn(self.kind, model.with_options(**self.options), tuple(free), "; ".join(notes))
 
     def fixed(self, model, table):
@@ -165,16 +181,20 @@ class TransverseShear(Effect):
 
 class ThickPlate(TransverseShear):
     kind = "thick_plate"
-    description = ("Mindlin plate: transverse shear and rotary inertia together; free: G13, G23 of the identified "
-                   "materials")
+    description = (
+        "Mindlin plate: transverse shear and rotary inertia together; free: G13, G23 of the identified "
+        "materials"
+    )
     options = {"transverse_shear": True, "rotary_inertia": True}
     covers = frozenset({"transverse_shear", "rotary_inertia"})
 
 
 class Layerwise(Effect):
     kind = "layerwise"
-    description = ("layerwise (zig-zag) shear: each soft layer (foam or honeycomb core, bond line) shears on its "
-                   "own; free: G13, G23 of the identified materials and of the soft specimen layers")
+    description = (
+        "layerwise (zig-zag) shear: each soft layer (foam or honeycomb core, bond line) shears on its "
+        "own; free: G13, G23 of the identified materials and of the soft specimen layers"
+    )
     #: Shear and the full inertia of its displacement field besides its soft layers' own
     #: shear; it frees the same shear moduli.
     covers = frozenset({"layerwise", "transverse_shear", "rotary_inertia"})
@@ -206,8 +226,10 @@ class Layerwise(Effect):
         shear plate with rotary inertia, ``thick_plate``, to round-off
         (``tests/fem/test_layerwise.py``), and switching to it adds nothing."""
         options, specimen = model.options, model.specimen
-        stacks = [LayerwiseLaminate.of(specimen.laminate(c), options.layer_groups, options.core_stretch)
-                  for c in specimen.configurations]
+        stacks = [
+            LayerwiseLaminate.of(specimen.laminate(c), options.layer_groups, options.core_stretch)
+            for c in specimen.configurations
+        ]
         return all(stack.n_groups == 1 and not stack.stretch for stack in stacks)
 
     def adds_nothing(self, model: SpecimenModel) -> bool:
@@ -215,10 +237,16 @@ class Layerwise(Effect):
 
     def _on(self, model, free=()):
         own, added = self._soft(model)
-        notes = [f"soft layers shear on their own: {', '.join(own + added)}" if own or added
-                 else "no soft layer: the same as transverse_shear with rotary inertia"]
-        defaulted = [f"{' = '.join(m.defaulted_shear_moduli)} = G12 for {m.name}"
-                     for m in model.specimen.materials.values() if m.defaulted_shear_moduli]
+        notes = [
+            f"soft layers shear on their own: {', '.join(own + added)}"
+            if own or added
+            else "no soft layer: the same as transverse_shear with rotary inertia"
+        ]
+        defaulted = [
+            f"{' = '.join(m.defaulted_shear_moduli)} = G12 for {m.name}"
+            for m in model.specimen.materials.values()
+            if m.defaulted_shear_moduli
+        ]
         if defaulted:
             notes.append(f"assumed {', '.join(defaulted)} (exact for isotropic layers)")
         if free:
@@ -235,8 +263,16 @@ class Layerwise(Effect):
             return []  # a single shear group: transverse_shear already is this model
         materials = model.specimen.materials
         free = TransverseShear.shear_parameters(model)
-        free += [p for p in (Parameter(kind, name) for name in own for kind in ("G13", "G23")
-                             if kind not in materials[name].identify) if p not in free]
+        free += [
+            p
+            for p in (
+                Parameter(kind, name)
+                for name in own
+                for kind in ("G13", "G23")
+                if kind not in materials[name].identify
+            )
+            if p not in free
+        ]
         return [self._on(model, free)]
 
 
@@ -263,23 +299,33 @@ def _plate_mass(specimen) -> float:
 
 class PointMassEffect(Effect):
     kind = "point_mass"
-    description = ("a mass at a point (an accelerometer, a glue blob): mass and position; base_mm, the side of the "
-                   "sensor's square footprint, spreads it over that")
-    sign = ("the misfit grows with the mode number like shear, or a sensor heavier than plausible: transverse "
-            "shear, or a mass measured and given in the spec?")
+    description = (
+        "a mass at a point (an accelerometer, a glue blob): mass and position; base_mm, the side of the "
+        "sensor's square footprint, spreads it over that"
+    )
+    sign = (
+        "the misfit grows with the mode number like shear, or a sensor heavier than plausible: transverse "
+        "shear, or a mass measured and given in the spec?"
+    )
     keys = ("mass_g", "x_mm", "y_mm", "label", "base_mm")
     independent_starts = True
     hinted = True
 
     def fixed(self, model, table):
         self._check(table)
-        mass = PointMass(self._number(table, "mass_g") * 1e-3, self._number(table, "x_mm") * 1e-3,
-                         self._number(table, "y_mm") * 1e-3, str(table.get("label", self.kind)),
-                         self._number(table, "base_mm", 0.0) * 1e-3)
+        mass = PointMass(
+            self._number(table, "mass_g") * 1e-3,
+            self._number(table, "x_mm") * 1e-3,
+            self._number(table, "y_mm") * 1e-3,
+            str(table.get("label", self.kind)),
+            self._number(table, "base_mm", 0.0) * 1e-3,
+        )
         plate = _plate_mass(model.specimen)
         if mass.mass > plate:
-            raise SpecError(f"{self._where}.mass_g = {1e3 * mass.mass:g} g is more than the plate itself "
-                            f"({1e3 * plate:.4g} g): a point mass is a sensor or a glue blob; the mass is in grams")
+            raise SpecError(
+                f"{self._where}.mass_g = {1e3 * mass.mass:g} g is more than the plate itself "
+                f"({1e3 * plate:.4g} g): a point mass is a sensor or a glue blob; the mass is in grams"
+            )
         return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (mass,)))
 
     def free(self, model, hint=None):
@@ -289,8 +335,10 @@ class PointMassEffect(Effect):
         mass = hint.get("mass_kg") or 0.01 * plate_mass
         x, y = hint.get("xy", (0.8 * specimen.length, 0.7 * specimen.width))
         # Start inside the plate, so that the first step may go either way.
-        x, y = np.clip(x, 0.02 * specimen.length, 0.98 * specimen.length), np.clip(y, 0.02 * specimen.width,
-                                                                                   0.98 * specimen.width)
+        x, y = (
+            np.clip(x, 0.02 * specimen.length, 0.98 * specimen.length),
+            np.clip(y, 0.02 * specimen.width, 0.98 * specimen.width),
+        )
         on = PointMass(max(mass, 1e-3 * plate_mass), x, y, self.kind)
         free = tuple(Parameter(k, self.kind) for k in ("mass", "x", "y"))
         note = "start from the residual pattern" if "xy" in hint else "start at a guessed position"
@@ -321,7 +369,9 @@ class SuspensionEffect(Effect):
 
     def fixed(self, model, table):
         self._check(table)
-        springs = Suspension(self._number(table, "stiffness_N_m"), self._points(model.specimen, table), self.kind)
+        springs = Suspension(
+            self._number(table, "stiffness_N_m"), self._points(model.specimen, table), self.kind
+        )
         return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (springs,)))
 
     def free(self, model, hint=None):
@@ -335,8 +385,14 @@ class SuspensionEffect(Effect):
         k = (0.05 * omega1) ** 2 * plate_mass / len(points)
         springs = Suspension(k, points, self.kind)
         note = "springs near the four corners (give points_mm in the spec to fix them)"
-        return [SwitchedOn(self.kind, model.with_attachments(specimen.attachments + (springs,)),
-                           (Parameter("stiffness", self.kind),), note)]
+        return [
+            SwitchedOn(
+                self.kind,
+                model.with_attachments(specimen.attachments + (springs,)),
+                (Parameter("stiffness", self.kind),),
+                note,
+            )
+        ]
 
     def other_starts(self, switched):
         """The springs all but gone (``VANISHING``): the fit the effect is added to, from
@@ -372,7 +428,9 @@ class Orientation(Effect):
             if layer.material.identify and (not stated or layer.label in stated):
                 p = Parameter("angle", layer.label)
                 moved = model.with_values({p: layer.angle + math.radians(self.START_DEG)})
-                out.append(SwitchedOn(self.kind, moved, (p,), f"angle of {layer.label} ({layer.material.name})"))
+                out.append(
+                    SwitchedOn(self.kind, moved, (p,), f"angle of {layer.label} ({layer.material.name})")
+                )
         return out
 
     def other_starts(self, switched):
@@ -401,8 +459,10 @@ class Adhesive(Effect):
     def fixed(self, model, table):
         self._check(table)
         t = self._number(table, "thickness_mm") * 1e-3
-        return SwitchedOn(self.kind, model.with_values({Parameter("thickness", l.label): t
-                                                        for l in self.bond_layers(model.specimen)}))
+        return SwitchedOn(
+            self.kind,
+            model.with_values({Parameter("thickness", l.label): t for l in self.bond_layers(model.specimen)}),
+        )
 
     def free(self, model, hint=None):
         free = tuple(Parameter("thickness", l.label) for l in self.bond_layers(model.specimen))
@@ -412,15 +472,19 @@ class Adhesive(Effect):
 class Thickness(Effect):
     kind = "thickness"
     description = "specimen layer thicknesses off nominal"
-    sign = ("the misfit wants the neutral axis or the bending stiffness distribution to move: transverse shear "
-            "or a layerwise effect?")
+    sign = (
+        "the misfit wants the neutral axis or the bending stiffness distribution to move: transverse shear "
+        "or a layerwise effect?"
+    )
     keys = ("layer", "thickness_mm")
 
     def fixed(self, model, table):
         self._check(table)
         layer = self._layer(model, table)
-        return SwitchedOn(self.kind, model.with_values(
-            {Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}))
+        return SwitchedOn(
+            self.kind,
+            model.with_values({Parameter("thickness", layer): self._number(table, "thickness_mm") * 1e-3}),
+        )
 
     def free(self, model, hint=None):
         free = tuple(Parameter("thickness", l.label) for l in model.specimen.layers)
@@ -438,8 +502,17 @@ def register(effect: Effect) -> Effect:
     return effect
 
 
-for _effect in (TransverseShear(), RotaryInertia(), ThickPlate(), PointMassEffect(), SuspensionEffect(), Orientation(),
-                Adhesive(), Thickness(), Layerwise()):
+for _effect in (
+    TransverseShear(),
+    RotaryInertia(),
+    ThickPlate(),
+    PointMassEffect(),
+    SuspensionEffect(),
+    Orientation(),
+    Adhesive(),
+    Thickness(),
+    Layerwise(),
+):
     register(_effect)
 
 
@@ -459,8 +532,11 @@ def apply_fixed(model: SpecimenModel, tables) -> SpecimenModel:
         if "kind" not in table:
             raise SpecError("[[effects]]: every table needs a 'kind'")
         on = effect(str(table["kind"])).fixed(model, table)
-        model = replace(on.model, effects=on.model.effects + (on.kind,),
-                        notes=on.model.notes + ((on.note,) if on.note else ()))
+        model = replace(
+            on.model,
+            effects=on.model.effects + (on.kind,),
+            notes=on.model.notes + ((on.note,) if on.note else ()),
+        )
     return model
 
 

@@ -2,6 +2,7 @@
 budget (GUM-style): the moduli, Poisson ratios, densities and thicknesses of the known
 layers, the plate's size and weighed mass are not exact, and their scatter carries into
 the identified properties."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,5 +1,6 @@
 """Output helpers shared by the command-line tools: files and report folders written
 whole or not at all, JSON, the tool's version."""
+
 from __future__ import annotations
 
 import html
@@ -43,11 +44,13 @@ def _writable_parent(path: Path, what: str) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise OutputError(f"{what} {str(path)!r}: its folder cannot be made ({exc.strerror}); choose another "
-                          "place") from None
+        raise OutputError(
+            f"{what} {str(path)!r}: its folder cannot be made ({exc.strerror}); choose another place"
+        ) from None
     if not os.access(path.parent, os.W_OK | os.X_OK):
-        raise OutputError(f"{what} {str(path)!r}: the folder {str(path.parent)!r} is not writable; choose another "
-                          "place")
+        raise OutputError(
+            f"{what} {str(path)!r}: the folder {str(path.parent)!r} is not writable; choose another place"
+        )
 
 
 @contextmanager
@@ -62,7 +65,8 @@ def atomic_path(path: str | Path):
     os.close(fd)
     try:
         yield Path(tmp)
-        os.chmod(tmp, 0o666 & ~_permissions())  # mkstemp makes 0600; reports are for everyone who reads the folder
+        # mkstemp makes 0600; reports are for everyone who reads the folder
+        os.chmod(tmp, 0o666 & ~_permissions())
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -92,18 +96,24 @@ def check_report_folder(path: str | Path) -> Path:
     if path.exists() and not path.is_dir():
         raise OutputError(f"report folder {str(path)!r} is an existing file; give a folder name")
     if path.exists() and Path.cwd().resolve().is_relative_to(path.resolve()):
-        raise OutputError(f"report folder {str(path)!r} is the current folder or holds it; a report replaces its "
-                          "folder whole: give a new subfolder, e.g. --report report")
+        raise OutputError(
+            f"report folder {str(path)!r} is the current folder or holds it; a report replaces its "
+            "folder whole: give a new subfolder, e.g. --report report"
+        )
     if path.is_dir() and any(path.iterdir()):
         written = _manifest(path)
         if written is None:
-            raise OutputError(f"report folder {str(path)!r} exists and is not a report of this tool; choose a new or "
-                              "empty folder (its files are left alone)")
+            raise OutputError(
+                f"report folder {str(path)!r} exists and is not a report of this tool; choose a new or "
+                "empty folder (its files are left alone)"
+            )
         foreign = sorted(_files(path) - written)
         if foreign:
             listed = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
-            raise OutputError(f"report folder {str(path)!r} holds files this tool did not write ({listed}); a new "
-                              "report replaces the folder whole: move them out or choose another folder")
+            raise OutputError(
+                f"report folder {str(path)!r} holds files this tool did not write ({listed}); a new "
+                "report replaces the folder whole: move them out or choose another folder"
+            )
     _writable_parent(path, "report folder")
     return path
 
@@ -121,7 +131,9 @@ def _alive(pid: int) -> bool:
 def _clear_leftovers(path: Path) -> None:
     """Remove what killed runs left beside ``path`` (``.NAME.tmp-PID-*``, ``.NAME.old-PID-*``);
     a running one's (its process still alive) is left alone."""
-    for stale in list(path.parent.glob(f".{path.name}.tmp-*")) + list(path.parent.glob(f".{path.name}.old-*")):
+    for stale in list(path.parent.glob(f".{path.name}.tmp-*")) + list(
+        path.parent.glob(f".{path.name}.old-*")
+    ):
         pid = stale.name.rsplit(".", 1)[-1].split("-")[1]
         if not (pid.isdigit() and _alive(int(pid))):
             shutil.rmtree(stale, ignore_errors=True)
@@ -164,8 +176,9 @@ def report_folder(path: str | Path):
             tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.tmp-{os.getpid()}-"))
         yield tmp
         written = sorted(_files(tmp))
-        (tmp / REPORT_MARK).write_text(f"written by layer-id {tool_version()}; its files:\n"
-                                       + "".join(f"- {name}\n" for name in written))
+        (tmp / REPORT_MARK).write_text(
+            f"written by layer-id {tool_version()}; its files:\n" + "".join(f"- {name}\n" for name in written)
+        )
         os.chmod(tmp, 0o777 & ~_permissions())
         with _swap_lock(path), _interrupts_held():
             check_report_folder(path)  # still ours to replace (nothing foreign put in meanwhile)

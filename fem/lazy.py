@@ -1,5 +1,6 @@
 """Packages whose public names are imported on first use (PEP 562), so that a command
 line that needs one part (its version, its help) does not import them all."""
+
 from __future__ import annotations
 
 import sys

@@ -1,5 +1,6 @@
 """The limits a lab works within: added mass and thickness, the frequency band of the
 measurement chain and the separation two modes need to be told apart."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -78,21 +79,36 @@ class Limits:
         """One line stating the mass and thickness limits and where they come from."""
         parts = []
         if self.max_added_mass is not None:
-            parts.append(f"added mass <= {self.max_added_mass * 1e3:.4g} g" + (
-                f" (default: {DEFAULT_MASS_RATIO:g} x the specimen's mass; set [design] max_added_mass_g)"
-                if "mass" in self.defaults else " ([design] max_added_mass_g)"))
+            parts.append(
+                f"added mass <= {self.max_added_mass * 1e3:.4g} g"
+                + (
+                    f" (default: {DEFAULT_MASS_RATIO:g} x the specimen's mass; set [design] max_added_mass_g)"
+                    if "mass" in self.defaults
+                    else " ([design] max_added_mass_g)"
+                )
+            )
         if self.max_added_thickness is not None:
-            parts.append(f"added thickness <= {self.max_added_thickness * 1e3:.4g} mm" + (
-                f" (default: {DEFAULT_THICKNESS_RATIO:g} x the specimen's thickness; set [design] "
-                "max_added_thickness_mm)" if "thickness" in self.defaults else " ([design] max_added_thickness_mm)"))
+            parts.append(
+                f"added thickness <= {self.max_added_thickness * 1e3:.4g} mm"
+                + (
+                    f" (default: {DEFAULT_THICKNESS_RATIO:g} x the specimen's thickness; set [design] "
+                    "max_added_thickness_mm)"
+                    if "thickness" in self.defaults
+                    else " ([design] max_added_thickness_mm)"
+                )
+            )
         return "limits per configuration: " + ("; ".join(parts) if parts else "none")
 
     def to_dict(self) -> dict:
-        return {"max_added_mass_g": None if self.max_added_mass is None else round(self.max_added_mass * 1e3, 6),
-                "max_added_thickness_mm": (None if self.max_added_thickness is None
-                                           else round(self.max_added_thickness * 1e3, 6)),
-                "defaults": list(self.defaults), "band_hz": list(self.band) if self.band else None,
-                "min_separation_rel": self.min_separation}
+        return {
+            "max_added_mass_g": None if self.max_added_mass is None else round(self.max_added_mass * 1e3, 6),
+            "max_added_thickness_mm": (
+                None if self.max_added_thickness is None else round(self.max_added_thickness * 1e3, 6)
+            ),
+            "defaults": list(self.defaults),
+            "band_hz": list(self.band) if self.band else None,
+            "min_separation_rel": self.min_separation,
+        }
 
     def extra_modes(self) -> int:
         """Modes to solve beyond the measured ones: one, to see whether the last
@@ -116,5 +132,7 @@ class Limits:
             out.append(f"adds {mass * 1e3:.4g} g > max_added_mass_g = {self.max_added_mass * 1e3:g}")
         thickness = added_thickness(configuration)
         if self.max_added_thickness is not None and thickness > self.max_added_thickness * (1 + 1e-12):
-            out.append(f"adds {thickness * 1e3:.4g} mm > max_added_thickness_mm = {self.max_added_thickness * 1e3:g}")
+            out.append(
+                f"adds {thickness * 1e3:.4g} mm > max_added_thickness_mm = {self.max_added_thickness * 1e3:g}"
+            )
         return out

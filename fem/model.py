@@ -1,4 +1,5 @@
 """Solving configurations: frequencies, modes and exact sensitivities, cached by content."""
+
 from __future__ import annotations
 
 import math
@@ -80,12 +81,19 @@ class ModelOptions:
     def __post_init__(self):
         whole(self.modes, "ModelOptions.modes", 1, MAX_SOLVED_MODES, "of elastic modes ", OptionsError)
         if self.divisions is not None:
-            whole(self.divisions, "ModelOptions.divisions", *DIVISIONS_RANGE,
-                  "of elements along the longer side (or None for the default rule) ", OptionsError)
+            whole(
+                self.divisions,
+                "ModelOptions.divisions",
+                *DIVISIONS_RANGE,
+                "of elements along the longer side (or None for the default rule) ",
+                OptionsError,
+            )
         if self.theory not in THEORIES:
             raise ModelError(f"theory = {self.theory!r} is unknown; use one of {', '.join(THEORIES)}")
         if self.layer_groups not in GROUPINGS:
-            raise ModelError(f"layer_groups = {self.layer_groups!r} is unknown; use one of {', '.join(GROUPINGS)}")
+            raise ModelError(
+                f"layer_groups = {self.layer_groups!r} is unknown; use one of {', '.join(GROUPINGS)}"
+            )
 
     @property
     def shear_deformable(self) -> bool:
@@ -109,8 +117,9 @@ class ModelOptions:
             if isinstance(a, PointMass) and a.base > 0:
                 x0, y0 = base_square(a, specimen.length, specimen.width)
                 bases.append((x0, x0 + a.base, y0, y0 + a.base))
-        return PlateMesh.with_element_size(specimen.length, specimen.width, self.divisions_for(specimen), edge,
-                                           tuple(bases))
+        return PlateMesh.with_element_size(
+            specimen.length, specimen.width, self.divisions_for(specimen), edge, tuple(bases)
+        )
 
 
 def edge_size_for(specimen: Specimen) -> float:
@@ -152,8 +161,10 @@ class LaminateSolution:
     def labels(self) -> tuple[str, ...]:
         """Nodal-pattern labels, e.g. '(1,2)' or '(0,2)+(2,0)' (``fem.solver.mode_shapes``);
         computed when first asked for, not on every solve."""
-        return tuple("in-plane" if in_plane(self.units, s) else label_of(c)
-                     for s, c in zip(self.modes.shapes.T, self.shape_coefficients))
+        return tuple(
+            "in-plane" if in_plane(self.units, s) else label_of(c)
+            for s, c in zip(self.modes.shapes.T, self.shape_coefficients)
+        )
 
     def coefficient_derivatives(self, kinds) -> tuple[np.ndarray, np.ndarray]:
         """dX/dp and dI/dp of the laminate parameters ``kinds`` ((kind, target) pairs): the
@@ -179,13 +190,16 @@ class LaminateSolution:
         d_lambda = np.zeros((len(self.modes.eigenvalues), len(parameters)))
         laminate = [j for j, p in enumerate(parameters) if p.kind not in ATTACHMENT_PARAMETERS]
         if laminate:
-            dx, di = self.coefficient_derivatives([(parameters[j].kind, parameters[j].target) for j in laminate])
+            dx, di = self.coefficient_derivatives(
+                [(parameters[j].kind, parameters[j].target) for j in laminate]
+            )
             d_lambda[:, laminate] = eigenvalue_derivatives(self.energies, self.modes.eigenvalues, dx, di)
         by_label = {a.label: a for a in self.attachments}
         for j, p in enumerate(parameters):
             if p.kind in ATTACHMENT_PARAMETERS and p.target in by_label:
-                d_lambda[:, j] = attachment_derivative(self.units, by_label[p.target], p.kind, self.modes.shapes,
-                                                       self.modes.eigenvalues)
+                d_lambda[:, j] = attachment_derivative(
+                    self.units, by_label[p.target], p.kind, self.modes.shapes, self.modes.eigenvalues
+                )
         return frequency_derivatives(self.modes.eigenvalues, d_lambda)
 
 
@@ -194,13 +208,19 @@ def _shape_derivatives(solution: LaminateSolution, parameters: list[Parameter], 
     exact (``eigenvector_derivatives``), for the laminate parameters of a single-layer
     theory (attachments kept in K and M)."""
     if solution.layerwise is not None:
-        raise ModelError("mode shape sensitivities are not available for the layerwise theory; use the "
-                         "single-layer plate (Kirchhoff or first-order shear)")
+        raise ModelError(
+            "mode shape sensitivities are not available for the layerwise theory; use the "
+            "single-layer plate (Kirchhoff or first-order shear)"
+        )
     if any(p.kind in ATTACHMENT_PARAMETERS for p in parameters):
-        raise ModelError("mode shape sensitivities to an attachment's parameters are not available; hold its mass "
-                         "and position, or fit frequencies alone")
+        raise ModelError(
+            "mode shape sensitivities to an attachment's parameters are not available; hold its mass "
+            "and position, or fit frequencies alone"
+        )
     units = solution.units
-    coefficients, inertia = system_coefficients(solution.laminate, solution.transverse_shear, solution.inertia_terms)
+    coefficients, inertia = system_coefficients(
+        solution.laminate, solution.transverse_shear, solution.inertia_terms
+    )
     stiffness, mass = system_data(units, coefficients, inertia, solution.attachments)
     dx, di = solution.coefficient_derivatives([(p.kind, p.target) for p in parameters])
     d_stiffness, d_mass = [], []
@@ -211,13 +231,20 @@ def _shape_derivatives(solution: LaminateSolution, parameters: list[Parameter], 
     k_matrix, m_matrix = units.matrix(stiffness), units.matrix(mass)
     out = np.empty((units.n_dofs, len(indices), len(parameters)))
     for n, i in enumerate(indices):
-        out[:, n, :] = eigenvector_derivatives(k_matrix, m_matrix, float(solution.modes.eigenvalues[i]),
-                                               solution.modes.shapes[:, i], d_stiffness, d_mass)[0]
+        out[:, n, :] = eigenvector_derivatives(
+            k_matrix,
+            m_matrix,
+            float(solution.modes.eigenvalues[i]),
+            solution.modes.shapes[:, i],
+            d_stiffness,
+            d_mass,
+        )[0]
     return out
 
 
-def system_coefficients(laminate: Laminate, transverse_shear: bool,
-                        inertia_terms: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+def system_coefficients(
+    laminate: Laminate, transverse_shear: bool, inertia_terms: tuple[float, float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     """The weights of the unit stiffness and mass matrices of a single-layer theory: the
     18 CLT coefficients (and the 3 shear stiffnesses with ``transverse_shear``) [SI], and
     the inertia terms I0, I1, I2 the theory keeps."""
@@ -227,8 +254,9 @@ def system_coefficients(laminate: Laminate, transverse_shear: bool,
     return coefficients, laminate.inertia * np.array(inertia_terms)
 
 
-def system_data(units: UnitMatrices, coefficients: np.ndarray, inertia: np.ndarray,
-                attachments: tuple = ()) -> tuple[np.ndarray, np.ndarray]:
+def system_data(
+    units: UnitMatrices, coefficients: np.ndarray, inertia: np.ndarray, attachments: tuple = ()
+) -> tuple[np.ndarray, np.ndarray]:
     """CSR data of K = sum_c coefficients_c K_c and M = sum_j inertia_j M_j on ``units``
     (weights from ``system_coefficients`` or a layerwise stack; complex ones for damping),
     the attachments' point masses and springs added.  The thin plate's few unit data
@@ -260,8 +288,16 @@ SOLUTION_OVERHEAD_BYTES = 1 << 16
 @bytes_bounded_cache(SOLVE_CACHE_BYTES, _solution_bytes)
 @one_blas_thread
 def solve_laminate(
-    laminate: Laminate, mesh: PlateMesh, n_modes: int, *, transverse_shear: bool = False, rotary_inertia: bool = False,
-    attachments: tuple = (), theory: str = "single_layer", layer_groups: str = "auto", core_stretch: bool = True,
+    laminate: Laminate,
+    mesh: PlateMesh,
+    n_modes: int,
+    *,
+    transverse_shear: bool = False,
+    rotary_inertia: bool = False,
+    attachments: tuple = (),
+    theory: str = "single_layer",
+    layer_groups: str = "auto",
+    core_stretch: bool = True,
 ) -> LaminateSolution:
     """Solve (and cache by content, within ``SOLVE_CACHE_BYTES``) the free-free modes of a
     laminate on a mesh.
@@ -275,7 +311,9 @@ def solve_laminate(
     inertia; the two flags are then implied.
     """
     stack = LayerwiseLaminate.of(laminate, layer_groups, core_stretch) if theory == "layerwise" else None
-    transverse_shear, rotary_inertia = (True, True) if stack is not None else (transverse_shear, rotary_inertia)
+    transverse_shear, rotary_inertia = (
+        (True, True) if stack is not None else (transverse_shear, rotary_inertia)
+    )
     terms = ROTARY_INERTIA if rotary_inertia else KIRCHHOFF_INERTIA
     coefficients, inertia = system_coefficients(laminate, transverse_shear, terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
@@ -292,7 +330,9 @@ def solve_laminate(
 
 # A unit set the unit cache lets go goes with the solves that hold it, so the two budgets
 # bound what the process keeps.
-UNIT_CACHE.on_drop.append(lambda units: solve_laminate.cache_discard(lambda solution: solution.units is units))
+UNIT_CACHE.on_drop.append(
+    lambda units: solve_laminate.cache_discard(lambda solution: solution.units is units)
+)
 
 
 @dataclass(frozen=True)
@@ -359,9 +399,14 @@ class SpecimenModel:
 
     def solve(self, configuration: str) -> LaminateSolution:
         return solve_laminate(
-            self.specimen.laminate(configuration), self.mesh, self.options.modes,
-            transverse_shear=self.options.transverse_shear, rotary_inertia=self.options.rotary_inertia,
-            attachments=self.specimen.attachments, theory=self.options.theory, layer_groups=self.options.layer_groups,
+            self.specimen.laminate(configuration),
+            self.mesh,
+            self.options.modes,
+            transverse_shear=self.options.transverse_shear,
+            rotary_inertia=self.options.rotary_inertia,
+            attachments=self.specimen.attachments,
+            theory=self.options.theory,
+            layer_groups=self.options.layer_groups,
             core_stretch=self.options.core_stretch,
         )
 
@@ -381,6 +426,8 @@ class SpecimenModel:
         return np.vstack(blocks)
 
 
-def plate_frequency_parameter(frequency_hz: np.ndarray, length: float, mass_per_area: float, D: float) -> np.ndarray:
+def plate_frequency_parameter(
+    frequency_hz: np.ndarray, length: float, mass_per_area: float, D: float
+) -> np.ndarray:
     """lambda = omega a^2 sqrt(rho h / D), the usual non-dimensional plate frequency."""
     return 2 * math.pi * np.asarray(frequency_hz) * length**2 * math.sqrt(mass_per_area / D)

@@ -1,4 +1,5 @@
 """Small numeric helpers shared by every package (one place, one meaning)."""
+
 from __future__ import annotations
 
 import math

@@ -5,6 +5,7 @@ in pyplot's registry: a notebook or GUI user would lose theirs.  Figures here ar
 ``matplotlib.figure.Figure`` objects on their own Agg canvas, saved atomically.
 matplotlib is imported only when a figure is drawn.
 """
+
 from __future__ import annotations
 
 from pathlib import Path

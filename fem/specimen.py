@@ -1,4 +1,5 @@
 """Specimens, bonded test configurations and the parameters that describe them."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
@@ -68,7 +69,10 @@ class Specimen:
         for a in self.attachments:
             if a.label == label:
                 return a
-        raise SpecError(f"no attachment labelled {label!r}; known: {', '.join(a.label for a in self.attachments) or 'none'}")
+        raise SpecError(
+            f"no attachment labelled {label!r}; known: "
+            f"{', '.join(a.label for a in self.attachments) or 'none'}"
+        )
 
     @property
     def materials(self) -> dict[str, Material]:
@@ -143,11 +147,16 @@ class Specimen:
     def _with_layers(self, materials: dict, layer_changes: dict) -> Specimen:
         """Every layer (specimen and additions) with its material taken from ``materials``
         by name and its ``layer_changes`` (label -> field -> value) applied."""
-        def stack(layers):
-            return tuple(replace(layer, material=materials[layer.material.name], **layer_changes.get(layer.label, {}))
-                         for layer in layers)
 
-        configurations = tuple(replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations)
+        def stack(layers):
+            return tuple(
+                replace(layer, material=materials[layer.material.name], **layer_changes.get(layer.label, {}))
+                for layer in layers
+            )
+
+        configurations = tuple(
+            replace(c, bottom=stack(c.bottom), top=stack(c.top)) for c in self.configurations
+        )
         return replace(self, layers=stack(self.layers), configurations=configurations)
 
     def with_configurations(self, configurations) -> Specimen:

@@ -9,6 +9,7 @@ The values are cross-checked in the tests against an independent table: the
 extensional (thin-rod) and shear wave speeds sqrt(E/rho), sqrt(G/rho) of the CRC
 Handbook of Chemistry and Physics, "Speed of sound in various media", Table 1.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -37,26 +38,61 @@ class StockMaterial:
 STOCK = {
     s.name: s
     for s in (
-        StockMaterial("brass", 110 * GPA, 0.34, 8530,
-                      "cartridge brass C26000 (CuZn30): E and density from the Copper Development "
-                      "Association alloy data (16 000 ksi, 0.308 lb/in^3); nu typical of alpha brass"),
-        StockMaterial("aluminium", 68.9 * GPA, 0.33, 2700,
-                      "aluminium 6061-T6: Aluminum Association, Aluminum Standards and Data "
-                      "(E 10.0 Msi, density 0.098 lb/in^3); ASM Handbook Vol. 2"),
-        StockMaterial("steel", 210 * GPA, 0.30, 7850,
-                      "structural (mild) steel: EN 1993-1-1 (Eurocode 3) section 3.2.6 "
-                      "(E 210 GPa, nu 0.3); density from EN 1991-1-1 Annex A"),
-        StockMaterial("stainless_steel", 193 * GPA, 0.29, 8000,
-                      "stainless steel AISI 304 (1.4301), annealed sheet: ASM Handbook Vol. 1"),
-        StockMaterial("copper", 117 * GPA, 0.34, 8890,
-                      "copper C11000 (ETP): Copper Development Association alloy data "
-                      "(17 000 ksi, 0.321 lb/in^3); nu from Kaye & Laby"),
-        StockMaterial("titanium", 113.8 * GPA, 0.342, 4430,
-                      "titanium Ti-6Al-4V (grade 5), annealed: ASM Materials Properties "
-                      "Handbook: Titanium Alloys (1994)"),
-        StockMaterial("epoxy", 3.0 * GPA, 0.35, 1200,
-                      "a generic cured structural epoxy adhesive (products range 2-4 GPa): "
-                      "use the data sheet of your adhesive when it matters"),
+        StockMaterial(
+            "brass",
+            110 * GPA,
+            0.34,
+            8530,
+            "cartridge brass C26000 (CuZn30): E and density from the Copper Development "
+            "Association alloy data (16 000 ksi, 0.308 lb/in^3); nu typical of alpha brass",
+        ),
+        StockMaterial(
+            "aluminium",
+            68.9 * GPA,
+            0.33,
+            2700,
+            "aluminium 6061-T6: Aluminum Association, Aluminum Standards and Data "
+            "(E 10.0 Msi, density 0.098 lb/in^3); ASM Handbook Vol. 2",
+        ),
+        StockMaterial(
+            "steel",
+            210 * GPA,
+            0.30,
+            7850,
+            "structural (mild) steel: EN 1993-1-1 (Eurocode 3) section 3.2.6 "
+            "(E 210 GPa, nu 0.3); density from EN 1991-1-1 Annex A",
+        ),
+        StockMaterial(
+            "stainless_steel",
+            193 * GPA,
+            0.29,
+            8000,
+            "stainless steel AISI 304 (1.4301), annealed sheet: ASM Handbook Vol. 1",
+        ),
+        StockMaterial(
+            "copper",
+            117 * GPA,
+            0.34,
+            8890,
+            "copper C11000 (ETP): Copper Development Association alloy data "
+            "(17 000 ksi, 0.321 lb/in^3); nu from Kaye & Laby",
+        ),
+        StockMaterial(
+            "titanium",
+            113.8 * GPA,
+            0.342,
+            4430,
+            "titanium Ti-6Al-4V (grade 5), annealed: ASM Materials Properties "
+            "Handbook: Titanium Alloys (1994)",
+        ),
+        StockMaterial(
+            "epoxy",
+            3.0 * GPA,
+            0.35,
+            1200,
+            "a generic cured structural epoxy adhesive (products range 2-4 GPa): "
+            "use the data sheet of your adhesive when it matters",
+        ),
     )
 }
 #: Suffix that names the stock material when the spec uses the plain name for

@@ -1,6 +1,7 @@
 """What both command lines (``identify-layers``, ``plan-tests``) share: the runner that
 turns a user's error into one line and an exit status, ``--version`` and the arguments
 every command has."""
+
 from __future__ import annotations
 
 import os
@@ -36,7 +37,9 @@ def add_version(parser) -> None:
     parser.add_argument("--version", action="version", version=f"%(prog)s {tool_version()}")
 
 
-def add_common_arguments(parser, spec_help: str = "specimen spec (TOML); default: the bundled example") -> None:
+def add_common_arguments(
+    parser, spec_help: str = "specimen spec (TOML); default: the bundled example"
+) -> None:
     """The options every command of both tools has: the spec file and ``--json``."""
     parser.add_argument("spec", nargs="?", help=spec_help)
     parser.add_argument("--json", action="store_true", help="machine-readable output on stdout")

@@ -1,6 +1,7 @@
 """The console entry points (``identify-layers``, ``plan-tests``).  They load their
 command line's modules inside the interrupt handling, so that a Ctrl-C while they load
 ends in one line, as it does once the command runs."""
+
 from __future__ import annotations
 
 import sys

@@ -7,6 +7,7 @@ peak (as written in the measurement file, to ``PEAK_MATCH`` or better); points a
 spec's plate coordinates, from the corner at the origin, as for a point mass; amplitudes
 are in any common scale and sign per mode.
 """
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -47,69 +48,101 @@ def _numbers(frame: pd.DataFrame, column: str, source: str, line: np.ndarray) ->
     return values
 
 
-def _peak(measurements: Measurements, configuration: str, frequency_hz: float, source: str, line: int) -> float:
+def _peak(
+    measurements: Measurements, configuration: str, frequency_hz: float, source: str, line: int
+) -> float:
     """The measured peak a shape names: its frequency as the measurements hold it."""
     peaks = measurements.of(configuration)["frequency_hz"].to_numpy()
     nearest = peaks[np.argmin(np.abs(peaks - frequency_hz))]
     if abs(nearest / frequency_hz - 1) > PEAK_MATCH:
-        raise _fail(source, f"line {line}: frequency_hz = {frequency_hz:g} names no measured peak of {configuration!r} "
-                    f"(the nearest is {nearest:g} Hz; a shape names its peak to {PEAK_MATCH:.1%}): write the peak's "
-                    "frequency as the measurement file has it")
+        raise _fail(
+            source,
+            f"line {line}: frequency_hz = {frequency_hz:g} names no measured peak of {configuration!r} "
+            f"(the nearest is {nearest:g} Hz; a shape names its peak to {PEAK_MATCH:.1%}): write the peak's "
+            "frequency as the measurement file has it",
+        )
     return float(nearest)
 
 
-def _shape(group: pd.DataFrame, model: SpecimenModel, source: str, line: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _shape(
+    group: pd.DataFrame, model: SpecimenModel, source: str, line: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Points [m] and complex amplitudes of one mode's rows, checked."""
     where = f"lines {line[0]}-{line[-1]}"
     if len(group) < MIN_POINTS:
-        raise _fail(source, f"{where}: {len(group)} points; a shape needs at least {MIN_POINTS} to be told from "
-                    "another mode's")
+        raise _fail(
+            source,
+            f"{where}: {len(group)} points; a shape needs at least {MIN_POINTS} to be told from "
+            "another mode's",
+        )
     xy = 1e-3 * group[["x_mm", "y_mm"]].to_numpy()
     length, width = model.specimen.length, model.specimen.width
-    outside = (xy[:, 0] < -EDGE_SLACK) | (xy[:, 0] > length + EDGE_SLACK) | (xy[:, 1] < -EDGE_SLACK) | (
-        xy[:, 1] > width + EDGE_SLACK)
+    outside = (
+        (xy[:, 0] < -EDGE_SLACK)
+        | (xy[:, 0] > length + EDGE_SLACK)
+        | (xy[:, 1] < -EDGE_SLACK)
+        | (xy[:, 1] > width + EDGE_SLACK)
+    )
     if outside.any():
         k = int(np.flatnonzero(outside)[0])
-        raise _fail(source, f"line {line[k]}: point ({1e3 * xy[k, 0]:g}, {1e3 * xy[k, 1]:g}) mm lies outside the "
-                    f"{1e3 * length:g} x {1e3 * width:g} mm plate; points are measured from its corner at the origin, "
-                    "x along its length")
+        raise _fail(
+            source,
+            f"line {line[k]}: point ({1e3 * xy[k, 0]:g}, {1e3 * xy[k, 1]:g}) mm lies outside the "
+            f"{1e3 * length:g} x {1e3 * width:g} mm plate; points are measured from its corner at the "
+            "origin, "
+            "x along its length",
+        )
     xy = np.clip(xy, 0.0, [length, width])
     if np.all(xy[:, 0] <= UNIT_SLIP * length) and np.all(xy[:, 1] <= UNIT_SLIP * width):
-        raise _fail(source, f"{where}: every point lies within {UNIT_SLIP:.0%} of the corner (largest x_mm "
-                    f"{1e3 * xy[:, 0].max():g}): coordinates in metres? x_mm and y_mm are millimetres")
+        raise _fail(
+            source,
+            f"{where}: every point lies within {UNIT_SLIP:.0%} of the corner (largest x_mm "
+            f"{1e3 * xy[:, 0].max():g}): coordinates in metres? x_mm and y_mm are millimetres",
+        )
     _, first = np.unique(np.round(xy, 6), axis=0, return_index=True)
     if len(first) < len(xy):
         k = int(np.setdiff1d(np.arange(len(xy)), first)[0])
-        raise _fail(source, f"line {line[k]}: point ({1e3 * xy[k, 0]:g}, {1e3 * xy[k, 1]:g}) mm is given twice "
-                    "for this mode")
+        raise _fail(
+            source,
+            f"line {line[k]}: point ({1e3 * xy[k, 0]:g}, {1e3 * xy[k, 1]:g}) mm is given twice for this mode",
+        )
     amplitude = group["amplitude"].to_numpy() + 1j * group["amplitude_imag"].to_numpy()
     if not np.any(amplitude):
         raise _fail(source, f"{where}: every amplitude is zero")
     return xy, amplitude
 
 
-def parse_shapes(frame: pd.DataFrame, model: SpecimenModel, measurements: Measurements,
-                 source: str = "<shapes>") -> MeasuredShapes:
+def parse_shapes(
+    frame: pd.DataFrame, model: SpecimenModel, measurements: Measurements, source: str = "<shapes>"
+) -> MeasuredShapes:
     """Validate a raw shape table against the spec and the measured peaks; rows are
     reported by CSV line number."""
     frame, line = checked_columns(frame, REQUIRED, OPTIONAL, source, "give one row per mode and point")
     known = measurements.configurations
     for i, name in enumerate(frame["configuration"]):
         if pd.isna(name) or str(name).strip() not in known:
-            raise _fail(source, f"line {line[i]}: configuration = {name!r} has no measured peaks; "
-                        f"{suggestion(name, known).replace('allowed:', 'the measurements have:')}")
+            raise _fail(
+                source,
+                f"line {line[i]}: configuration = {name!r} has no measured peaks; "
+                f"{suggestion(name, known).replace('allowed:', 'the measurements have:')}",
+            )
     frame["configuration"] = frame["configuration"].map(lambda s: str(s).strip())
     for column in ("frequency_hz", "x_mm", "y_mm", "amplitude"):
         frame[column] = _numbers(frame, column, source, line)
-    frame["amplitude_imag"] = _numbers(frame, "amplitude_imag", source, line) if "amplitude_imag" in frame else 0.0
+    frame["amplitude_imag"] = (
+        _numbers(frame, "amplitude_imag", source, line) if "amplitude_imag" in frame else 0.0
+    )
     frame["_line"] = line
     shapes, named = [], {}
     for (name, frequency), group in frame.groupby(["configuration", "frequency_hz"], sort=False):
         rows = group["_line"].to_numpy()
         peak = _peak(measurements, name, frequency, source, int(rows[0]))
         if (name, peak) in named:
-            raise _fail(source, f"line {rows[0]}: frequency_hz = {frequency:g} and {named[name, peak]:g} name the same "
-                        f"peak of {name!r} ({peak:g} Hz); give one shape per peak")
+            raise _fail(
+                source,
+                f"line {rows[0]}: frequency_hz = {frequency:g} and {named[name, peak]:g} name the same "
+                f"peak of {name!r} ({peak:g} Hz); give one shape per peak",
+            )
         named[name, peak] = frequency
         xy, amplitude = _shape(group, model, source, rows)
         shapes.append(ModeShape(name, peak, xy, amplitude))
@@ -118,9 +151,20 @@ def parse_shapes(frame: pd.DataFrame, model: SpecimenModel, measurements: Measur
 
 def shapes_frame(shapes: MeasuredShapes) -> pd.DataFrame:
     """The shapes as the shape CSV holds them (one row per mode and point, mm)."""
-    return pd.DataFrame([{"configuration": s.configuration, "frequency_hz": s.frequency_hz, "x_mm": 1e3 * x,
-                          "y_mm": 1e3 * y, "amplitude": a.real, "amplitude_imag": a.imag}
-                         for s in shapes.shapes for (x, y), a in zip(s.xy, s.amplitude)])
+    return pd.DataFrame(
+        [
+            {
+                "configuration": s.configuration,
+                "frequency_hz": s.frequency_hz,
+                "x_mm": 1e3 * x,
+                "y_mm": 1e3 * y,
+                "amplitude": a.real,
+                "amplitude_imag": a.imag,
+            }
+            for s in shapes.shapes
+            for (x, y), a in zip(s.xy, s.amplitude)
+        ]
+    )
 
 
 def load_shapes(path: str | Path, model: SpecimenModel, measurements: Measurements) -> Measurements:

@@ -1,16 +1,18 @@
 """Measured resonance frequencies (CSV), validated against the spec they belong to.
 
-Format (see the measurement CSV in the docs): ``configuration,mode,frequency_hz,std_hz`` with ``mode`` (1-based
-rank among the elastic modes) and ``std_hz`` optional.  An optional ``label`` column
-names a mode's nodal pattern as the model prints it, e.g. ``(1,2)``; when given it fixes
-which model mode a measured one is paired with.  ``damping_ratio`` (zeta, the modal
-loss factor is 2 zeta) and its standard uncertainty ``damping_std`` (same unit) may be
-given, as ``identify-layers peaks`` writes them: a damping identification uses them.
+Format (see the measurement CSV in the docs): ``configuration,mode,frequency_hz,std_hz``
+with ``mode`` (1-based rank among the elastic modes) and ``std_hz`` optional.  An optional
+``label`` column names a mode's nodal pattern as the model prints it, e.g. ``(1,2)``; when
+given it fixes which model mode a measured one is paired with.  ``damping_ratio`` (zeta,
+the modal loss factor is 2 zeta) and its standard uncertainty ``damping_std`` (same unit)
+may be given, as ``identify-layers peaks`` writes them: a damping identification uses
+them.
 
 Without ``mode`` the file is a peak list, as recordings give it: some modes missing,
 some peaks spurious.  Its rows get mode 0 (no rank) and the fit matches them to model
 modes itself (``identify.engine.matching``).
 """
+
 from __future__ import annotations
 
 import csv
@@ -55,7 +57,10 @@ class MeasuredShapes:
     def of(self, configuration: str, frequency_hz: float) -> ModeShape | None:
         """The shape measured at this peak (its frequency as the measurements hold it), or None."""
         for shape in self.shapes:
-            if shape.configuration == configuration and abs(shape.frequency_hz - frequency_hz) <= 1e-9 * frequency_hz:
+            if (
+                shape.configuration == configuration
+                and abs(shape.frequency_hz - frequency_hz) <= 1e-9 * frequency_hz
+            ):
                 return shape
         return None
 
@@ -98,8 +103,13 @@ class Measurements:
     @property
     def pinned(self) -> np.ndarray:
         """Per row: its mode is pinned by a label or a measured shape, not by frequency alone."""
-        return np.array([bool(label) or shape is not None
-                         for label, shape in zip(self.table["label"], self.shapes_of(self.table))], dtype=bool)
+        return np.array(
+            [
+                bool(label) or shape is not None
+                for label, shape in zip(self.table["label"], self.shapes_of(self.table))
+            ],
+            dtype=bool,
+        )
 
     def shapes_of(self, rows: pd.DataFrame) -> list[ModeShape | None]:
         """The measured shape of each of these rows (None where there is none)."""
@@ -112,7 +122,9 @@ def _fail(source: str, message: str) -> MeasurementError:
     return MeasurementError(f"{source}: {message}")
 
 
-def checked_columns(frame: pd.DataFrame, required, optional, source: str, what_rows: str) -> tuple[pd.DataFrame, np.ndarray]:
+def checked_columns(
+    frame: pd.DataFrame, required, optional, source: str, what_rows: str
+) -> tuple[pd.DataFrame, np.ndarray]:
     """A copy of a raw table with its column names stripped, every column known and the
     required ones there, and its CSV line numbers (the header is line 1); ``what_rows``
     tells an empty table what to give."""
@@ -129,7 +141,9 @@ def checked_columns(frame: pd.DataFrame, required, optional, source: str, what_r
     return frame, frame.index.to_numpy() + 2
 
 
-def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = "<measurements>") -> Measurements:
+def parse_measurements(
+    frame: pd.DataFrame, model: SpecimenModel, source: str = "<measurements>"
+) -> Measurements:
     """Validate a raw table against the model's configurations; rows are reported by CSV
     line number.  ``frame``: a data frame, or what makes one (a list of row dicts, a
     dict of columns)."""
@@ -137,21 +151,29 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         try:
             frame = pd.DataFrame(frame)
         except (TypeError, ValueError) as exc:
-            raise _fail(source, f"need a table (a data frame, a list of row dicts or a dict of columns), not "
-                        f"{type(frame).__name__}: {exc}") from None
+            raise _fail(
+                source,
+                f"need a table (a data frame, a list of row dicts or a dict of columns), not "
+                f"{type(frame).__name__}: {exc}",
+            ) from None
     frame, line = checked_columns(frame, REQUIRED, OPTIONAL, source, "give at least one measured frequency")
 
     known = [c.name for c in model.specimen.configurations]
     for i, name in enumerate(frame["configuration"]):
         if pd.isna(name) or str(name).strip() not in known:
-            raise _fail(source, f"line {line[i]}: configuration = {name!r} is not in the spec; "
-                        f"{suggestion(name, known).replace('allowed:', 'the spec has:')}")
+            raise _fail(
+                source,
+                f"line {line[i]}: configuration = {name!r} is not in the spec; "
+                f"{suggestion(name, known).replace('allowed:', 'the spec has:')}",
+            )
     frame["configuration"] = frame["configuration"].map(lambda s: str(s).strip())
 
     frequency = pd.to_numeric(frame["frequency_hz"], errors="coerce")
     for i, (raw, f) in enumerate(zip(frame["frequency_hz"], frequency)):
         if not np.isfinite(f):
-            raise _fail(source, f"line {line[i]}: frequency_hz = {raw!r} is not a number; give the frequency in Hz")
+            raise _fail(
+                source, f"line {line[i]}: frequency_hz = {raw!r} is not a number; give the frequency in Hz"
+            )
         if f <= 0:
             raise _fail(source, f"line {line[i]}: frequency_hz = {f:g} must be positive")
     frame["frequency_hz"] = frequency.astype(float)
@@ -173,7 +195,9 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         mode = pd.to_numeric(frame["mode"], errors="coerce")
         for i, (raw, m) in enumerate(zip(frame["mode"], mode)):
             if not (np.isfinite(m) and m == int(m) and 1 <= m <= MAX_MODE):
-                raise _fail(source, f"line {line[i]}: mode = {raw!r}: need the elastic mode's rank, 1 to {MAX_MODE}")
+                raise _fail(
+                    source, f"line {line[i]}: mode = {raw!r}: need the elastic mode's rank, 1 to {MAX_MODE}"
+                )
         frame["mode"] = mode.astype(int)
     else:
         frame["mode"] = UNRANKED
@@ -181,8 +205,12 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         damping = pd.to_numeric(frame["damping_ratio"], errors="coerce")
         for i, (raw, d) in enumerate(zip(frame["damping_ratio"], damping)):
             if not pd.isna(raw) and not (np.isfinite(d) and 0 < d < 0.5):
-                raise _fail(source, f"line {line[i]}: damping_ratio = {raw!r}: need a ratio above 0 and below 0.5 (0.01 for 1 %), "
-                            "or leave it empty")
+                raise _fail(
+                    source,
+                    f"line {line[i]}: damping_ratio = {raw!r}: need a ratio above 0 and below 0.5 (0.01 for "
+                    "1 %), "
+                    "or leave it empty",
+                )
         frame["damping_ratio"] = damping.astype(float)
     else:
         frame["damping_ratio"] = np.nan
@@ -192,31 +220,46 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
             if pd.isna(raw):
                 continue
             if not (np.isfinite(s) and s > 0):
-                raise _fail(source, f"line {line[i]}: damping_std = {raw!r}: need a positive std of the damping ratio "
-                            "(0.0003 for 3 % of 0.01), or leave it empty")
+                raise _fail(
+                    source,
+                    f"line {line[i]}: damping_std = {raw!r}: need a positive std of the damping ratio "
+                    "(0.0003 for 3 % of 0.01), or leave it empty",
+                )
             if pd.isna(d):
-                raise _fail(source, f"line {line[i]}: damping_std = {raw!r} without a damping_ratio; give both or "
-                            "neither")
+                raise _fail(
+                    source,
+                    f"line {line[i]}: damping_std = {raw!r} without a damping_ratio; give both or neither",
+                )
         frame["damping_std"] = damping_std.astype(float)
     else:
         frame["damping_std"] = np.nan
-    frame["label"] = (frame["label"].map(lambda v: "" if pd.isna(v) else str(v).strip()) if "label" in frame.columns
-                      else "")
+    frame["label"] = (
+        frame["label"].map(lambda v: "" if pd.isna(v) else str(v).strip()) if "label" in frame.columns else ""
+    )
     for i, label in enumerate(frame["label"]):
         if label and pattern(label) is None:
-            raise _fail(source, f"line {line[i]}: label = {label!r} is not a nodal pattern; write it as predict "
-                        "prints it, e.g. \"(1,2)\" or \"(0,2)+(2,0)\" (quoted in the CSV), or leave it empty")
+            raise _fail(
+                source,
+                f"line {line[i]}: label = {label!r} is not a nodal pattern; write it as predict "
+                'prints it, e.g. "(1,2)" or "(0,2)+(2,0)" (quoted in the CSV), or leave it empty',
+            )
 
     duplicated = frame.duplicated(["configuration", "mode"], keep=False) & (frame["mode"] != UNRANKED)
     if duplicated.any():
         rows = frame[duplicated]
-        raise _fail(source, f"lines {', '.join(map(str, line[duplicated.to_numpy()]))}: configuration "
-                    f"{rows['configuration'].iloc[0]!r} mode {rows['mode'].iloc[0]} is given more than once")
+        raise _fail(
+            source,
+            f"lines {', '.join(map(str, line[duplicated.to_numpy()]))}: configuration "
+            f"{rows['configuration'].iloc[0]!r} mode {rows['mode'].iloc[0]} is given more than once",
+        )
     peaks = frame[frame["mode"] == UNRANKED].groupby("configuration", sort=False).size()
     if (peaks > MAX_MODE).any():
-        raise _fail(source, f"configuration {peaks.idxmax()!r} has {peaks.max()} peaks without mode numbers; at most "
-                    f"{MAX_MODE} can be matched to model modes: keep the strongest peaks of the band you fit (e.g. "
-                    "peaks --band LOW HIGH)")
+        raise _fail(
+            source,
+            f"configuration {peaks.idxmax()!r} has {peaks.max()} peaks without mode numbers; at most "
+            f"{MAX_MODE} can be matched to model modes: keep the strongest peaks of the band you fit (e.g. "
+            "peaks --band LOW HIGH)",
+        )
     frame["_order"] = frame["configuration"].map({name: i for i, name in enumerate(known)})
     frame = frame.sort_values(["_order", "mode", "frequency_hz"], kind="stable").drop(columns="_order")
     frame = frame.reset_index(drop=True)
@@ -225,8 +268,11 @@ def parse_measurements(frame: pd.DataFrame, model: SpecimenModel, source: str = 
         bad = np.flatnonzero(np.diff(f) < 0)
         if bad.size:
             a, b = group.iloc[bad[0]], group.iloc[bad[0] + 1]
-            raise _fail(source, f"configuration {name!r}: mode {b['mode']} ({b['frequency_hz']:g} Hz) is below mode "
-                        f"{a['mode']} ({a['frequency_hz']:g} Hz); mode numbers are ranks, so frequencies must rise")
+            raise _fail(
+                source,
+                f"configuration {name!r}: mode {b['mode']} ({b['frequency_hz']:g} Hz) is below mode "
+                f"{a['mode']} ({a['frequency_hz']:g} Hz); mode numbers are ranks, so frequencies must rise",
+            )
     columns = ["configuration", "mode", "frequency_hz", "std_hz", "label", "damping_ratio", "damping_std"]
     return Measurements(frame[columns], source)
 
@@ -245,8 +291,9 @@ def read_table(path: str | Path, what: str) -> pd.DataFrame:
     except OSError as exc:
         raise MeasurementError(f"{where} cannot be read: {exc.strerror}") from None
     except UnicodeDecodeError:
-        raise MeasurementError(f"{where} is not UTF-8 text (a binary file, or saved as UTF-16?): save it as a "
-                               "UTF-8 CSV") from None
+        raise MeasurementError(
+            f"{where} is not UTF-8 text (a binary file, or saved as UTF-16?): save it as a UTF-8 CSV"
+        ) from None
     _check_field_counts(text, where)
     try:
         return pd.read_csv(io.StringIO(text), skipinitialspace=True, comment="#", index_col=False)
@@ -262,12 +309,17 @@ def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
 def _check_field_counts(text: str, where: str) -> None:
     """Every data row has as many fields as the header; an unquoted label like (1,2)
     splits in two, so say how to write it."""
-    rows = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), 1)
-            if row and not row[0].lstrip().startswith("#")]
+    rows = [
+        (n, row)
+        for n, row in enumerate(csv.reader(io.StringIO(text)), 1)
+        if row and not row[0].lstrip().startswith("#")
+    ]
     if not rows:
         raise MeasurementError(f"{where} is empty: give a header line and one row per measured value")
     width = len(rows[0][1])
     for n, row in rows[1:]:
         if len(row) > width:
-            raise MeasurementError(f"{where}: line {n} has {len(row)} fields for the header's {width}; a label with a "
-                                   'comma must be quoted, e.g. "(1,2)"')
+            raise MeasurementError(
+                f"{where}: line {n} has {len(row)} fields for the header's {width}; a label with a "
+                'comma must be quoted, e.g. "(1,2)"'
+            )

@@ -1,4 +1,5 @@
 """``predict``: the elastic frequencies of every configuration of a model."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -26,8 +27,12 @@ class Prediction:
 
     def to_dict(self) -> dict:
         """The ``predict --json`` document."""
-        return {"configurations": [{"name": name, "frequencies_hz": f.round(4), "labels": list(self.labels[name])}
-                                   for name, f in self.frequencies_hz.items()]}
+        return {
+            "configurations": [
+                {"name": name, "frequencies_hz": f.round(4), "labels": list(self.labels[name])}
+                for name, f in self.frequencies_hz.items()
+            ]
+        }
 
     def report(self) -> str:
         model, mesh = self.model, self.model.mesh
@@ -35,16 +40,24 @@ class Prediction:
         if options.theory == "layerwise":
             theory = "layerwise (zig-zag) plate"
         else:
-            theory = ("first-order shear deformation" if options.transverse_shear else "Kirchhoff") + " plate" + (
-                " with rotary inertia" if options.rotary_inertia else "")
-        lines = [f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} elements"
-                 f"{', graded towards the edges' if mesh.x_nodes else ''})"]
+            theory = (
+                ("first-order shear deformation" if options.transverse_shear else "Kirchhoff")
+                + " plate"
+                + (" with rotary inertia" if options.rotary_inertia else "")
+            )
+        lines = [
+            f"{model.name}: first {model.options.modes} elastic modes ({theory}, {mesh.nx} x {mesh.ny} "
+            "elements"
+            f"{', graded towards the edges' if mesh.x_nodes else ''})"
+        ]
         if model.effects:
             lines.append(f"with the spec's effects: {', '.join(model.effects)}")
         lines += [f"note: {n}" for n in model.notes]
         lines.append("mode  " + "".join(f"{name:>24s}" for name in self.frequencies_hz))
         for i in range(model.options.modes):
-            cells = "".join(f"{f[i]:>14.3f} Hz {self.labels[n][i]:>6s}" for n, f in self.frequencies_hz.items())
+            cells = "".join(
+                f"{f[i]:>14.3f} Hz {self.labels[n][i]:>6s}" for n, f in self.frequencies_hz.items()
+            )
             lines.append(f"{i + 1:>4d}  {cells}")
         return "\n".join(lines)
 
@@ -70,8 +83,11 @@ def predict(model: SpecimenModel, modes: int | None = None) -> Prediction:
     if modes is not None:
         model = model.with_options(modes=whole(modes, "--modes", 1, MAX_MODES, ""))
     solutions = {c.name: model.solve(c.name) for c in model.specimen.configurations}
-    return Prediction(model, {n: s.frequencies_hz for n, s in solutions.items()},
-                      {n: s.labels for n, s in solutions.items()})
+    return Prediction(
+        model,
+        {n: s.frequencies_hz for n, s in solutions.items()},
+        {n: s.labels for n, s in solutions.items()},
+    )
 
 
 __all__ = ["Prediction", "predict"]

@@ -34,6 +34,7 @@ frequencies are those of the case's measurement rows.
 
     python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR] [--jobs N]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -75,8 +76,13 @@ TRUE_RATIO = 1.5
 FLOOR_RATIO = 1.5
 Z_MAX = 3.0
 #: Physics a selected effect brings (for "the selection contains the true effects").
-PHYSICS = {"transverse_shear": {"shear"}, "thick_plate": {"shear"}, "layerwise": {"shear", "layerwise"},
-           "point_mass": {"point_mass"}, "orientation": {"orientation"}}
+PHYSICS = {
+    "transverse_shear": {"shear"},
+    "thick_plate": {"shear"},
+    "layerwise": {"shear", "layerwise"},
+    "point_mass": {"point_mass"},
+    "orientation": {"orientation"},
+}
 IN_PLANE = ("E1", "E2", "G12", "nu12")
 
 
@@ -115,7 +121,9 @@ def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, se
     with rotary inertia), 'layerwise' or 'clt'."""
     text = case["truth_spec_toml"]
     if _core(case):
-        text = re.sub(r"(\[materials\.foam_core\][^\[]*?)identify = \w+", r'\1identify = ["G13", "G23"]', text)
+        text = re.sub(
+            r"(\[materials\.foam_core\][^\[]*?)identify = \w+", r'\1identify = ["G13", "G23"]', text
+        )
     if not sensor:
         text = text.split("\n[[effects]]")[0] + "\n"
     if theory == "layerwise":
@@ -130,8 +138,10 @@ def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, se
 
 def _nominal_angles(model, case: dict):
     nominal = case["choices"]["nominal_layers"]
-    values = {Parameter("angle", layer.label): math.radians(n["angle_deg"])
-              for layer, n in zip(model.specimen.layers, nominal, strict=True)}
+    values = {
+        Parameter("angle", layer.label): math.radians(n["angle_deg"])
+        for layer, n in zip(model.specimen.layers, nominal, strict=True)
+    }
     return model.with_values(values)
 
 
@@ -150,8 +160,11 @@ def start_model(case: dict, rng: np.random.Generator):
 
 def with_lay_up_tolerance(model, case: dict):
     """The model with its plies' angles known to ``ANGLE_STD_DEG`` (a core has no axes)."""
-    tolerance = tuple(InputStd("angle", layer.label, math.radians(ANGLE_STD_DEG))
-                      for layer in model.specimen.layers if layer.material.name != _core(case))
+    tolerance = tuple(
+        InputStd("angle", layer.label, math.radians(ANGLE_STD_DEG))
+        for layer in model.specimen.layers
+        if layer.material.name != _core(case)
+    )
     return replace(model, input_std=tuple(model.input_std) + tolerance)
 
 
@@ -173,10 +186,18 @@ def measurements(case: dict, model, noise: float, rng: np.random.Generator) -> M
         close[1:] |= gaps
         labels = [m["label"] for m in conf["modes"]]
         noisy = f * (1 + noise * rng.standard_normal(len(f)))
-        rows += [{"configuration": conf["name"], "mode": k + 1, "frequency_hz": noisy[k], "std_hz": noise * f[k],
-                  "label": m["label"] if (close[k] or m["plate_mode"] != k + 1) and labels.count(m["label"]) == 1
-                  else ""}
-                 for k, m in enumerate(conf["modes"])]
+        rows += [
+            {
+                "configuration": conf["name"],
+                "mode": k + 1,
+                "frequency_hz": noisy[k],
+                "std_hz": noise * f[k],
+                "label": m["label"]
+                if (close[k] or m["plate_mode"] != k + 1) and labels.count(m["label"]) == 1
+                else "",
+            }
+            for k, m in enumerate(conf["modes"])
+        ]
     frame = pd.DataFrame(rows)
     return parse_measurements(frame, model, f"<blind 3-D case {case['case']}, {100 * noise:.3g} % noise>")
 
@@ -208,13 +229,19 @@ class Oracle:
 
 def _wanted(case: dict, truth) -> dict:
     """The properties the study scores: every ply's in-plane constants, a core's shear moduli."""
-    return {p: truth.value(p) for p in truth.specimen.material_parameters()
-            if p.kind in IN_PLANE or p.target == _core(case)}
+    return {
+        p: truth.value(p)
+        for p in truth.specimen.material_parameters()
+        if p.kind in IN_PLANE or p.target == _core(case)
+    }
 
 
 def oracle(case: dict, data: Measurements) -> Oracle:
     wanted = _wanted(case, truth_model(case))
-    fits = {theory: _fit_from_truth(truth_model(case, theory), data, wanted) for theory in ("thick_plate", "layerwise")}
+    fits = {
+        theory: _fit_from_truth(truth_model(case, theory), data, wanted)
+        for theory in ("thick_plate", "layerwise")
+    }
     theory = min(fits, key=lambda t: fits[t][0])
     floor, floor_z = fits[theory]
     without = {"shear": _fit_from_truth(truth_model(case, "clt"), data, wanted)}
@@ -236,8 +263,9 @@ def true_effects(without: dict, floor: float, floor_z: float) -> tuple[str, ...]
     worst, ``floor_z``.  Where the oracle's or the refit's std are not all defined (a
     floor fit that did not finish: blind03's), only the RMS decides."""
     limit = max(Z_MAX, floor_z) if math.isfinite(floor_z) else math.inf
-    return tuple(k for k, (rms, z) in without.items()
-                 if rms > TRUE_RATIO * floor or (math.isfinite(z) and z > limit))
+    return tuple(
+        k for k, (rms, z) in without.items() if rms > TRUE_RATIO * floor or (math.isfinite(z) and z > limit)
+    )
 
 
 @dataclass
@@ -291,18 +319,31 @@ class Outcome:
         def num(x, digits=4):
             return round(float(x), digits) if isinstance(x, float) and math.isfinite(x) else None
 
-        return {"case": self.case, "family": self.family, "half": self.half, "noise_pct": num(100 * self.noise),
-                "true": "+".join(self.true_effects), "selected": "+".join(self.selected),
-                "contains_true": self.contains_truth, "rms_baseline_pct": num(100 * self.rms_baseline),
-                "rms_after_pct": num(100 * self.rms_after), "floor_pct": num(100 * self.floor),
-                "floor_theory": self.oracle.theory if self.oracle else "", "ratio": num(self.ratio, 3),
-                "floor_max_z": num(self.oracle.max_z, 2) if self.oracle else None, "max_z": num(self.max_z, 2),
-                "max_z_measured": num(self.max_z_measured, 2),
-                "seconds": num(self.seconds, 1), "oracle_seconds": num(self.oracle_seconds, 1),
-                "z": {k: num(v, 2) for k, v in self.z.items()},
-                "without": {k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)}
-                            for k, (rms, z) in (self.oracle.without if self.oracle else {}).items()},
-                "error": self.error}
+        return {
+            "case": self.case,
+            "family": self.family,
+            "half": self.half,
+            "noise_pct": num(100 * self.noise),
+            "true": "+".join(self.true_effects),
+            "selected": "+".join(self.selected),
+            "contains_true": self.contains_truth,
+            "rms_baseline_pct": num(100 * self.rms_baseline),
+            "rms_after_pct": num(100 * self.rms_after),
+            "floor_pct": num(100 * self.floor),
+            "floor_theory": self.oracle.theory if self.oracle else "",
+            "ratio": num(self.ratio, 3),
+            "floor_max_z": num(self.oracle.max_z, 2) if self.oracle else None,
+            "max_z": num(self.max_z, 2),
+            "max_z_measured": num(self.max_z_measured, 2),
+            "seconds": num(self.seconds, 1),
+            "oracle_seconds": num(self.oracle_seconds, 1),
+            "z": {k: num(v, 2) for k, v in self.z.items()},
+            "without": {
+                k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)}
+                for k, (rms, z) in (self.oracle.without if self.oracle else {}).items()
+            },
+            "error": self.error,
+        }
 
 
 def _z(fit, truth_values: dict, measurement_only: bool = False) -> dict:
@@ -312,8 +353,14 @@ def _z(fit, truth_values: dict, measurement_only: bool = False) -> dict:
     out = {}
     for p in fit.parameters:
         if p in truth_values:
-            sd = fit.budget.measurement_std[fit.budget.parameters.index(p)] if measurement_only and fit.budget else fit.std(p)
-            out[p.name] = abs(fit.value(p) - truth_values[p]) / sd if sd > 0 and math.isfinite(sd) else math.inf
+            sd = (
+                fit.budget.measurement_std[fit.budget.parameters.index(p)]
+                if measurement_only and fit.budget
+                else fit.std(p)
+            )
+            out[p.name] = (
+                abs(fit.value(p) - truth_values[p]) / sd if sd > 0 and math.isfinite(sd) else math.inf
+            )
     return out
 
 
@@ -345,8 +392,13 @@ def shapes_table(case_name: str, configurations=None, *, noise: float | None = N
         return None
     stored = json.loads(path.read_text())["configurations"]
     names = [c["name"] for c in stored]
-    wanted = names if configurations is None else [configurations] if isinstance(configurations, str) \
+    wanted = (
+        names
+        if configurations is None
+        else [configurations]
+        if isinstance(configurations, str)
         else list(configurations)
+    )
     unknown = [n for n in wanted if n not in names]
     if unknown:
         raise ValueError(f"configurations = {unknown!r}: not in the shapes of {case_name}; it has {names}")
@@ -356,14 +408,23 @@ def shapes_table(case_name: str, configurations=None, *, noise: float | None = N
         measured = data.of(conf["name"]).set_index("mode")["frequency_hz"]
         x, y = np.meshgrid(conf["x_mm"], conf["y_mm"])  # [j][i], as w
         for k, mode in enumerate(conf["modes"]):
-            frames.append(pd.DataFrame({"configuration": conf["name"], "frequency_hz": float(measured[k + 1]),
-                                        "x_mm": x.ravel(), "y_mm": y.ravel(),
-                                        "amplitude": np.ravel(mode["w"]).astype(float)}))
+            frames.append(
+                pd.DataFrame(
+                    {
+                        "configuration": conf["name"],
+                        "frequency_hz": float(measured[k + 1]),
+                        "x_mm": x.ravel(),
+                        "y_mm": y.ravel(),
+                        "amplitude": np.ravel(mode["w"]).astype(float),
+                    }
+                )
+            )
     return pd.concat(frames, ignore_index=True)[list(SHAPE_COLUMNS)]
 
 
-def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | None = None,
-             noise: float | None = None) -> Outcome:
+def run_case(
+    name: str, with_oracle: bool = True, progress=None, starts: dict | None = None, noise: float | None = None
+) -> Outcome:
     case = load(name)
     rng, drawn = _case_rng(name)
     noise = drawn if noise is None else noise
@@ -371,7 +432,9 @@ def run_case(name: str, with_oracle: bool = True, progress=None, starts: dict | 
     try:
         start = start_model(case, rng)
         if starts:
-            start = start.with_values({Parameter(kind, material): value for (material, kind), value in starts.items()})
+            start = start.with_values(
+                {Parameter(kind, material): value for (material, kind), value in starts.items()}
+            )
         data = measurements(case, start, noise, rng)
         truth = truth_model(case)
         started = time.perf_counter()
@@ -409,8 +472,15 @@ def confusion(outcomes: list[Outcome]) -> pd.DataFrame:
             missed += true and not chosen
             extra += chosen and not true
             neither += not true and not chosen
-        rows.append({"effect": effect, "true & selected": hit, "true, missed": missed,
-                     "selected, not true": extra, "neither": neither})
+        rows.append(
+            {
+                "effect": effect,
+                "true & selected": hit,
+                "true, missed": missed,
+                "selected, not true": extra,
+                "neither": neither,
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -419,22 +489,32 @@ def summary(outcomes: list[Outcome]) -> dict:
     if not n:
         return {"cases": 0}
     seconds = [o.seconds for o in outcomes if math.isfinite(o.seconds)]
-    return {"cases": n,
-            "contains_true_pct": round(100 * sum(o.contains_truth for o in outcomes) / n, 1),
-            "rms_within_1.5_floor_pct": round(100 * sum(o.within_floor for o in outcomes) / n, 1),
-            "every_property_within_3_std_pct": round(100 * sum(o.within_std for o in outcomes) / n, 1),
-            "every_property_within_3_measurement_std_pct":
-                round(100 * sum(o.within_measurement_std for o in outcomes) / n, 1),
-            "tracebacks": sum(bool(o.error) for o in outcomes),
-            "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
-            "max_seconds": round(float(np.max(seconds)), 1) if seconds else None}
+    return {
+        "cases": n,
+        "contains_true_pct": round(100 * sum(o.contains_truth for o in outcomes) / n, 1),
+        "rms_within_1.5_floor_pct": round(100 * sum(o.within_floor for o in outcomes) / n, 1),
+        "every_property_within_3_std_pct": round(100 * sum(o.within_std for o in outcomes) / n, 1),
+        "every_property_within_3_measurement_std_pct": round(
+            100 * sum(o.within_measurement_std for o in outcomes) / n, 1
+        ),
+        "tracebacks": sum(bool(o.error) for o in outcomes),
+        "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
+        "max_seconds": round(float(np.max(seconds)), 1) if seconds else None,
+    }
 
 
 def report(outcomes: list[Outcome], title: str) -> str:
     table = pd.DataFrame([o.row() for o in outcomes])
-    lines = [f"== {title} ==", "", table.drop(columns=["half", "z", "without"]).to_string(index=False, na_rep="-"), "",
-             "confusion (per effect, over the cases):", confusion(outcomes).to_string(index=False), "",
-             json.dumps(summary(outcomes))]
+    lines = [
+        f"== {title} ==",
+        "",
+        table.drop(columns=["half", "z", "without"]).to_string(index=False, na_rep="-"),
+        "",
+        "confusion (per effect, over the cases):",
+        confusion(outcomes).to_string(index=False),
+        "",
+        json.dumps(summary(outcomes)),
+    ]
     return "\n".join(lines)
 
 
@@ -447,7 +527,9 @@ def _keep(o: Outcome, out: Path) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m studies.blind_diagnosis", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m studies.blind_diagnosis", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--half", choices=("dev", "heldout", "both"), default="dev")
     parser.add_argument("--case", action="append", help="run only these cases")
     parser.add_argument("--out", type=Path, default=Path("reports") / "blind_diagnosis")
@@ -466,10 +548,15 @@ def main(argv=None) -> int:
         except BrokenProcessPool:
             # A worker killed from outside (the out-of-memory killer: a layerwise diagnosis
             # grew to 14 GB beside another of 10 GB on 23 GB): the unfinished cases are failures.
-            for name in names[len(outcomes):]:
+            for name in names[len(outcomes) :]:
                 case = load(name)
-                o = Outcome(name, case["family"], case["half"], math.nan,
-                            error="its process was killed before it finished (out of memory?): run it with --jobs 1")
+                o = Outcome(
+                    name,
+                    case["family"],
+                    case["half"],
+                    math.nan,
+                    error="its process was killed before it finished (out of memory?): run it with --jobs 1",
+                )
                 _keep(o, args.out)
                 outcomes.append(o)
     else:
@@ -486,10 +573,17 @@ def main(argv=None) -> int:
     text = "\n\n".join(texts)
     print(text)
     write_text(args.out / f"blind_{args.half}.txt", text + "\n")
-    write_text(args.out / f"blind_{args.half}.json",
-               json.dumps({"cases": [o.row() for o in outcomes],
-                           "summary": {h: summary([o for o in outcomes if o.half == h]) for h in ("dev", "heldout")}},
-                          indent=1) + "\n")
+    write_text(
+        args.out / f"blind_{args.half}.json",
+        json.dumps(
+            {
+                "cases": [o.row() for o in outcomes],
+                "summary": {h: summary([o for o in outcomes if o.half == h]) for h in ("dev", "heldout")},
+            },
+            indent=1,
+        )
+        + "\n",
+    )
     return 0
 
 

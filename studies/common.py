@@ -1,4 +1,5 @@
 """Shared pieces of the studies: the paper's plate, report folders, small plots."""
+
 from __future__ import annotations
 
 import argparse
@@ -31,8 +32,14 @@ TABLE2 = {
 def material_values(table: dict) -> dict[Parameter, float]:
     out = {}
     for material, (E1, E2, G12, nu12) in table.items():
-        out.update({Parameter("E1", material): E1 * GPA, Parameter("E2", material): E2 * GPA,
-                    Parameter("G12", material): G12 * GPA, Parameter("nu12", material): nu12})
+        out.update(
+            {
+                Parameter("E1", material): E1 * GPA,
+                Parameter("E2", material): E2 * GPA,
+                Parameter("G12", material): G12 * GPA,
+                Parameter("nu12", material): nu12,
+            }
+        )
     return out
 
 

@@ -32,6 +32,7 @@ layer properties come back within their uncertainty.
 
     python -m studies.hidden_effect [--out DIR]
 """
+
 from __future__ import annotations
 
 import json
@@ -67,36 +68,51 @@ GPA = 1e9
 #: data (fibre volume fraction about 0.6), as a user without a measurement would take them
 #: from a handbook.  Against the truth: 2.5-15 % off, the carbon ply's G12 44 % high.
 HANDBOOK_START = {
-    Parameter("E1", "gfrp_ud"): 41 * GPA, Parameter("E2", "gfrp_ud"): 10.4 * GPA,
-    Parameter("G12", "gfrp_ud"): 4.3 * GPA, Parameter("nu12", "gfrp_ud"): 0.28,
-    Parameter("E1", "cfrp_ud"): 142 * GPA, Parameter("E2", "cfrp_ud"): 10.3 * GPA,
-    Parameter("G12", "cfrp_ud"): 7.2 * GPA, Parameter("nu12", "cfrp_ud"): 0.27,
+    Parameter("E1", "gfrp_ud"): 41 * GPA,
+    Parameter("E2", "gfrp_ud"): 10.4 * GPA,
+    Parameter("G12", "gfrp_ud"): 4.3 * GPA,
+    Parameter("nu12", "gfrp_ud"): 0.28,
+    Parameter("E1", "cfrp_ud"): 142 * GPA,
+    Parameter("E2", "cfrp_ud"): 10.3 * GPA,
+    Parameter("G12", "cfrp_ud"): 7.2 * GPA,
+    Parameter("nu12", "cfrp_ud"): 0.27,
 }
 #: Start values of the spruce plate (``spruce_plate.json``): "handbook" values for spruce
 #: a user would type, G13/G23 not given (so they default to G12).  Against the truth
 #: (11.0, 0.90, 0.70 GPa, 0.37): E1 -9 %, E2 -11 %, G12 -11 %, nu12 +8 %.
 SPRUCE_START = {
-    Parameter("E1", "spruce"): 10.0 * GPA, Parameter("E2", "spruce"): 0.80 * GPA,
-    Parameter("G12", "spruce"): 0.62 * GPA, Parameter("nu12", "spruce"): 0.40,
+    Parameter("E1", "spruce"): 10.0 * GPA,
+    Parameter("E2", "spruce"): 0.80 * GPA,
+    Parameter("G12", "spruce"): 0.62 * GPA,
+    Parameter("nu12", "spruce"): 0.40,
 }
 #: Start values of the homogeneous control (``thick_homogeneous.json``): handbook aluminium
 #: a user might type (6061-T6-like 68.9 GPa; against the truth E -1.6 %, G -1.6 %).
 ALUMINIUM_START = {
-    Parameter("E1", "aluminium"): 68.9 * GPA, Parameter("E2", "aluminium"): 68.9 * GPA,
-    Parameter("G12", "aluminium"): 25.9 * GPA, Parameter("nu12", "aluminium"): 0.33,
+    Parameter("E1", "aluminium"): 68.9 * GPA,
+    Parameter("E2", "aluminium"): 68.9 * GPA,
+    Parameter("G12", "aluminium"): 25.9 * GPA,
+    Parameter("nu12", "aluminium"): 0.33,
 }
 #: 3-D reference case -> the start values of its identified materials (the cross-ply on a
 #: soft bond line has the thick laminate's plies).
-REFERENCE_STARTS = {"thick_laminate": HANDBOOK_START, "spruce_plate": SPRUCE_START,
-                    "laminate_on_adhesive": HANDBOOK_START, "thick_homogeneous": ALUMINIUM_START}
+REFERENCE_STARTS = {
+    "thick_laminate": HANDBOOK_START,
+    "spruce_plate": SPRUCE_START,
+    "laminate_on_adhesive": HANDBOOK_START,
+    "thick_homogeneous": ALUMINIUM_START,
+}
 #: ``run_case`` names of the 3-D references.
 REFERENCE_CASES = tuple(f"{name}_3d" for name in REFERENCE_STARTS)
 
 
 def thick(model: SpecimenModel) -> SpecimenModel:
     """The paper's plate with every layer five times thicker and 3 mm brass plates."""
-    values = {Parameter("thickness", "layer1"): 1e-3, Parameter("thickness", "layer2"): 3.5e-3,
-              Parameter("thickness", "layer3"): 1e-3}
+    values = {
+        Parameter("thickness", "layer1"): 1e-3,
+        Parameter("thickness", "layer2"): 3.5e-3,
+        Parameter("thickness", "layer3"): 1e-3,
+    }
     for name, side in (("brass_bottom", "bottom"), ("brass_top", "top")):
         values[Parameter("thickness", f"{name}.{side}1")] = 0.1e-3
         values[Parameter("thickness", f"{name}.{side}2")] = 3e-3
@@ -111,9 +127,11 @@ def _sensor(grams: float):
 CASES = {
     "sensor_mass": (("point_mass",), _sensor(3.0), lambda m: m),
     "thick_plate": (("transverse_shear",), lambda m: thick(m).with_options(transverse_shear=True), thick),
-    "sensor_on_thick": (("point_mass", "transverse_shear"),
-                        lambda m: _sensor(10.0)(thick(m)).with_options(transverse_shear=True, rotary_inertia=True),
-                        thick),
+    "sensor_on_thick": (
+        ("point_mass", "transverse_shear"),
+        lambda m: _sensor(10.0)(thick(m)).with_options(transverse_shear=True, rotary_inertia=True),
+        thick,
+    ),
 }
 #: The effects that count as "transverse shear" (with or without rotary inertia).
 SHEAR = {"transverse_shear", "thick_plate"}
@@ -124,7 +142,7 @@ class HiddenEffect:
     case: str
     true_effects: tuple[str, ...]
     diagnosis: Diagnosis
-    max_z: float          # largest |identified - true| / std of the layer properties after the final refit
+    max_z: float  # largest |identified - true| / std of the layer properties after the final refit
 
     @property
     def ranked_first(self) -> str:
@@ -156,8 +174,12 @@ def run_case(case: str, kinds: list[str] | None = None, seed: int = 4, workers: 
     truth = make_truth(true_model().with_options(modes=MODES))
     data = synthetic_measurements(truth, modes=MODES, noise_rel=NOISE, seed=seed, labels="close")
     result = diagnose(make_start(start_model().with_options(modes=MODES)), data, kinds, workers=workers)
-    return HiddenEffect(case, true_effects, result, _max_z(result, {p: truth.value(p) for p in
-                                                                    truth.specimen.material_parameters()}))
+    return HiddenEffect(
+        case,
+        true_effects,
+        result,
+        _max_z(result, {p: truth.value(p) for p in truth.specimen.material_parameters()}),
+    )
 
 
 def _max_z(result: Diagnosis, truth: dict) -> float:
@@ -188,7 +210,9 @@ def reference_start(case: str = DEFAULT_REFERENCE) -> SpecimenModel:
     G23 not given."""
     truth = reference_truth(case)
     specimen = truth.specimen
-    specimen = specimen.with_materials([replace(m, G13=None, G23=None) for m in specimen.identified_materials])
+    specimen = specimen.with_materials(
+        [replace(m, G13=None, G23=None) for m in specimen.identified_materials]
+    )
     return truth.with_specimen(specimen).with_values(REFERENCE_STARTS[case])
 
 
@@ -202,8 +226,9 @@ def _grid_w(solution, length: float, width: float) -> np.ndarray:
     return np.array(rows)
 
 
-def reference_measurements(modes: int = REFERENCE_MODES, noise: float = NOISE, seed: int = 1,
-                           case: str = DEFAULT_REFERENCE) -> Measurements:
+def reference_measurements(
+    modes: int = REFERENCE_MODES, noise: float = NOISE, seed: int = 1, case: str = DEFAULT_REFERENCE
+) -> Measurements:
     """The first ``modes`` flexural modes of every configuration of the 3-D solution with
     ``noise`` relative Gaussian scatter (std_hz = noise x f): each ranked by the plate mode
     its shape pairs with (the plate model at the true values, first-order shear with
@@ -227,11 +252,20 @@ def reference_measurements(modes: int = REFERENCE_MODES, noise: float = NOISE, s
         close[:-1] |= gaps
         close[1:] |= gaps
         noisy = f3d * (1 + noise * rng.standard_normal(modes))
-        rows += [{"configuration": conf["name"], "mode": int(rank[k]) + 1, "frequency_hz": noisy[k],
-                  "std_hz": noise * f3d[k], "label": solution.labels[rank[k]] if close[k] else ""}
-                 for k in range(modes)]
+        rows += [
+            {
+                "configuration": conf["name"],
+                "mode": int(rank[k]) + 1,
+                "frequency_hz": noisy[k],
+                "std_hz": noise * f3d[k],
+                "label": solution.labels[rank[k]] if close[k] else "",
+            }
+            for k in range(modes)
+        ]
     frame = pd.DataFrame(rows).sort_values(["configuration", "mode"], kind="stable")
-    return parse_measurements(frame, truth, f"<3-D reference {_reference_path(case).name}, {100 * noise:g} % noise>")
+    return parse_measurements(
+        frame, truth, f"<3-D reference {_reference_path(case).name}, {100 * noise:g} % noise>"
+    )
 
 
 def reference_values(case: str = DEFAULT_REFERENCE) -> dict[Parameter, float]:
@@ -244,10 +278,13 @@ def reference_values(case: str = DEFAULT_REFERENCE) -> dict[Parameter, float]:
     return out
 
 
-def run_reference(kinds: list[str] | None = None, seed: int = 1, workers: int = 1,
-                  case: str = DEFAULT_REFERENCE) -> HiddenEffect:
+def run_reference(
+    kinds: list[str] | None = None, seed: int = 1, workers: int = 1, case: str = DEFAULT_REFERENCE
+) -> HiddenEffect:
     """A 3-D reference (default the thick laminate) diagnosed from handbook starts."""
-    result = diagnose(reference_start(case), reference_measurements(seed=seed, case=case), kinds, workers=workers)
+    result = diagnose(
+        reference_start(case), reference_measurements(seed=seed, case=case), kinds, workers=workers
+    )
     truth = {p: v for p, v in reference_values(case).items() if p.kind in ("E1", "E2", "G12", "nu12")}
     return HiddenEffect(f"{case}_3d", ("transverse_shear",), result, _max_z(result, truth))
 
@@ -257,16 +294,26 @@ def run(out=None, cases=(*CASES, *REFERENCE_CASES), kinds: list[str] | None = No
     outcomes = [run_case(case, kinds) for case in cases]
     lines = ["Hidden effects: baseline fit, diagnosis (forward selection), refit with the selection", ""]
     for o in outcomes:
-        lines += [f"== {o.case}: data carry {' + '.join(o.true_effects)} ==",
-                  f"baseline RMS error {100 * o.rms_before:.4f} % (noise {100 * NOISE:.3g} % per mode), reduced chi^2 "
-                  f"{o.diagnosis.baseline.statistics.reduced_chi2:.3g}",
-                  f"selected: {' + '.join(o.selected) or 'nothing'}; RMS error after the refit {100 * o.rms_after:.4f} % "
-                  f"(fall {o.rms_before / o.rms_after:.1f}x)",
-                  f"layer properties after the refit: largest |error| / std = {o.max_z:.2f}", "",
-                  o.diagnosis.report(), ""]
+        lines += [
+            f"== {o.case}: data carry {' + '.join(o.true_effects)} ==",
+            f"baseline RMS error {100 * o.rms_before:.4f} % (noise {100 * NOISE:.3g} % per mode), reduced "
+            "chi^2 "
+            f"{o.diagnosis.baseline.statistics.reduced_chi2:.3g}",
+            f"selected: {' + '.join(o.selected) or 'nothing'}; RMS error after the refit "
+            f"{100 * o.rms_after:.4f} % "
+            f"(fall {o.rms_before / o.rms_after:.1f}x)",
+            f"layer properties after the refit: largest |error| / std = {o.max_z:.2f}",
+            "",
+            o.diagnosis.report(),
+            "",
+        ]
         if o.diagnosis.final is not None:
-            plot_before_after(o.diagnosis.baseline, o.diagnosis.final, " + ".join(o.selected),
-                              folder / f"{o.case}_before_after.png")
+            plot_before_after(
+                o.diagnosis.baseline,
+                o.diagnosis.final,
+                " + ".join(o.selected),
+                folder / f"{o.case}_before_after.png",
+            )
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
     return outcomes
 

@@ -19,6 +19,7 @@ nu12 0.40) with no mode numbers.
 
     python -m studies.long_plates [--out DIR]
 """
+
 from __future__ import annotations
 
 import math
@@ -46,10 +47,22 @@ from .common import parse_args, report_folder, write_text
 LENGTH, WIDTH, THICKNESS = 0.580, 0.213, 0.005
 #: The spec a lab writes: measured size and density, handbook spruce as the start.
 HANDBOOK = {
-    "specimen": {"name": "spruce plate", "length_mm": LENGTH * 1e3, "width_mm": WIDTH * 1e3,
-                 "layers": [{"material": "spruce", "thickness_mm": THICKNESS * 1e3}]},
-    "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.80, "G12_GPa": 0.62, "nu12": 0.40,
-                             "density_kg_m3": 440.0, "identify": True}},
+    "specimen": {
+        "name": "spruce plate",
+        "length_mm": LENGTH * 1e3,
+        "width_mm": WIDTH * 1e3,
+        "layers": [{"material": "spruce", "thickness_mm": THICKNESS * 1e3}],
+    },
+    "materials": {
+        "spruce": {
+            "E1_GPa": 10.0,
+            "E2_GPa": 0.80,
+            "G12_GPa": 0.62,
+            "nu12": 0.40,
+            "density_kg_m3": 440.0,
+            "identify": True,
+        }
+    },
     "configurations": [{"name": "original"}],
     "model": {"modes": 12},
 }
@@ -85,8 +98,12 @@ class Plate:
 def simulate(seed: int, folder: Path, real_like: bool = True) -> Plate:
     """Five hits on plate ``seed`` written as CSV exports into ``folder``."""
     rng = np.random.default_rng(seed)
-    truth = {"E1": 11.5e9 * rng.uniform(0.9, 1.1), "E2": 0.85e9 * rng.uniform(0.8, 1.2),
-             "G12": 0.70e9 * rng.uniform(0.9, 1.1), "nu12": rng.uniform(0.35, 0.45)}
+    truth = {
+        "E1": 11.5e9 * rng.uniform(0.9, 1.1),
+        "E2": 0.85e9 * rng.uniform(0.8, 1.2),
+        "G12": 0.70e9 * rng.uniform(0.9, 1.1),
+        "nu12": rng.uniform(0.35, 0.45),
+    }
     excitation = (rng.uniform(0.05, 0.15) * LENGTH, rng.uniform(0.1, 0.3) * WIDTH)
     sensor = (rng.uniform(0.6, 0.9) * LENGTH, rng.uniform(0.6, 0.9) * WIDTH)
     model = handbook_model()
@@ -158,11 +175,24 @@ def run_plate(plate: Plate, folder: Path) -> Outcome:
             # An undetermined estimate (infinite std) has no z-score, not a perfect one.
             z[p.kind] = float((v - plate.truth[p.kind]) / s) if np.isfinite(s) and s > 0 else math.nan
             ratio[p.kind] = float(v / plate.truth[p.kind])
-    write_text(folder / "report.txt", "\n\n".join([baseline.report(), diagnosis.report(), final.report()]) + "\n")
+    write_text(
+        folder / "report.txt", "\n\n".join([baseline.report(), diagnosis.report(), final.report()]) + "\n"
+    )
     used = int((final.peaks.modes > 0).sum()) if final.peaks is not None else len(measurements)
-    return Outcome(plate.seed, plate.real_like, seconds, len(table), used, baseline.status.value,
-                   baseline.rms_rel_error, selected, final.status.value if selected else None,
-                   final.rms_rel_error if selected else None, z, ratio)
+    return Outcome(
+        plate.seed,
+        plate.real_like,
+        seconds,
+        len(table),
+        used,
+        baseline.status.value,
+        baseline.rms_rel_error,
+        selected,
+        final.status.value if selected else None,
+        final.rms_rel_error if selected else None,
+        z,
+        ratio,
+    )
 
 
 def run(out=None, seeds=(10, 11, 12), real_like: bool = True) -> list[Outcome]:
@@ -172,11 +202,20 @@ def run(out=None, seeds=(10, 11, 12), real_like: bool = True) -> list[Outcome]:
         plate_folder = folder / f"plate{seed}"
         plate_folder.mkdir(parents=True, exist_ok=True)
         outcomes.append(run_plate(simulate(seed, plate_folder, real_like), plate_folder))
-    rows = [{"plate": o.seed, "peaks": o.peaks, "used": o.used, "fit": o.fit_status,
-             "fit_rms_%": round(100 * o.fit_rms, 3), "selected": " + ".join(o.selected) or "-",
-             "refit": o.refit_status or "-", **{f"{k}_s": round(v, 1) for k, v in o.seconds.items()},
-             **{f"z_{k}": round(v, 2) if math.isfinite(v) else "undetermined" for k, v in o.z.items()}}
-            for o in outcomes]
+    rows = [
+        {
+            "plate": o.seed,
+            "peaks": o.peaks,
+            "used": o.used,
+            "fit": o.fit_status,
+            "fit_rms_%": round(100 * o.fit_rms, 3),
+            "selected": " + ".join(o.selected) or "-",
+            "refit": o.refit_status or "-",
+            **{f"{k}_s": round(v, 1) for k, v in o.seconds.items()},
+            **{f"z_{k}": round(v, 2) if math.isfinite(v) else "undetermined" for k, v in o.z.items()},
+        }
+        for o in outcomes
+    ]
     summary = pd.DataFrame(rows).to_string(index=False)
     write_text(folder / "summary.txt", "Long spruce-like plates, recordings to layers\n\n" + summary + "\n")
     return outcomes

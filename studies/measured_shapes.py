@@ -21,6 +21,7 @@ against the start model's mode that carries the truth's (``blind_pairing``).
 
     python -m studies.measured_shapes [--out DIR] [--seeds N] [--blind]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,8 +57,15 @@ EXAMPLE_SEED = 2026
 
 def hidden_sensor_data(seed: int, grid: tuple[int, int] = GRID) -> Measurements:
     """The peak list (no mode numbers) with its shapes, of the plate carrying the sensor."""
-    data = synthetic_measurements(true_model().with_attachments([SENSOR]), modes=MODES, noise_rel=5e-4, seed=seed,
-                                  shape_grid=grid, shape_noise_rel=SHAPE_NOISE, hammer_std_mm=HAMMER_STD_MM)
+    data = synthetic_measurements(
+        true_model().with_attachments([SENSOR]),
+        modes=MODES,
+        noise_rel=5e-4,
+        seed=seed,
+        shape_grid=grid,
+        shape_noise_rel=SHAPE_NOISE,
+        hammer_std_mm=HAMMER_STD_MM,
+    )
     return Measurements(data.table.assign(mode=0), data.source, data.shapes)
 
 
@@ -66,15 +74,21 @@ def _truly_paired(comparison: Comparison, data: Measurements) -> int:
     peaks' order: 0.05 % noise does not reorder these modes, 0.2 % apart at the closest),
     the two followed by MAC of the deflection over the whole plate (mass-weighted)."""
     fitted = comparison.solver
-    truth = true_model().with_attachments([SENSOR]).with_options(modes=fitted.options.modes,
-                                                                 divisions=fitted.options.divisions)
+    truth = (
+        true_model()
+        .with_attachments([SENSOR])
+        .with_options(modes=fitted.options.modes, divisions=fitted.options.divisions)
+    )
     result = comparison.fitted
     right = 0
     for name in data.configurations:
         peaks = data.of(name)["frequency_hz"].to_numpy()
         true_solution, model_solution = truth.solve(name), fitted.solve(name)
-        mac = mac_matrix(true_solution.modes.shapes[:, :MODES], model_solution.modes.shapes,
-                         model_solution.units.first_unit_mass)
+        mac = mac_matrix(
+            true_solution.modes.shapes[:, :MODES],
+            model_solution.modes.shapes,
+            model_solution.units.first_unit_mass,
+        )
         expected = np.argmax(mac, axis=1)  # the fitted model's mode of each true rank
         matched = result.measurements.of(name)["frequency_hz"].to_numpy()
         for f, mode in zip(matched, result.pairings[name].indices):
@@ -92,14 +106,19 @@ def hidden_sensor_run(seed: int, grid: tuple[int, int] = GRID) -> dict:
     comac = sum(1 - c.comac for c in with_shapes.shapes.values())
     xy = next(iter(with_shapes.shapes.values())).xy
     hint = with_shapes.shape_map.hint()
-    return {"seed": seed, "grid": f"{grid[0]}x{grid[1]}", "peaks": len(data),
-            "paired_right_frequency_only": _truly_paired(frequency_only, data),
-            "paired_right_with_shapes": _truly_paired(with_shapes, data),
-            "rms_frequency_only_%": 100 * frequency_only.rms_rel_error, "rms_with_shapes_%": 100 * with_shapes.rms_rel_error,
-            "map_distance_mm": 1e3 * float(np.hypot(*(np.array(hint["xy"]) - sensor))),
-            "map_mass_g": 1e3 * hint["mass_kg"],
-            "residual_worst_distance_mm": 1e3 * float(np.hypot(*(xy[np.argmax(residual)] - sensor))),
-            "comac_worst_distance_mm": 1e3 * float(np.hypot(*(xy[np.argmax(comac)] - sensor)))}
+    return {
+        "seed": seed,
+        "grid": f"{grid[0]}x{grid[1]}",
+        "peaks": len(data),
+        "paired_right_frequency_only": _truly_paired(frequency_only, data),
+        "paired_right_with_shapes": _truly_paired(with_shapes, data),
+        "rms_frequency_only_%": 100 * frequency_only.rms_rel_error,
+        "rms_with_shapes_%": 100 * with_shapes.rms_rel_error,
+        "map_distance_mm": 1e3 * float(np.hypot(*(np.array(hint["xy"]) - sensor))),
+        "map_mass_g": 1e3 * hint["mass_kg"],
+        "residual_worst_distance_mm": 1e3 * float(np.hypot(*(xy[np.argmax(residual)] - sensor))),
+        "comac_worst_distance_mm": 1e3 * float(np.hypot(*(xy[np.argmax(comac)] - sensor))),
+    }
 
 
 #: The truth's mode is carried to the start model by MAC of the deflection on this grid
@@ -141,15 +160,25 @@ def blind_pairing(name: str) -> pd.DataFrame:
         start_solution = solver.solve(name_)
         truth_solution = truth.with_options(modes=len(ranks) + 8).solve(name_)
         partners = np.array([m["plate_mode"] - 1 for m in conf["modes"]])
-        mac = mac_matrix(_w_on_grid(truth_solution, specimen.length, specimen.width)[:, partners],
-                         _w_on_grid(start_solution, specimen.length, specimen.width), sp.identity(PARTNER_GRID**2))
+        mac = mac_matrix(
+            _w_on_grid(truth_solution, specimen.length, specimen.width)[:, partners],
+            _w_on_grid(start_solution, specimen.length, specimen.width),
+            sp.identity(PARTNER_GRID**2),
+        )
         truth_rows, truth_cols = linear_sum_assignment(-mac)
         expected = truth_cols[np.argsort(truth_rows)]
-        ways = {"rank": ([""] * len(ranks), None), "labels": (labels, None),
-                "shapes 13x11": ([""] * len(ranks), [full.of(name_, f) for f in measured["frequency_hz"]]),
-                "shapes 5x4": ([""] * len(ranks), [coarse.of(name_, f) for f in measured["frequency_hz"]])}
-        row = {"case": name, "configuration": name_, "modes": len(ranks),
-               "labelled": sum(bool(label) for label in labels)}
+        ways = {
+            "rank": ([""] * len(ranks), None),
+            "labels": (labels, None),
+            "shapes 13x11": ([""] * len(ranks), [full.of(name_, f) for f in measured["frequency_hz"]]),
+            "shapes 5x4": ([""] * len(ranks), [coarse.of(name_, f) for f in measured["frequency_hz"]]),
+        }
+        row = {
+            "case": name,
+            "configuration": name_,
+            "modes": len(ranks),
+            "labelled": sum(bool(label) for label in labels),
+        }
         for way, (given, shapes) in ways.items():
             indices = ModePairing.initial(name_, start_solution, ranks, given, shapes).indices
             row[way] = int(np.sum(indices == expected))
@@ -168,26 +197,44 @@ def write_example_shapes(path: Path) -> Path:
     measurements) on the 5 x 4 grid, named by the bundled measurements' frequencies."""
     truth = true_model().with_options(divisions=EXAMPLE_DIVISIONS)
     measured = load_measurements(COATED_PLATE_MEASURED, truth)
-    made = synthetic_measurements(truth, modes=int(measured.table["mode"].max()), seed=EXAMPLE_SEED,
-                                  shape_grid=GRID, shape_noise_rel=SHAPE_NOISE, hammer_std_mm=HAMMER_STD_MM)
+    made = synthetic_measurements(
+        truth,
+        modes=int(measured.table["mode"].max()),
+        seed=EXAMPLE_SEED,
+        shape_grid=GRID,
+        shape_noise_rel=SHAPE_NOISE,
+        hammer_std_mm=HAMMER_STD_MM,
+    )
     frame = shapes_frame(made.shapes)
     # Name each shape by the bundled peak of its configuration and rank.
     ranks = made.table.set_index(["configuration", "frequency_hz"])["mode"]
     peaks = measured.table.set_index(["configuration", "mode"])["frequency_hz"]
-    frame["frequency_hz"] = [peaks[c, ranks[c, f]] for c, f in zip(frame["configuration"], frame["frequency_hz"])]
-    header = ("# Mode shapes of the bundled example's peaks, as a roving-hammer test on a 5 x 4 grid gives them: the\n"
-              "# paper's plate at Table 1 (20 x 20 mesh), 1 % noise, hits 1 mm off their points, scale and sign per\n"
-              "# mode arbitrary (python -m studies.measured_shapes --example).\n")
+    frame["frequency_hz"] = [
+        peaks[c, ranks[c, f]] for c, f in zip(frame["configuration"], frame["frequency_hz"])
+    ]
+    header = (
+        "# Mode shapes of the bundled example's peaks, as a roving-hammer test on a 5 x 4 grid gives them: "
+        "the\n"
+        "# paper's plate at Table 1 (20 x 20 mesh), 1 % noise, hits 1 mm off their points, scale and sign "
+        "per\n"
+        "# mode arbitrary (python -m studies.measured_shapes --example).\n"
+    )
     write_text(path, header + frame.to_csv(index=False, float_format="%.6g"))
     return path
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python -m studies.measured_shapes", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m studies.measured_shapes", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--out", help="report folder (default reports/measured_shapes)")
     parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--example", action="store_true", help="write the bundled example's shape file and stop")
-    parser.add_argument("--blind", action="store_true", help="the start pairing on the blind study's held-out cases")
+    parser.add_argument(
+        "--example", action="store_true", help="write the bundled example's shape file and stop"
+    )
+    parser.add_argument(
+        "--blind", action="store_true", help="the start pairing on the blind study's held-out cases"
+    )
     args = parser.parse_args()
     if args.example:
         from identify.examples import COATED_PLATE_SHAPES
@@ -197,17 +244,25 @@ def main() -> None:
     folder = Path(args.out or "reports/measured_shapes")
     folder.mkdir(parents=True, exist_ok=True)
     if args.blind:
-        pairing = pd.concat([blind_pairing(n) for n in blind_diagnosis.case_names("heldout")], ignore_index=True)
-        text = pairing.to_string(index=False) + "\n\ntotal\n" + pairing.drop(
-            columns=["case", "configuration"]).sum().to_string() + "\n"
+        pairing = pd.concat(
+            [blind_pairing(n) for n in blind_diagnosis.case_names("heldout")], ignore_index=True
+        )
+        text = (
+            pairing.to_string(index=False)
+            + "\n\ntotal\n"
+            + pairing.drop(columns=["case", "configuration"]).sum().to_string()
+            + "\n"
+        )
         write_text(folder / "blind_pairing.csv", pairing.to_csv(index=False))
         write_text(folder / "blind_pairing.txt", text)
         print(text)
         return
     rows = pd.DataFrame([hidden_sensor_run(seed) for seed in range(1, args.seeds + 1)])
     spacing = grid_spacing_mm()
-    text = (rows.to_string(index=False, float_format=lambda x: f"{x:.3g}")
-            + f"\n\ngrid spacing {spacing[0]:.1f} x {spacing[1]:.1f} mm\n")
+    text = (
+        rows.to_string(index=False, float_format=lambda x: f"{x:.3g}")
+        + f"\n\ngrid spacing {spacing[0]:.1f} x {spacing[1]:.1f} mm\n"
+    )
     write_text(folder / "hidden_sensor.csv", rows.to_csv(index=False))
     write_text(folder / "hidden_sensor.txt", text)
     print(text)

@@ -4,6 +4,7 @@ properties is compared with the std the fit reports.
 
     python -m studies.monte_carlo [--out DIR] [--draws N]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -23,8 +24,8 @@ NOISE = 5e-4
 @dataclass(frozen=True)
 class MonteCarlo:
     names: list[str]
-    observed_std: np.ndarray       # scatter of the identified values over the draws
-    reported_std: np.ndarray       # mean std reported by the fits
+    observed_std: np.ndarray  # scatter of the identified values over the draws
+    reported_std: np.ndarray  # mean std reported by the fits
     draws: int
 
     @property
@@ -37,7 +38,9 @@ def run(out=None, draws: int = 200, seed: int = 7) -> MonteCarlo:
     (the start does not matter once the fit converges; it keeps the study fast)."""
     truth = true_model()
     base = synthetic_measurements(truth, modes=5, noise_rel=NOISE, seed=0, labels="close")
-    exact = np.concatenate([truth.with_options(modes=5).solve(c).frequencies_hz[:5] for c in base.configurations])
+    exact = np.concatenate(
+        [truth.with_options(modes=5).solve(c).frequencies_hz[:5] for c in base.configurations]
+    )
     rng = np.random.default_rng(seed)
     values, stds = [], []
     for _ in range(draws):
@@ -50,10 +53,15 @@ def run(out=None, draws: int = 200, seed: int = 7) -> MonteCarlo:
     names = [p.name for p in truth.specimen.material_parameters()]
     outcome = MonteCarlo(names, values.std(axis=0, ddof=1), stds.mean(axis=0), len(values))
     folder = report_folder("monte_carlo", out)
-    lines = [f"Monte Carlo: {outcome.draws} converged draws of {draws}, {100 * NOISE:.2g} % frequency scatter", "",
-             f"  {'parameter':24s} {'observed std':>14s} {'reported std':>14s} {'ratio':>7s}"]
-    lines += [f"  {n:24s} {o:14.4g} {r:14.4g} {q:7.3f}"
-              for n, o, r, q in zip(names, outcome.observed_std, outcome.reported_std, outcome.ratio)]
+    lines = [
+        f"Monte Carlo: {outcome.draws} converged draws of {draws}, {100 * NOISE:.2g} % frequency scatter",
+        "",
+        f"  {'parameter':24s} {'observed std':>14s} {'reported std':>14s} {'ratio':>7s}",
+    ]
+    lines += [
+        f"  {n:24s} {o:14.4g} {r:14.4g} {q:7.3f}"
+        for n, o, r, q in zip(names, outcome.observed_std, outcome.reported_std, outcome.ratio)
+    ]
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
     return outcome
 

@@ -3,6 +3,7 @@ has the same frequencies (Table 4), though its A matrix differs by tens of perce
 
     python -m studies.paper_equivalent_plate [--out DIR]
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -43,14 +44,23 @@ def run(out=None) -> EquivalentPlate:
     f1 = equivalent.with_options(modes=10).solve("original").frequencies_hz
     result = EquivalentPlate(diff, f0, f1)
     folder = report_folder("paper_equivalent_plate", out)
-    lines = ["Equivalent plate (paper section 3.4, Tables 2-4)", "",
-             "stiffness differences (original - equivalent) / original [%] (paper Table 3: A11 -15.946, "
-             "A22 36.053, A12 31.729, A66 17.566, D 0.000)"]
+    lines = [
+        "Equivalent plate (paper section 3.4, Tables 2-4)",
+        "",
+        "stiffness differences (original - equivalent) / original [%] (paper Table 3: A11 -15.946, "
+        "A22 36.053, A12 31.729, A66 17.566, D 0.000)",
+    ]
     lines += [f"  {k:4s} {v:9.3f}" for k, v in diff.items()]
     lines += ["", "first 10 frequencies [Hz]   original   equivalent   difference [%]"]
-    lines += [f"  mode {i + 1:2d}   {a:12.3f} {b:12.3f} {100 * (b / a - 1):10.4f}" for i, (a, b) in enumerate(zip(f0, f1))]
-    lines += ["", f"largest frequency difference {100 * result.max_frequency_difference:.4f} % "
-              "(Table 2 is printed to 4 digits, which limits the D match to ~1e-4)"]
+    lines += [
+        f"  mode {i + 1:2d}   {a:12.3f} {b:12.3f} {100 * (b / a - 1):10.4f}"
+        for i, (a, b) in enumerate(zip(f0, f1))
+    ]
+    lines += [
+        "",
+        f"largest frequency difference {100 * result.max_frequency_difference:.4f} % "
+        "(Table 2 is printed to 4 digits, which limits the D match to ~1e-4)",
+    ]
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
     return result
 

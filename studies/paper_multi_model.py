@@ -9,6 +9,7 @@ them off the measured shapes.
 
     python -m studies.paper_multi_model [--out DIR]
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -50,16 +51,28 @@ def run(out=None) -> MultiModel:
     folder = report_folder("paper_multi_model", out)
     write_report(result, folder / "fit")
     residual = dependency_plot(S, folder / "fig10b_dependency.png", "three configurations (paper Fig. 10b)")
-    header = f"  {'parameter':24s} {'correct':>9s} " + " ".join(f"{'step ' + str(i):>9s}" for i in range(len(result.history)))
-    rows = [f"  {p.name:24s} {display(p, truth.value(p)):9.4g} "
-            + " ".join(f"{display(p, it.values[j]):9.4g}" for it in result.history) for j, p in enumerate(parameters)]
-    lines = ["Multi-model identification of the three layers (paper section 4.5)", "",
-             f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 34.4)",
-             f"fit status: {result.message}; {result.iterations} iterations (paper: 4 steps)",
-             f"largest error against Table 1: {100 * max(errors):.2e} %", "",
-             "evolution of the properties (paper Table 6; GPa, nu dimensionless)", header, *rows, "",
-             f"Fig. 10b: column 1 against the best combination of the others: relative misfit {residual:.3g} "
-             "(independent columns)"]
+    header = f"  {'parameter':24s} {'correct':>9s} " + " ".join(
+        f"{'step ' + str(i):>9s}" for i in range(len(result.history))
+    )
+    rows = [
+        f"  {p.name:24s} {display(p, truth.value(p)):9.4g} "
+        + " ".join(f"{display(p, it.values[j]):9.4g}" for it in result.history)
+        for j, p in enumerate(parameters)
+    ]
+    lines = [
+        "Multi-model identification of the three layers (paper section 4.5)",
+        "",
+        f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 34.4)",
+        f"fit status: {result.message}; {result.iterations} iterations (paper: 4 steps)",
+        f"largest error against Table 1: {100 * max(errors):.2e} %",
+        "",
+        "evolution of the properties (paper Table 6; GPa, nu dimensionless)",
+        header,
+        *rows,
+        "",
+        f"Fig. 10b: column 1 against the best combination of the others: relative misfit {residual:.3g} "
+        "(independent columns)",
+    ]
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
     return MultiModel(cond, result, max(errors), residual)
 

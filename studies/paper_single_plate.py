@@ -4,6 +4,7 @@ sensitivity matrix is singular (condition number above 1e7; paper 6.76e9).
 
     python -m studies.paper_single_plate [--out DIR]
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -33,9 +34,9 @@ ENTRIES = {"11": (0, 0), "22": (1, 1), "12": (0, 1), "66": (2, 2)}
 class SinglePlate:
     condition_number: float
     fit: FitResult
-    max_parameter_error: float          # relative, identified vs Table 1
-    stiffness_difference_pct: dict      # (true - identified) / true, paper Table 5
-    dependency_residual: float          # Fig. 10a: 0 = column 1 is a combination of the others
+    max_parameter_error: float  # relative, identified vs Table 1
+    stiffness_difference_pct: dict  # (true - identified) / true, paper Table 5
+    dependency_residual: float  # Fig. 10a: 0 = column 1 is a combination of the others
 
 
 def run(out=None, iterations: int = 15) -> SinglePlate:
@@ -56,15 +57,22 @@ def run(out=None, iterations: int = 15) -> SinglePlate:
     write_report(result, folder / "fit")
     plot_convergence(result, folder / "fig3_convergence.png")
     residual = dependency_plot(S, folder / "fig10a_dependency.png", "one plate, 15 modes (paper Fig. 10a)")
-    lines = ["One plate, 15 frequencies, 12 unknown layer properties (paper section 2.2)", "",
-             f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 6.76e9; singular > 1e7)",
-             f"fit status: {result.message}",
-             f"RMS frequency error after {result.iterations} iterations: {100 * result.rms_rel_error:.2e} %",
-             f"largest layer-property error: {100 * max(errors):.1f} %", "",
-             "stiffness differences (true - identified) / true [%] (paper Table 5: D within 0.4 %, "
-             "A tens of percent, B hundreds)"]
+    lines = [
+        "One plate, 15 frequencies, 12 unknown layer properties (paper section 2.2)",
+        "",
+        f"condition number of the normalised sensitivity matrix: {cond:.3g} (paper 6.76e9; singular > 1e7)",
+        f"fit status: {result.message}",
+        f"RMS frequency error after {result.iterations} iterations: {100 * result.rms_rel_error:.2e} %",
+        f"largest layer-property error: {100 * max(errors):.1f} %",
+        "",
+        "stiffness differences (true - identified) / true [%] (paper Table 5: D within 0.4 %, "
+        "A tens of percent, B hundreds)",
+    ]
     lines += [f"  {k:4s} {v:10.3f}" for k, v in diff.items()]
-    lines += ["", f"Fig. 10a: column 1 against the best combination of the other 11: relative misfit {residual:.2e}"]
+    lines += [
+        "",
+        f"Fig. 10a: column 1 against the best combination of the other 11: relative misfit {residual:.2e}",
+    ]
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
     return SinglePlate(cond, result, max(errors), diff, residual)
 

@@ -15,6 +15,7 @@ modes in band (``tap_quirks.real_like_plate``).
 
     python -m studies.recording_chain [--out DIR]
 """
+
 from __future__ import annotations
 
 import json
@@ -73,20 +74,43 @@ VARIANTS = (
     Variant("clean", "the simulator's exact hits, full-precision CSV"),
     Variant("rounded_time", "time column printed with %.7g (DAQ export)", writer="rounded"),
     Variant("adc_counts", "24-bit integer counts on a 1200-count offset, no time column", writer="counts"),
-    Variant("hum", "50 Hz mains hum and 4 harmonics at 3 % of the response's peak",
-            lambda h, rng, i: with_hum(h, 50.0, 3e-2)),
-    Variant("bounce_rattle", "suspension bounce at 6 Hz and cable rattle below 15 Hz",
-            lambda h, rng, i: with_rattle(with_bounce(h), rng)),
-    Variant("one_clipped", "hit 1's force clipped at 70 % of its peak (rejected, the others used)",
-            lambda h, rng, i: clipped(h, "force") if i == 0 else h),
-    Variant("noisy", "response noise floor 30 dB under its first 0.1 s (lab range 5-40 dB)",
-            lambda h, rng, i: with_snr(h, 30.0, rng)),
-    Variant("very_noisy", "noise floor 20 dB under the response: close pairs merge into one peak each",
-            lambda h, rng, i: with_snr(h, 20.0, rng)),
-    Variant("all_clipped", "every hit's response clipped: nothing usable", lambda h, rng, i: clipped(h, "response"),
-            honest=False),
-    Variant("sensor_not_in_spec", "the 3 g accelerometer left out of the spec: a misfit to diagnose",
-            honest=False, sensor_in_spec=False),
+    Variant(
+        "hum",
+        "50 Hz mains hum and 4 harmonics at 3 % of the response's peak",
+        lambda h, rng, i: with_hum(h, 50.0, 3e-2),
+    ),
+    Variant(
+        "bounce_rattle",
+        "suspension bounce at 6 Hz and cable rattle below 15 Hz",
+        lambda h, rng, i: with_rattle(with_bounce(h), rng),
+    ),
+    Variant(
+        "one_clipped",
+        "hit 1's force clipped at 70 % of its peak (rejected, the others used)",
+        lambda h, rng, i: clipped(h, "force") if i == 0 else h,
+    ),
+    Variant(
+        "noisy",
+        "response noise floor 30 dB under its first 0.1 s (lab range 5-40 dB)",
+        lambda h, rng, i: with_snr(h, 30.0, rng),
+    ),
+    Variant(
+        "very_noisy",
+        "noise floor 20 dB under the response: close pairs merge into one peak each",
+        lambda h, rng, i: with_snr(h, 20.0, rng),
+    ),
+    Variant(
+        "all_clipped",
+        "every hit's response clipped: nothing usable",
+        lambda h, rng, i: clipped(h, "response"),
+        honest=False,
+    ),
+    Variant(
+        "sensor_not_in_spec",
+        "the 3 g accelerometer left out of the spec: a misfit to diagnose",
+        honest=False,
+        sensor_in_spec=False,
+    ),
 )
 
 
@@ -133,8 +157,9 @@ def run_variant(variant: Variant, folder, seed: int = 1, run_diagnosis: bool = T
         except MeasurementError as error:
             lines.append(f"peaks of {c.name} refused: {error}")
             write_text(folder / "report.txt", "\n".join(lines) + "\n")
-            return Outcome(variant.name, variant.honest, f"refused: {error}",
-                           seconds=time.perf_counter() - start_clock)
+            return Outcome(
+                variant.name, variant.honest, f"refused: {error}", seconds=time.perf_counter() - start_clock
+            )
         lines += [peaks.report(), ""]
         lists.append(peaks.to_frame()[["configuration", "frequency_hz", "std_hz", "damping_ratio"]])
         rejected += len(peaks.rejected)
@@ -143,8 +168,10 @@ def run_variant(variant: Variant, folder, seed: int = 1, run_diagnosis: bool = T
     start = start_model().with_attachments(sensor if variant.sensor_in_spec else [])
     measurements = parse_measurements(peak_list, start, "peaks.csv")
     result = fit(start, measurements)
-    z = {p.name: float((v - truth.value(p)) / s)
-         for p, v, s in zip(result.parameters, result.values, result.uncertainty.std, strict=True)}
+    z = {
+        p.name: float((v - truth.value(p)) / s)
+        for p, v, s in zip(result.parameters, result.values, result.uncertainty.std, strict=True)
+    }
     lines += [result.report(), "(identified - true) / std:"] + [f"  {n:24s} {v:+.2f}" for n, v in z.items()]
     selected: tuple[str, ...] = ()
     if run_diagnosis and result.status.value != "converged":
@@ -152,8 +179,17 @@ def run_variant(variant: Variant, folder, seed: int = 1, run_diagnosis: bool = T
         selected = tuple(c.kind for c in diagnosis.selected)
         lines += ["", diagnosis.report()]
     write_text(folder / "report.txt", "\n".join(lines) + "\n")
-    return Outcome(variant.name, variant.honest, "ok", len(peak_list), rejected, result.status.value, z, selected,
-                   time.perf_counter() - start_clock)
+    return Outcome(
+        variant.name,
+        variant.honest,
+        "ok",
+        len(peak_list),
+        rejected,
+        result.status.value,
+        z,
+        selected,
+        time.perf_counter() - start_clock,
+    )
 
 
 @dataclass(frozen=True)
@@ -175,34 +211,63 @@ def dense_plate(seed: int = 0) -> DensePlate:
     result = extract_peaks(hits)
     seconds = time.perf_counter() - clock
     f, std = result.table["frequency_hz"].to_numpy(), result.table["std_hz"].to_numpy()
-    truth = modes.frequencies_hz[(modes.frequencies_hz > result.band_hz[0]) & (modes.frequencies_hz < result.band_hz[1])]
+    truth = modes.frequencies_hz[
+        (modes.frequencies_hz > result.band_hz[0]) & (modes.frequencies_hz < result.band_hz[1])
+    ]
     found = sum(bool(np.any(np.abs(f - x) < 3 * np.maximum(std, 1e-9))) for x in truth)
     return DensePlate(len(truth), found, seconds)
 
 
-def run(out=None, variants=VARIANTS, seed: int = 1, run_diagnosis: bool = True,
-        with_dense_plate: bool = True) -> tuple[list[Outcome], DensePlate | None]:
+def run(
+    out=None, variants=VARIANTS, seed: int = 1, run_diagnosis: bool = True, with_dense_plate: bool = True
+) -> tuple[list[Outcome], DensePlate | None]:
     folder = report_folder("recording_chain", out)
     outcomes = [run_variant(v, folder / v.name, seed, run_diagnosis) for v in variants]
     dense = dense_plate() if with_dense_plate else None
-    lines = ["Recording chain: recordings -> peaks -> fit -> diagnose, per variant of the corpus", "",
-             f"{'variant':20s} {'honest':>6s} {'peaks':>5s} {'rejected':>8s} {'fit status':>14s} {'max |z|':>8s} "
-             f"{'diagnosed':>12s} {'s':>6s}"]
+    lines = [
+        "Recording chain: recordings -> peaks -> fit -> diagnose, per variant of the corpus",
+        "",
+        f"{'variant':20s} {'honest':>6s} {'peaks':>5s} {'rejected':>8s} {'fit status':>14s} {'max |z|':>8s} "
+        f"{'diagnosed':>12s} {'s':>6s}",
+    ]
     for o in outcomes:
         z = f"{o.max_z:.2f}" if o.max_z is not None else "-"
         status = o.status or o.peaks.split(":")[0]
-        lines.append(f"{o.variant:20s} {str(o.honest):>6s} {o.n_peaks:>5d} {o.rejected:>8d} {status:>14s} {z:>8s} "
-                     f"{','.join(o.selected) or '-':>12s} {o.seconds:>6.1f}")
+        lines.append(
+            f"{o.variant:20s} {str(o.honest):>6s} {o.n_peaks:>5d} {o.rejected:>8d} {status:>14s} {z:>8s} "
+            f"{','.join(o.selected) or '-':>12s} {o.seconds:>6.1f}"
+        )
     if dense is not None:
-        lines += ["", f"real-like plate: {dense.found} of {dense.in_band} modes in band found within 3 std "
-                      f"in {dense.seconds:.1f} s (5 hits x 2 s at 48 kHz)"]
+        lines += [
+            "",
+            f"real-like plate: {dense.found} of {dense.in_band} modes in band found within 3 std "
+            f"in {dense.seconds:.1f} s (5 hits x 2 s at 48 kHz)",
+        ]
     write_text(folder / "summary.txt", "\n".join(lines) + "\n")
-    write_text(folder / "summary.json", json.dumps({
-        "variants": [{"variant": o.variant, "honest": o.honest, "peaks": o.peaks, "n_peaks": o.n_peaks,
-                      "rejected": o.rejected, "status": o.status, "max_abs_z": o.max_z, "z": o.z,
-                      "selected": list(o.selected)} for o in outcomes],
-        "dense_plate": None if dense is None else {"in_band": dense.in_band, "found": dense.found},
-    }, indent=2) + "\n")
+    write_text(
+        folder / "summary.json",
+        json.dumps(
+            {
+                "variants": [
+                    {
+                        "variant": o.variant,
+                        "honest": o.honest,
+                        "peaks": o.peaks,
+                        "n_peaks": o.n_peaks,
+                        "rejected": o.rejected,
+                        "status": o.status,
+                        "max_abs_z": o.max_z,
+                        "z": o.z,
+                        "selected": list(o.selected),
+                    }
+                    for o in outcomes
+                ],
+                "dense_plate": None if dense is None else {"in_band": dense.in_band, "found": dense.found},
+            },
+            indent=2,
+        )
+        + "\n",
+    )
     return outcomes, dense
 
 

@@ -12,6 +12,7 @@ from the paper's Table 6 start, with the accelerometer in the spec as a lab know
 
     python -m studies.tap_test [--out DIR]
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -40,11 +41,11 @@ MODES = 8
 
 @dataclass(frozen=True)
 class TapTest:
-    true_hz: dict[str, np.ndarray]     # the truth's frequencies per configuration
-    peaks: pd.DataFrame                # the peak list the recordings gave
-    rejected: int                      # hits rejected (double hits)
+    true_hz: dict[str, np.ndarray]  # the truth's frequencies per configuration
+    peaks: pd.DataFrame  # the peak list the recordings gave
+    rejected: int  # hits rejected (double hits)
     fit: FitResult
-    z: dict[str, float]                # (identified - true) / std per parameter
+    z: dict[str, float]  # (identified - true) / std per parameter
 
 
 def modal_data(model: SpecimenModel, configuration: str, seed: int) -> Modes:
@@ -63,8 +64,9 @@ def run(out=None, seed: int = 1) -> TapTest:
     folder = report_folder("tap_test", out)
     lists, rejected, true_hz = [], 0, {}
     for k, c in enumerate(truth.specimen.configurations):
-        session = Session(modal_data(truth, c.name, seed + k), n_hits=5, seed=seed + k, double_hits=(2,),
-                          cut_short={4: 0.4})
+        session = Session(
+            modal_data(truth, c.name, seed + k), n_hits=5, seed=seed + k, double_hits=(2,), cut_short={4: 0.4}
+        )
         paths = []
         for i, hit in enumerate(session.hits()):
             paths.append(folder / "recordings" / c.name / f"hit{i + 1}.csv")
@@ -78,7 +80,10 @@ def run(out=None, seed: int = 1) -> TapTest:
     write_text(folder / "peaks.csv", peak_list.to_csv(index=False))
     start = start_model().with_attachments(sensor)
     result = fit(start, parse_measurements(peak_list, start, "peaks.csv"))
-    z = {p.name: (v - truth.value(p)) / s for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)}
+    z = {
+        p.name: (v - truth.value(p)) / s
+        for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+    }
     lines = ["Tap test: recordings -> peaks -> fit (the paper's plate, 3 g accelerometer)", ""]
     for name, f in true_hz.items():
         found = peak_list[peak_list["configuration"] == name]["frequency_hz"].to_numpy()

@@ -1,4 +1,5 @@
 """Shared fixtures: the reference data and the paper's plate (Table 1 properties)."""
+
 import json
 from pathlib import Path
 

@@ -1,5 +1,6 @@
 """Slips and bad paths a lab makes: each a one-line error naming the value and
 the fix, exit status 2, nothing written; or a documented sound behaviour."""
+
 import copy
 import os
 import tomllib
@@ -30,13 +31,26 @@ def edited(edit) -> dict:
     return data
 
 
-@pytest.mark.parametrize("edit,fragments", [
-    (lambda d: d["specimen"]["layers"][1].update(thickness_mm=0.0007), ["thickness_mm = 0.0007", "0.7, not 0.0007 m"]),
-    (lambda d: d["materials"]["brass"].update(nu12=0.9, G12_GPa=100 / 3.8), ["nu12 = 0.9", "isotropic", "< 0.5"]),
-    (lambda d: d["specimen"]["layers"][1].update(angle_deg=1e300), ["angle_deg = 1e+300", "360"]),
-    (lambda d: d["materials"].update(spare={**d["materials"]["steel"]}), ["[materials.spare]", "no layer uses it"]),
-    (lambda d: d.update(model=5), ["[model] = 5", "must be a table"]),
-], ids=["metres typed as mm", "isotropic nu 0.9", "angle 1e300", "identified but unused", "model = 5"])
+@pytest.mark.parametrize(
+    "edit,fragments",
+    [
+        (
+            lambda d: d["specimen"]["layers"][1].update(thickness_mm=0.0007),
+            ["thickness_mm = 0.0007", "0.7, not 0.0007 m"],
+        ),
+        (
+            lambda d: d["materials"]["brass"].update(nu12=0.9, G12_GPa=100 / 3.8),
+            ["nu12 = 0.9", "isotropic", "< 0.5"],
+        ),
+        (lambda d: d["specimen"]["layers"][1].update(angle_deg=1e300), ["angle_deg = 1e+300", "360"]),
+        (
+            lambda d: d["materials"].update(spare={**d["materials"]["steel"]}),
+            ["[materials.spare]", "no layer uses it"],
+        ),
+        (lambda d: d.update(model=5), ["[model] = 5", "must be a table"]),
+    ],
+    ids=["metres typed as mm", "isotropic nu 0.9", "angle 1e300", "identified but unused", "model = 5"],
+)
 def test_spec_slips(edit, fragments):
     with pytest.raises(SpecError) as info:
         parse_spec(edited(edit))
@@ -50,8 +64,11 @@ def test_api_moduli_in_gpa_where_pa_are_expected():
         Material("steel", 200, 200, 77, 0.3, 7850)
 
 
-@pytest.mark.parametrize("content,fragment", [("[specimen]\nname = 'x'\n".encode("utf-16"), "not UTF-8 text"),
-                                              (bytes(range(256)), "not UTF-8 text")], ids=["UTF-16", "binary"])
+@pytest.mark.parametrize(
+    "content,fragment",
+    [("[specimen]\nname = 'x'\n".encode("utf-16"), "not UTF-8 text"), (bytes(range(256)), "not UTF-8 text")],
+    ids=["UTF-16", "binary"],
+)
 def test_unreadable_spec_files(tmp_path, capsys, content, fragment):
     spec = tmp_path / "spec.toml"
     spec.write_bytes(content)

@@ -1,6 +1,7 @@
 """A campaign of bad and odd inputs, tried as a new user would: each once ended in a
 traceback or a silent wrong result; now each ends in a one-line error naming the value and
 the fix, or in a correct result, or is warned about where the user looks."""
+
 import json
 import math
 import os
@@ -45,20 +46,29 @@ def one_line_error(result, *fragments):
 
 # --- the API ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("options,fragment", [
-    (dict(modes=0), "ModelOptions.modes = 0"), (dict(modes=-2), "ModelOptions.modes = -2"),
-    (dict(modes=5.5), "ModelOptions.modes = 5.5"), (dict(divisions=1), "ModelOptions.divisions = 1"),
-])
+
+@pytest.mark.parametrize(
+    "options,fragment",
+    [
+        (dict(modes=0), "ModelOptions.modes = 0"),
+        (dict(modes=-2), "ModelOptions.modes = -2"),
+        (dict(modes=5.5), "ModelOptions.modes = 5.5"),
+        (dict(divisions=1), "ModelOptions.divisions = 1"),
+    ],
+)
 def test_model_options_out_of_range(options, fragment):
     with pytest.raises(OptionsError, match=fragment.replace(".", r"\.")):
         ModelOptions(**options)
 
 
-@pytest.mark.parametrize("options,fragment", [
-    (dict(max_iterations=-5), "FitOptions.max_iterations = -5"),
-    (dict(parameter_tolerance=math.nan), "FitOptions.parameter_tolerance = nan"),
-    (dict(max_log_step=0.0), "FitOptions.max_log_step = 0"),
-])
+@pytest.mark.parametrize(
+    "options,fragment",
+    [
+        (dict(max_iterations=-5), "FitOptions.max_iterations = -5"),
+        (dict(parameter_tolerance=math.nan), "FitOptions.parameter_tolerance = nan"),
+        (dict(max_log_step=0.0), "FitOptions.max_log_step = 0"),
+    ],
+)
 def test_fit_options_out_of_range(options, fragment):
     with pytest.raises(OptionsError, match=fragment.replace(".", r"\.")):
         FitOptions(**options)
@@ -82,10 +92,13 @@ def test_measurements_as_rows(files):
 
 # --- report folders ---------------------------------------------------------------------
 
+
 def test_report_into_the_current_folder_is_refused(files, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    one_line_error(run(identify_layers, ["fit", files.spec, files.measurements["labelled"], "--report", "."]),
-                   "is the current folder")
+    one_line_error(
+        run(identify_layers, ["fit", files.spec, files.measurements["labelled"], "--report", "."]),
+        "is the current folder",
+    )
     assert list(tmp_path.iterdir()) == [] and list(tmp_path.parent.glob(f".{tmp_path.name}.*")) == []
 
 
@@ -93,8 +106,16 @@ def test_two_reports_into_one_folder_at_once(files, tmp_path):
     """Two fits into the same report folder, the second started while the first runs:
     both end cleanly and the folder holds one whole report."""
     folder = tmp_path / "report"
-    argv = [sys.executable, "-m", "identify.cli", "fit", str(files.spec), str(files.measurements["labelled"]),
-            "--report", str(folder)]
+    argv = [
+        sys.executable,
+        "-m",
+        "identify.cli",
+        "fit",
+        str(files.spec),
+        str(files.measurements["labelled"]),
+        "--report",
+        str(folder),
+    ]
     first = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     time.sleep(0.8)
     second = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
@@ -106,6 +127,7 @@ def test_two_reports_into_one_folder_at_once(files, tmp_path):
 
 # --- plan-tests -------------------------------------------------------------------------
 
+
 def test_write_spec_onto_the_input_spec_is_refused(files, tmp_path):
     spec = tmp_path / "plate.toml"
     spec.write_text("# my notes\n" + files.spec.read_text())
@@ -115,8 +137,10 @@ def test_write_spec_onto_the_input_spec_is_refused(files, tmp_path):
 
 
 def test_sweep_with_an_empty_value_list_is_refused(files, tmp_path):
-    one_line_error(run(plan_tests, ["sweep", files.spec, "--vary", "thickness=", "--out", tmp_path / "sweep"]),
-                   "no values after '='")
+    one_line_error(
+        run(plan_tests, ["sweep", files.spec, "--vary", "thickness=", "--out", tmp_path / "sweep"]),
+        "no values after '='",
+    )
 
 
 def test_corrupt_cache_entries_are_solved_again(tmp_path):
@@ -148,14 +172,17 @@ def test_a_read_only_cache_folder(files, tmp_path):
     cache.mkdir()
     cache.chmod(0o555)
     try:
-        result = run(plan_tests, ["sweep", files.spec, "--cache", cache, "--vary", "thickness=0.5,1",
-                                  "--out", tmp_path / "sweep"])
+        result = run(
+            plan_tests,
+            ["sweep", files.spec, "--cache", cache, "--vary", "thickness=0.5,1", "--out", tmp_path / "sweep"],
+        )
         assert result.code == 0 and "is read-only" in result.err
     finally:
         cache.chmod(0o755)
 
 
 # --- silent results of the fit ----------------------------------------------------------
+
 
 def test_a_scatter_that_determines_nothing_is_not_converged(files, tmp_path):
     """std_hz = 1000 on every row: the frequencies fit, but every std exceeds its value;
@@ -176,6 +203,7 @@ def test_an_overstated_scatter_is_warned_about(files, tmp_path):
 
 
 # --- recordings -------------------------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def hits(files):
@@ -207,8 +235,14 @@ def test_the_same_hit_given_several_times_is_refused(files):
 def test_a_clipped_response_is_refused(hits, tmp_path):
     """A clipped channel is never silently used: every hit whose response holds its limit
     is rejected, naming the channel, and with every hit clipped ``peaks`` stops in one line."""
-    clipped = [h.assign(acceleration=h["acceleration"].clip(-0.2 * h["acceleration"].abs().max(),
-                                                            0.2 * h["acceleration"].abs().max())) for h in hits]
+    clipped = [
+        h.assign(
+            acceleration=h["acceleration"].clip(
+                -0.2 * h["acceleration"].abs().max(), 0.2 * h["acceleration"].abs().max()
+            )
+        )
+        for h in hits
+    ]
     one_line_error(run(identify_layers, ["peaks", *write(tmp_path, clipped), "--json"]), "response clipped")
     clean = run(identify_layers, ["peaks", *write(tmp_path, hits), "--json"])
     assert clean.code == 0 and not any("clipped" in note for note in json.loads(clean.out)["notes"])
@@ -216,8 +250,11 @@ def test_a_clipped_response_is_refused(hits, tmp_path):
 
 # --- plan-tests advice --------------------------------------------------------------------
 
-@pytest.mark.parametrize("length,width,cut", [(0.300, 0.015, (18.0, 15.0)), (0.150, 0.120, (144.0, 120.0)),
-                                              (0.150, 0.200, (150.0, 125.0))])
+
+@pytest.mark.parametrize(
+    "length,width,cut",
+    [(0.300, 0.015, (18.0, 15.0)), (0.150, 0.120, (144.0, 120.0)), (0.150, 0.200, (150.0, 125.0))],
+)
 def test_poisson_plate_advice_never_needs_a_larger_plate(length, width, cut):
     """Eq. 16 with length/width = 1.2: the plate to cut fits inside the one there is (a
     300 x 15 mm strip was told to become 300 x 299.5 mm)."""
@@ -280,8 +317,12 @@ def test_commands_run_with_one_blas_thread(monkeypatch):
 def test_output_into_a_closed_pipe_is_not_a_traceback(command):
     """``identify-layers peaks rec.wav | head -4`` ended in a BrokenPipeError traceback
     (a long output fails in a print, a short one at the interpreter's final flush)."""
-    child = subprocess.Popen([sys.executable, "-m", "identify.cli", *command], cwd=ROOT, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE)
+    child = subprocess.Popen(
+        [sys.executable, "-m", "identify.cli", *command],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     child.stdout.close()  # the reader is gone before the command writes
     err = child.stderr.read().decode()
     assert child.wait(timeout=120) in (0, 1), err

@@ -1,6 +1,7 @@
 """Decisions read codes, not the project's own messages: rewording a report must not
 change which properties are held or which fits count as singular.  A static check of
 every module outside ``identify/reporting`` (where text is rendered)."""
+
 import ast
 from pathlib import Path
 
@@ -25,23 +26,36 @@ def _text(node) -> bool:
 
 def _named(node, suffix: str) -> bool:
     return (isinstance(node, ast.Attribute) and node.attr.endswith(suffix)) or (
-        isinstance(node, ast.Name) and node.id.endswith(suffix))
+        isinstance(node, ast.Name) and node.id.endswith(suffix)
+    )
 
 
 def test_no_verdict_is_compared_with_text():
     """A verdict is compared with ``Verdict`` members, never with its wording."""
-    found = [f"{path.relative_to(ROOT)}:{node.lineno}" for path, tree in _modules() for node in ast.walk(tree)
-             if isinstance(node, ast.Compare) and any(_named(x, "verdict") for x in [node.left, *node.comparators])
-             and any(_text(x) for x in [node.left, *node.comparators])]
+    found = [
+        f"{path.relative_to(ROOT)}:{node.lineno}"
+        for path, tree in _modules()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Compare)
+        and any(_named(x, "verdict") for x in [node.left, *node.comparators])
+        and any(_text(x) for x in [node.left, *node.comparators])
+    ]
     assert found == []
 
 
 def test_no_flag_is_parsed():
     """Whether a property is at a bound is ``Uncertainty.bounded``, not its flag's text."""
-    found = [f"{path.relative_to(ROOT)}:{node.lineno}" for path, tree in _modules() for node in ast.walk(tree)
-             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-             and node.func.attr in ("startswith", "endswith") and node.args and _text(node.args[0])
-             and node.args[0].value.startswith(("at bound", "weakly", "not identifiable", "singular"))]
+    found = [
+        f"{path.relative_to(ROOT)}:{node.lineno}"
+        for path, tree in _modules()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr in ("startswith", "endswith")
+        and node.args
+        and _text(node.args[0])
+        and node.args[0].value.startswith(("at bound", "weakly", "not identifiable", "singular"))
+    ]
     assert found == []
 
 
@@ -49,7 +63,11 @@ def test_the_codes_render_as_before(paper_specimen):
     """The codes print as the words reports and ``--json`` always used, and the at-limit
     code agrees with the flag it replaces in decisions."""
     assert [condition_verdict(c) for c in (10.0, 1e5, 1e8, float("nan"))] == [
-        "good", "ill-conditioned", "singular", "singular"]
+        "good",
+        "ill-conditioned",
+        "singular",
+        "singular",
+    ]
     assert f"{Verdict.ILL_CONDITIONED:<15s}|" == "ill-conditioned|" and str(Verdict.SINGULAR) == "singular"
     nu12 = Parameter("nu12", "steel")
     steel = paper_specimen.materials["steel"]
@@ -67,6 +85,7 @@ def test_no_message_is_searched_for_a_phrase():
     """No module outside ``identify/reporting`` tests a warning, note, message, flag or
     reason for a phrase (``"..." in w``, ``w.startswith("...")``): what a decision needs
     is a field or a code of the result, so that rewording a message changes no answer."""
+
     def message(node) -> bool:
         name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
         return name in MESSAGES
@@ -74,11 +93,18 @@ def test_no_message_is_searched_for_a_phrase():
     found = []
     for path, tree in _modules():
         for node in ast.walk(tree):
-            contains = (isinstance(node, ast.Compare) and _text(node.left)
-                        and any(isinstance(op, (ast.In, ast.NotIn)) for op in node.ops)
-                        and any(message(c) for c in node.comparators))
-            prefixed = (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                        and node.func.attr in ("startswith", "endswith") and message(node.func.value))
+            contains = (
+                isinstance(node, ast.Compare)
+                and _text(node.left)
+                and any(isinstance(op, (ast.In, ast.NotIn)) for op in node.ops)
+                and any(message(c) for c in node.comparators)
+            )
+            prefixed = (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr in ("startswith", "endswith")
+                and message(node.func.value)
+            )
             if contains or prefixed:
                 found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert found == []

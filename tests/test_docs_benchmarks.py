@@ -1,5 +1,6 @@
 """The accuracy and speed page is `make bench`'s output: every benchmark module runs in
 `python -m benchmarks`, and the committed page has a section from each."""
+
 from pathlib import Path
 
 from benchmarks.__main__ import PAGE, SECTIONS
@@ -16,4 +17,6 @@ def test_the_committed_page_has_every_section():
     text = PAGE.read_text()
     assert "Written by `make bench`" in text
     for heading, _ in SECTIONS:
-        assert f"## {heading}\n\n```\n" in text, f"docs/generated/benchmarks.md lacks '{heading}': run make bench"
+        assert f"## {heading}\n\n```\n" in text, (
+            f"docs/generated/benchmarks.md lacks '{heading}': run make bench"
+        )

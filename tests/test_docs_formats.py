@@ -1,4 +1,5 @@
 """The measurement CSV's columns in docs/formats.md are the ones the reader accepts."""
+
 import re
 from pathlib import Path
 

@@ -3,6 +3,7 @@ command runs on the bundled example, and every key path it prints must be on the
 and every top-level key the page gives must be printed. (Nested keys of lists that are
 empty on the bundled example, e.g. the rounds of a diagnosis at the noise level, are
 checked where a test produces them.)"""
+
 import json
 import re
 import tomllib
@@ -15,7 +16,14 @@ import pytest
 from designer.cli import main as plan_tests
 from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
-from identify.recordings.tap_simulation import Modes, Session, TapOptions, roving_hits, write_csv, write_roving
+from identify.recordings.tap_simulation import (
+    Modes,
+    Session,
+    TapOptions,
+    roving_hits,
+    write_csv,
+    write_roving,
+)
 
 DOC = Path(__file__).parent.parent / "docs" / "json.md"
 MATERIALS = set(tomllib.loads(Path(COATED_PLATE).read_text())["materials"])
@@ -60,11 +68,24 @@ def paths(value, prefix: str = "") -> set[str]:
 def _roving_test(folder: Path) -> list[str]:
     """A small roving-hammer test on disk (two modes of a 100 x 60 mm plate, 3 x 2 points,
     two hits each): the arguments of ``peaks --points``."""
-    points = pd.DataFrame({"point": [f"P{k}" for k in range(6)], "x_mm": [10.0, 50.0, 90.0] * 2,
-                           "y_mm": [10.0] * 3 + [50.0] * 3})
+    points = pd.DataFrame(
+        {
+            "point": [f"P{k}" for k in range(6)],
+            "x_mm": [10.0, 50.0, 90.0] * 2,
+            "y_mm": [10.0] * 3 + [50.0] * 3,
+        }
+    )
     shapes = [lambda x, y: np.cos(np.pi * x / 100), lambda x, y: np.cos(np.pi * y / 60) + 0.2 * x / 100]
-    hits = roving_hits([300.0, 520.0], [0.01, 0.01], shapes, (20.0, 15.0), points, hits=2, seed=1,
-                       options=TapOptions(sample_rate=4000.0, duration_s=1.0))
+    hits = roving_hits(
+        [300.0, 520.0],
+        [0.01, 0.01],
+        shapes,
+        (20.0, 15.0),
+        points,
+        hits=2,
+        seed=1,
+        options=TapOptions(sample_rate=4000.0, duration_s=1.0),
+    )
     write_roving(hits, folder)
     points.to_csv(folder / "points.csv", index=False)
     return ["--points", str(folder / "points.csv"), "--band", "150", "900"]
@@ -75,7 +96,9 @@ def run(command: str, tmp_path, capsys) -> dict:
     if args == ["peaks", "--points"]:
         args = ["peaks", *_roving_test(tmp_path)]
     if args == ["peaks"]:
-        modes = Modes(np.array([129.2, 191.6, 238.8]), np.array([0.005, 0.006, 0.008]), np.array([1.0, -0.7, 0.4]))
+        modes = Modes(
+            np.array([129.2, 191.6, 238.8]), np.array([0.005, 0.006, 0.008]), np.array([1.0, -0.7, 0.4])
+        )
         for i, hit in enumerate(Session(modes, n_hits=3, seed=3, double_hits=(1,)).hits()):
             write_csv(hit, tmp_path / f"hit{i + 1}.csv")
             args.append(str(tmp_path / f"hit{i + 1}.csv"))
@@ -88,7 +111,7 @@ def run(command: str, tmp_path, capsys) -> dict:
 def test_every_key_printed_is_documented_and_back(command, tmp_path, capsys):
     doc = documented()[command]
     printed = paths(run(command, tmp_path, capsys))
-    implied = {p[:m.start()] for p in doc for m in re.finditer(r"\.|\[\]", p)}  # a.b.c documents a.b
+    implied = {p[: m.start()] for p in doc for m in re.finditer(r"\.|\[\]", p)}  # a.b.c documents a.b
     missing = sorted(printed - doc - implied)
     assert not missing, f"{command} --json prints keys docs/json.md does not give: {missing}"
     top_doc = {p for p in doc if "." not in p and "[]" not in p}
@@ -97,7 +120,13 @@ def test_every_key_printed_is_documented_and_back(command, tmp_path, capsys):
 
 
 def test_every_command_is_documented():
-    assert set(documented()) == {"identify-layers predict", "identify-layers peaks", "identify-layers peaks --points",
-                                 "identify-layers fit",
-                                 "identify-layers compare", "identify-layers diagnose", "plan-tests check",
-                                 "plan-tests recommend"}
+    assert set(documented()) == {
+        "identify-layers predict",
+        "identify-layers peaks",
+        "identify-layers peaks --points",
+        "identify-layers fit",
+        "identify-layers compare",
+        "identify-layers diagnose",
+        "plan-tests check",
+        "plan-tests recommend",
+    }

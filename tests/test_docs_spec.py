@@ -6,6 +6,7 @@ effect's keys); the reference's are read from its tables, one table per section.
 in one and not the other fails, and so does a key of the bundled spec the reference
 does not give.
 """
+
 import re
 import sys
 import tomllib
@@ -67,6 +68,7 @@ def accepted(monkeypatch) -> dict[str, set[str]]:
         def check_keys(table, allowed, where, *args):
             seen.setdefault(normalise(where), set()).update(allowed)
             return original(table, allowed, where, *args)
+
         return check_keys
 
     for module in (fem.spec, fem.design_space):
@@ -82,15 +84,28 @@ def accepted(monkeypatch) -> dict[str, set[str]]:
 
 def test_every_table_of_the_validator_is_documented_key_for_key(monkeypatch):
     validator, reference = accepted(monkeypatch), documented()
-    expected_tables = {"spec", "[specimen]", "[specimen].layers", "[materials.NAME]", "[materials.NAME].bounds",
-                       "[[configurations]]", "[model]", "[design]", "[design].target_std_rel"}
-    assert expected_tables <= set(validator), f"the spec used here no longer reaches: {expected_tables - set(validator)}"
+    expected_tables = {
+        "spec",
+        "[specimen]",
+        "[specimen].layers",
+        "[materials.NAME]",
+        "[materials.NAME].bounds",
+        "[[configurations]]",
+        "[model]",
+        "[design]",
+        "[design].target_std_rel",
+    }
+    assert expected_tables <= set(validator), (
+        f"the spec used here no longer reaches: {expected_tables - set(validator)}"
+    )
     for table in sorted(set(validator) | set(reference)):
         assert table in reference, f"{table} is validated but has no section in docs/spec.md"
         assert table in validator, f"docs/spec.md documents {table}, which the validator does not check"
         missing, extra = validator[table] - reference[table], reference[table] - validator[table]
         assert not missing, f"{table}: keys accepted but not documented in docs/spec.md: {sorted(missing)}"
-        assert not extra, f"{table}: keys documented in docs/spec.md but refused by the validator: {sorted(extra)}"
+        assert not extra, (
+            f"{table}: keys documented in docs/spec.md but refused by the validator: {sorted(extra)}"
+        )
 
 
 def test_every_key_of_the_bundled_spec_is_documented():
@@ -103,8 +118,12 @@ def test_every_key_of_the_bundled_spec_is_documented():
         used |= {("[materials.NAME]", key) for key in table}
     for configuration in data["configurations"]:
         used |= {("[[configurations]]", key) for key in configuration}
-        used |= {("[specimen].layers", key) for side in ("top", "bottom") for layer in configuration.get(side, [])
-                 for key in layer}
+        used |= {
+            ("[specimen].layers", key)
+            for side in ("top", "bottom")
+            for layer in configuration.get(side, [])
+            for key in layer
+        }
     used |= {("[model]", key) for key in data["model"]} | {("[design]", key) for key in data["design"]}
     missing = sorted(f"{table}.{key}" for table, key in used if key not in reference.get(table, set()))
     assert not missing, f"keys of the bundled spec missing from docs/spec.md: {missing}"
@@ -119,7 +138,9 @@ def test_the_check_fails_on_a_missing_key(monkeypatch, tmp_path):
         test_every_table_of_the_validator_is_documented_key_for_key(monkeypatch)
 
 
-@pytest.mark.parametrize("key", ["bounds", "E1_GPa_std", "thickness_mm_std", "theory", "layer_groups", "E3_GPa",
-                                 "identify", "mass_g"])
+@pytest.mark.parametrize(
+    "key",
+    ["bounds", "E1_GPa_std", "thickness_mm_std", "theory", "layer_groups", "E3_GPa", "identify", "mass_g"],
+)
 def test_keys_added_since_the_first_release_are_described(key):
     assert f"| `{key}` |" in DOC.read_text()

@@ -1,5 +1,6 @@
 """The tutorials in docs/examples run as written, each checked on its key number (as
 scikit-fem tests its examples)."""
+
 import importlib.util
 from pathlib import Path
 
@@ -17,7 +18,14 @@ def load(name: str):
 
 
 def test_every_example_is_tested():
-    tested = {"paper_plate", "recordings_to_layers", "hidden_sensor", "planning", "soft_bond_line", "roving_hammer"}
+    tested = {
+        "paper_plate",
+        "recordings_to_layers",
+        "hidden_sensor",
+        "planning",
+        "soft_bond_line",
+        "roving_hammer",
+    }
     assert {p.stem for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -80,17 +88,19 @@ def test_roving_hammer(tmp_path):
     assert result.converged and result.peaks.matched.all()
     assert (tmp_path / "report" / "shape_maps.png").exists()
     truth = identify.load_spec(tmp_path / "truth.toml")
-    measured = load_shapes(tmp_path / "shapes.csv", truth, identify.load_measurements(tmp_path / "peaks.csv", truth))
+    measured = load_shapes(
+        tmp_path / "shapes.csv", truth, identify.load_measurements(tmp_path / "peaks.csv", truth)
+    )
     zeta = np.linspace(0.004, 0.007, example.MODES)  # the tutorial's damping ratios
     checked = 0
     for name in measured.configurations:
         solution = truth.solve(name)
-        f, shapes = solution.frequencies_hz[:example.MODES], solution.modes.shapes[:, :example.MODES]
+        f, shapes = solution.frequencies_hz[: example.MODES], solution.modes.shapes[:, : example.MODES]
         x, y = np.meshgrid(np.linspace(0, 0.15, 31), np.linspace(0, 0.15, 31))
         largest = np.abs(deflection_operator(solution.units, x.ravel(), y.ravel()) @ shapes).max(axis=0)
         seen = np.abs(deflection_operator(solution.units, [0.125], [0.110]) @ shapes)[0] / largest
         for shape in measured.shapes_of(measured.of(name)):
-            mac = point_mac(shape_at_points(solution, shape), shape.amplitude)[:example.MODES]
+            mac = point_mac(shape_at_points(solution, shape), shape.amplitude)[: example.MODES]
             j = int(np.argmax(mac))
             gap = np.min(np.abs(np.delete(f, j) / f[j] - 1)) / zeta[j]
             if gap >= 2 and seen[j] >= 0.02:

@@ -1,6 +1,7 @@
 """The house: no import circle among the project's modules, counting the imports inside
 functions and under ``TYPE_CHECKING`` (a circle dodged by a late import is still a
 circle), and no folder of the packages holding more than ``MAX_MODULES`` modules."""
+
 import ast
 from pathlib import Path
 
@@ -40,9 +41,13 @@ def import_graph(modules) -> dict[str, set[str]]:
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:
-                    base = ".".join(here[: len(here) - node.level + 1] + ([node.module] if node.module else []))
-                targets |= {known(f"{base}.{alias.name}") if f"{base}.{alias.name}" in modules else known(base)
-                            for alias in node.names}
+                    base = ".".join(
+                        here[: len(here) - node.level + 1] + ([node.module] if node.module else [])
+                    )
+                targets |= {
+                    known(f"{base}.{alias.name}") if f"{base}.{alias.name}" in modules else known(base)
+                    for alias in node.names
+                }
         graph[name] = targets - {None, name}
     return graph
 
@@ -87,7 +92,9 @@ def test_the_graph_counts_late_and_relative_imports(tmp_path):
     for name in ("pkg/__init__.py", "pkg/sub/__init__.py", "pkg/c.py"):
         (tmp_path / name).write_text("")
     (tmp_path / "pkg" / "a.py").write_text("from .sub import b\n")
-    (tmp_path / "pkg" / "sub" / "b.py").write_text("def f():\n    from .. import a\n    from pkg.c import x\n")
+    (tmp_path / "pkg" / "sub" / "b.py").write_text(
+        "def f():\n    from .. import a\n    from pkg.c import x\n"
+    )
     graph = import_graph(project_modules(tmp_path, ("pkg",)))
     assert graph["pkg.sub.b"] == {"pkg.a", "pkg.c"}
     assert cycles(graph) == [["pkg.a", "pkg.sub.b"]]
@@ -99,7 +106,10 @@ def test_no_import_circles():
 
 
 def test_no_folder_holds_more_than_max_modules():
-    sizes = {str(init.parent.relative_to(ROOT)): len(list(init.parent.glob("*.py")))
-             for package in ("fem", "identify", "designer") for init in (ROOT / package).rglob("__init__.py")}
+    sizes = {
+        str(init.parent.relative_to(ROOT)): len(list(init.parent.glob("*.py")))
+        for package in ("fem", "identify", "designer")
+        for init in (ROOT / package).rglob("__init__.py")
+    }
     assert len(sizes) >= 10 and all(sizes.values())
     assert {folder: n for folder, n in sizes.items() if n > MAX_MODULES} == {}

@@ -1,5 +1,6 @@
 """One model object from the spec: every command and the API see the same
 model, the spec's fixed effects included, and a bad [design] table stops them all."""
+
 import copy
 import json
 import re
@@ -22,6 +23,7 @@ BASE = tomllib.loads(COATED_PLATE.read_text())
 
 def toml_text(data: dict) -> str:
     """A minimal TOML writer for the spec dicts used here (tables, arrays of tables)."""
+
     def value(v):
         if isinstance(v, bool):
             return "true" if v else "false"
@@ -50,8 +52,10 @@ def toml_text(data: dict) -> str:
 def effects_spec(tmp_path_factory) -> Path:
     """The bundled example with a 30 g sensor and transverse shear switched on in the spec."""
     data = copy.deepcopy(BASE)
-    data["effects"] = [{"kind": "point_mass", "mass_g": 30.0, "x_mm": 125.0, "y_mm": 110.0},
-                       {"kind": "transverse_shear"}]
+    data["effects"] = [
+        {"kind": "point_mass", "mass_g": 30.0, "x_mm": 125.0, "y_mm": 110.0},
+        {"kind": "transverse_shear"},
+    ]
     path = tmp_path_factory.mktemp("spec") / "with_effects.toml"
     path.write_text(toml_text(data))
     return path
@@ -68,7 +72,9 @@ def test_predict_check_fit_and_api_agree_with_fixed_effects(effects_spec, capsys
     assert api["original"][0] < 0.97 * bare["original"][0], "the sensor lowers the first mode"
 
     assert identify_layers(["predict", str(effects_spec), "--json"]) == 0
-    predicted = {c["name"]: c["frequencies_hz"] for c in json.loads(capsys.readouterr().out)["configurations"]}
+    predicted = {
+        c["name"]: c["frequencies_hz"] for c in json.loads(capsys.readouterr().out)["configurations"]
+    }
     assert plan_tests(["check", str(effects_spec), "--json"]) in (0, 1)
     checked = {c["name"]: c["frequencies_hz"] for c in json.loads(capsys.readouterr().out)["configurations"]}
     for name, f in api.items():
@@ -77,7 +83,11 @@ def test_predict_check_fit_and_api_agree_with_fixed_effects(effects_spec, capsys
 
     # fit starts from the spec's values: with the predicted frequencies as data, its start
     # reproduces them (RMS error ~1e-12) only if it models the same effects.
-    rows = [{"configuration": n, "mode": i + 1, "frequency_hz": v} for n, f in api.items() for i, v in enumerate(f)]
+    rows = [
+        {"configuration": n, "mode": i + 1, "frequency_hz": v}
+        for n, f in api.items()
+        for i, v in enumerate(f)
+    ]
     csv = tmp_path / "predicted.csv"
     pd.DataFrame(rows).to_csv(csv, index=False)
     assert identify_layers(["fit", str(effects_spec), str(csv), "--json"]) == 0
@@ -86,16 +96,32 @@ def test_predict_check_fit_and_api_agree_with_fixed_effects(effects_spec, capsys
     assert out["iterations"] == 0 or out["rms_rel_error"] < 1e-9
 
 
-@pytest.mark.parametrize("argv", [["predict"], ["fit", "DATA"], ["compare", "DATA"], ["diagnose", "DATA"],
-                                  ["check"], ["recommend"], ["sweep", "--out", "OUT"]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["predict"],
+        ["fit", "DATA"],
+        ["compare", "DATA"],
+        ["diagnose", "DATA"],
+        ["check"],
+        ["recommend"],
+        ["sweep", "--out", "OUT"],
+    ],
+)
 def test_a_bad_design_table_stops_every_command(argv, capsys, tmp_path):
     data = copy.deepcopy(BASE)
     data["design"]["band_hz"] = "wide"
     spec = tmp_path / "bad_design.toml"
     spec.write_text(toml_text(data))
     command, *rest = argv
-    rest = [str(identify.examples.COATED_PLATE_MEASURED) if a == "DATA" else str(tmp_path / "out") if a == "OUT"
-            else a for a in rest]
+    rest = [
+        str(identify.examples.COATED_PLATE_MEASURED)
+        if a == "DATA"
+        else str(tmp_path / "out")
+        if a == "OUT"
+        else a
+        for a in rest
+    ]
     tool = plan_tests if command in ("check", "recommend", "sweep") else identify_layers
     assert tool([command, str(spec), *rest]) == 2
     err = capsys.readouterr().err
@@ -105,9 +131,12 @@ def test_a_bad_design_table_stops_every_command(argv, capsys, tmp_path):
 def test_no_consumer_applies_effects_by_hand():
     """Only the spec loader switches on the spec's effects: no module outside fem/ (and no
     test) imports apply_fixed."""
-    offenders = [str(p.relative_to(ROOT)) for folder in ("identify", "designer", "studies", "benchmarks", "tests")
-                 for p in (ROOT / folder).rglob("*.py")
-                 if re.search(r"\bapply_fixed\b", p.read_text()) and p.name != Path(__file__).name]
+    offenders = [
+        str(p.relative_to(ROOT))
+        for folder in ("identify", "designer", "studies", "benchmarks", "tests")
+        for p in (ROOT / folder).rglob("*.py")
+        if re.search(r"\bapply_fixed\b", p.read_text()) and p.name != Path(__file__).name
+    ]
     assert offenders == []
 
 
@@ -120,5 +149,12 @@ def test_public_api_results_report_and_export(capsys):
         view = result._repr_html_()
         # identify's views are the HTML report's tables; the planner's the text report
         assert "<table" in view if not isinstance(result, designer.CheckResult) else view.startswith("<pre>")
-    assert set(identify.__all__) >= {"load_spec", "load_measurements", "predict", "fit", "compare", "diagnose"}
+    assert set(identify.__all__) >= {
+        "load_spec",
+        "load_measurements",
+        "predict",
+        "fit",
+        "compare",
+        "diagnose",
+    }
     assert set(designer.__all__) >= {"check", "recommend", "sweep"}

@@ -1,6 +1,7 @@
 """Outputs that never half-exist: report folders written whole, interrupted
 runs that leave the previous report or none, a resumable sweep, and bad output paths
 refused in one line before any work."""
+
 import hashlib
 import os
 import signal
@@ -22,8 +23,13 @@ ROOT = Path(__file__).parent.parent
 
 def spawn(tool: str, *argv, env=None) -> subprocess.Popen:
     module = {"identify-layers": "identify.cli", "plan-tests": "designer.cli"}[tool]
-    return subprocess.Popen([sys.executable, "-m", module, *map(str, argv)], cwd=ROOT, env={**os.environ, **(env or {})},
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    return subprocess.Popen(
+        [sys.executable, "-m", module, *map(str, argv)],
+        cwd=ROOT,
+        env={**os.environ, **(env or {})},
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
 
 
 def wait_for(condition, process, timeout=120.0):
@@ -42,7 +48,9 @@ def contents(folder: Path) -> dict[str, str]:
 
 
 def temporaries(folder: Path) -> list[Path]:
-    return list(folder.parent.glob(f".{folder.name}.tmp-*")) + list(folder.parent.glob(f".{folder.name}.old-*"))
+    return list(folder.parent.glob(f".{folder.name}.tmp-*")) + list(
+        folder.parent.glob(f".{folder.name}.old-*")
+    )
 
 
 @pytest.mark.parametrize("signal_number", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
@@ -128,8 +136,10 @@ def test_bad_report_paths_are_refused_before_work(tmp_path, capsys, target):
     else:
         (tmp_path / "file").write_text("keep")
         path = tmp_path / "file" / "report"
-    for tool, argv in ((identify_layers, ["fit", "--report", str(path)]),
-                       (plan_tests, ["sweep", "--out", str(path), "--no-cache"])):
+    for tool, argv in (
+        (identify_layers, ["fit", "--report", str(path)]),
+        (plan_tests, ["sweep", "--out", str(path), "--no-cache"]),
+    ):
         assert tool(argv) == 2
         err = capsys.readouterr().err
         assert err.startswith("error: report folder") and err.count("\n") == 1

@@ -3,6 +3,7 @@ parser, the recording readers or the peak-list matcher, the answer is a result o
 one-line error of the project's family (``LayerIdError``, a ``ValueError``), never another
 exception.  Inputs are the bundled spec and measurements with one value replaced by any
 TOML-like value, tables of arbitrary cells, and arbitrary bytes as recording files."""
+
 import copy
 import math
 import tempfile
@@ -27,11 +28,19 @@ MODEL = load_spec(COATED_PLATE)
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 #: Any value a TOML document can hold (TOML has no null; numbers include the awkward ones).
-scalars = st.one_of(st.booleans(), st.integers(-10**12, 10**12),
-                    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=12))
-toml_values = st.recursive(scalars, lambda inner: st.one_of(st.lists(inner, max_size=3),
-                                                            st.dictionaries(st.text(max_size=8), inner, max_size=3)),
-                           max_leaves=6)
+scalars = st.one_of(
+    st.booleans(),
+    st.integers(-(10**12), 10**12),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=12),
+)
+toml_values = st.recursive(
+    scalars,
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=3), st.dictionaries(st.text(max_size=8), inner, max_size=3)
+    ),
+    max_leaves=6,
+)
 
 
 def paths(node, prefix=()):
@@ -93,9 +102,13 @@ def test_spec_of_any_document(value):
         one_line(exc)
 
 
-cells = st.one_of(st.none(), st.floats(allow_nan=True, allow_infinity=True), st.integers(-10, 10**6),
-                  st.sampled_from(["original", "brass_top", "brass_bottom", "(1,2)", "", " ", "nan", "1e3"]),
-                  st.text(max_size=6))
+cells = st.one_of(
+    st.none(),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-10, 10**6),
+    st.sampled_from(["original", "brass_top", "brass_bottom", "(1,2)", "", " ", "nan", "1e3"]),
+    st.text(max_size=6),
+)
 COLUMNS = ["configuration", "mode", "frequency_hz", "std_hz", "label", "damping_ratio"]
 
 
@@ -109,8 +122,11 @@ def test_measurements_of_any_rows(rows):
 
 
 @SETTINGS
-@given(st.binary(max_size=400), st.sampled_from([read_csv, read_wav, read_uff]),
-       st.one_of(st.none(), st.floats(allow_nan=True, allow_infinity=True)))
+@given(
+    st.binary(max_size=400),
+    st.sampled_from([read_csv, read_wav, read_uff]),
+    st.one_of(st.none(), st.floats(allow_nan=True, allow_infinity=True)),
+)
 def test_recording_readers_on_any_bytes(content, reader, sample_rate):
     suffix = {read_csv: ".csv", read_wav: ".wav", read_uff: ".uff"}[reader]
     with tempfile.TemporaryDirectory() as folder:

@@ -1,4 +1,5 @@
 """The README's Python example runs as written and says what it claims."""
+
 import re
 from pathlib import Path
 

@@ -1,5 +1,6 @@
 """The repository documents itself: no tracked file points to a folder outside it (the
 team's notes, a sibling checkout) or to a tracker number a user cannot see."""
+
 import re
 import subprocess
 from pathlib import Path
@@ -8,8 +9,19 @@ import pytest
 
 ROOT = Path(__file__).parent.parent
 # Built from parts so that this file does not match itself.
-OUTSIDE = re.compile("|".join([r"\.\./" + "shared", "shared" + " folder", "shared" + "/", "DESIGN" + r"\.md",
-                               r"\bissues? #?\d+", r"/" + "work/"]), re.I)
+OUTSIDE = re.compile(
+    "|".join(
+        [
+            r"\.\./" + "shared",
+            "shared" + " folder",
+            "shared" + "/",
+            "DESIGN" + r"\.md",
+            r"\bissues? #?\d+",
+            r"/" + "work/",
+        ]
+    ),
+    re.I,
+)
 
 
 def tracked_files() -> list[Path]:
@@ -35,7 +47,13 @@ def test_no_file_refers_outside_the_repository_or_to_a_tracker():
 
 def test_the_pattern_catches_what_it_should():
     """The check can fail: each kind of reference it looks for is caught."""
-    for line in ("see DESIGN" + ".md", "the team's shared" + " folder", "(iss" + "ue 12)", "Iss" + "ues 4 and 11",
-                 "../" + "shared" + "/reference", "/" + "work/" + "shared" + "/seed"):
+    for line in (
+        "see DESIGN" + ".md",
+        "the team's shared" + " folder",
+        "(iss" + "ue 12)",
+        "Iss" + "ues 4 and 11",
+        "../" + "shared" + "/reference",
+        "/" + "work/" + "shared" + "/seed",
+    ):
         assert OUTSIDE.search(line), line
     assert not OUTSIDE.search("a shared bond line; tissue 3")

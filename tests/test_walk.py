@@ -5,6 +5,7 @@ and --report output: exit status 0, 1 or 2, no traceback, strict JSON, a report 
 whole or absent, CSV without NaN.  The cross product is sampled: every input meets
 ``fit --json``, every output meets the labelled and peak-list inputs, every other command
 meets the inputs that stress it.  The --effect kinds are walked in test_walk_effects.py."""
+
 import pytest
 
 from designer.cli import main as plan_tests
@@ -66,7 +67,8 @@ def test_peak_list_residual_rows_are_null_not_nan(files):
     """A spurious peak's row: matched false, no model mode, no model frequency, no error,
     and a note naming the nearest mode."""
     rows = strict_json(walk(identify_layers, ["fit", files.spec, files.measurements["peaks"], "--json"]).out)[
-        "residuals"]
+        "residuals"
+    ]
     left_out = [r for r in rows if not r["matched"]]
     assert sorted(r["measured_hz"] for r in left_out) == [60.0, 560.0]
     assert all(r["mode"] is None and r["model_hz"] is None and r["rel_error"] is None for r in left_out)
@@ -74,8 +76,10 @@ def test_peak_list_residual_rows_are_null_not_nan(files):
     assert all(isinstance(r["mode"], int) and r["note"] == "" for r in rows if r["matched"])
 
 
-@pytest.mark.parametrize("measured,output", [("labelled", "--json"), ("peaks", "--json"), ("gap", "text"),
-                                             ("peaks", "--report"), ("kHz", "--json")])
+@pytest.mark.parametrize(
+    "measured,output",
+    [("labelled", "--json"), ("peaks", "--json"), ("gap", "text"), ("peaks", "--report"), ("kHz", "--json")],
+)
 @pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_compare(files, tmp_path, measured, output):
     """A valid input is compared, whatever its fit's status: exit 0 or 1, never the
@@ -103,8 +107,11 @@ def test_peaks(files, tmp_path, output):
     assert (tmp_path / "peaks.csv").exists()
 
 
-@pytest.mark.parametrize("argv", [["check"], ["check", "--json"], ["recommend", "--json"], ["recommend"]],
-                         ids=["check", "check --json", "recommend --json", "recommend"])
+@pytest.mark.parametrize(
+    "argv",
+    [["check"], ["check", "--json"], ["recommend", "--json"], ["recommend"]],
+    ids=["check", "check --json", "recommend --json", "recommend"],
+)
 def test_plan_tests(files, argv):
     result = walk(plan_tests, [argv[0], files.spec, *argv[1:]])
     assert result.code in (0, 1)

@@ -2,6 +2,7 @@
 each applies to it; no traceback, strict JSON); on the peak list, the before/after table follows the peaks
 (the baseline and the fit with the effect may match different ones).  A file of its own
 so that the suite's workers share the walk."""
+
 import pytest
 
 from fem.effects import REGISTRY
@@ -28,7 +29,16 @@ def test_fit_effect(files, kind):
 
 def test_point_mass_on_a_peak_list_with_report(files, tmp_path):
     folder = tmp_path / "report"
-    argv = ["fit", files.spec, files.measurements["peaks"], "--effect", "point_mass", "--json", "--report", folder]
+    argv = [
+        "fit",
+        files.spec,
+        files.measurements["peaks"],
+        "--effect",
+        "point_mass",
+        "--json",
+        "--report",
+        folder,
+    ]
     result = run(identify_layers, argv)
     check_clean_end(result, argv, folder, json_out=True)
     assert result.code in (0, 1)

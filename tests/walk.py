@@ -1,6 +1,7 @@
 """The command walk's inputs and checks: a small plate (one identified steel sheet, a brass
 plate bonded on top, 5 modes, a 6-element mesh: each fit takes a second or two) with the
 measurement files a lab hands in, and one run of a command line checked for a clean end."""
+
 from __future__ import annotations
 
 import contextlib
@@ -80,12 +81,24 @@ def _inputs(spec: Path) -> dict[str, pd.DataFrame]:
     ranked = synthetic_measurements(truth, modes=5, noise_rel=5e-4, seed=5).table
     ranked = ranked[["configuration", "mode", "frequency_hz", "std_hz"]]
     labels = {c: truth.solve(c).labels for c in ("original", "brass_top")}
-    labelled = ranked.assign(label=[labels[c][m - 1] for c, m in zip(ranked["configuration"], ranked["mode"])])
-    peaks = pd.concat([ranked.drop(index=[2, 8]).drop(columns="mode"),  # a node at the sensor: 2 modes missing
-                       pd.DataFrame({"configuration": ["original", "brass_top"], "frequency_hz": [60.0, 560.0],
-                                     "std_hz": [0.05, 0.3]})])  # suspension and cable: 2 spurious peaks
-    swapped = ranked.assign(configuration=ranked["configuration"].map({"original": "brass_top",
-                                                                       "brass_top": "original"}))
+    labelled = ranked.assign(
+        label=[labels[c][m - 1] for c, m in zip(ranked["configuration"], ranked["mode"])]
+    )
+    peaks = pd.concat(
+        [
+            ranked.drop(index=[2, 8]).drop(columns="mode"),  # a node at the sensor: 2 modes missing
+            pd.DataFrame(
+                {
+                    "configuration": ["original", "brass_top"],
+                    "frequency_hz": [60.0, 560.0],
+                    "std_hz": [0.05, 0.3],
+                }
+            ),
+        ]
+    )  # suspension and cable: 2 spurious peaks
+    swapped = ranked.assign(
+        configuration=ranked["configuration"].map({"original": "brass_top", "brass_top": "original"})
+    )
     return {
         "labelled": labelled,
         "gap": ranked.drop(index=[2]),  # original mode 3 not measured
@@ -110,7 +123,9 @@ def write_files(folder: Path) -> Files:
     for name, table in _inputs(spec).items():
         measurements[name] = folder / f"{name}.csv"
         table.to_csv(measurements[name], index=False)
-    modes = Modes(np.array([183.8, 232.2, 376.6]), np.array([0.005, 0.006, 0.008]), np.array([1.0, -0.7, 0.4]))
+    modes = Modes(
+        np.array([183.8, 232.2, 376.6]), np.array([0.005, 0.006, 0.008]), np.array([1.0, -0.7, 0.4])
+    )
     recordings = []
     for i, hit in enumerate(Session(modes, n_hits=3, seed=3).hits()):
         recordings.append(folder / f"hit{i + 1}.csv")
@@ -163,7 +178,11 @@ def check_clean_end(result: Run, argv: list, report: Path | None = None, json_ou
     elif json_out:
         strict_json(result.out)
     else:  # the text a user reads: a missing value is '-' or blank, with its reason beside it
-        assert not NON_FINITE_WORD.search(result.out), (where, NON_FINITE_WORD.search(result.out), result.out[-3000:])
+        assert not NON_FINITE_WORD.search(result.out), (
+            where,
+            NON_FINITE_WORD.search(result.out),
+            result.out[-3000:],
+        )
     if report is not None:
         check_report(report, where)
 

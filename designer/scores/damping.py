@@ -9,6 +9,7 @@ at the nominal loss factors: the spec's values of the identified ones, else
 ``NOMINAL_LOSS``.  A design good for stiffness may be useless for damping (a loss factor
 whose predicted std exceeds its nominal value): the verdict says so.
 """
+
 from __future__ import annotations
 
 import math
@@ -55,17 +56,29 @@ class DampingScores:
         for (m, k), v, s in zip(self.targets, self.nominal, self.predicted_std):
             nominal.setdefault(m, {})[k] = float(v)
             predicted.setdefault(m, {})[k] = finite_or_none(s)
-        return {"condition_number": finite_or_none(self.condition_number), "verdict": self.verdict,
-                "damping_std_rel": self.damping_std_rel, "nominal": nominal, "predicted_std": predicted,
-                "useless_for": self.useless}
+        return {
+            "condition_number": finite_or_none(self.condition_number),
+            "verdict": self.verdict,
+            "damping_std_rel": self.damping_std_rel,
+            "nominal": nominal,
+            "predicted_std": predicted,
+            "useless_for": self.useless,
+        }
 
     def report(self) -> str:
-        lines = [f"damping: condition number of the loss-factor columns {self.condition_number:.4g}: {self.verdict}; "
-                 f"predicted std for {100 * self.damping_std_rel:.3g} % damping scatter:"]
-        lines += [f"  {n:28s} {v:.4g} +- {s:.2g}" for n, v, s in zip(self.names, self.nominal, self.predicted_std)]
+        lines = [
+            f"damping: condition number of the loss-factor columns {self.condition_number:.4g}: "
+            f"{self.verdict}; "
+            f"predicted std for {100 * self.damping_std_rel:.3g} % damping scatter:"
+        ]
+        lines += [
+            f"  {n:28s} {v:.4g} +- {s:.2g}" for n, v, s in zip(self.names, self.nominal, self.predicted_std)
+        ]
         if self.useless:
-            lines.append(f"  this design does not determine {', '.join(self.useless)} (std above the value): useless "
-                         "for their damping whatever it does for stiffness")
+            lines.append(
+                f"  this design does not determine {', '.join(self.useless)} (std above the value): useless "
+                "for their damping whatever it does for stiffness"
+            )
         return "\n".join(lines)
 
 
@@ -76,7 +89,9 @@ def damping_scores(model: SpecimenModel, configurations, damping_std_rel: float)
     targets = [(m.name, k) for m in materials.values() for k in m.identify_damping]
     if not targets:
         return None
-    nominal = np.array([getattr(materials[m], "eta_E1" if k == "eta" else k) or NOMINAL_LOSS for m, k in targets])
+    nominal = np.array(
+        [getattr(materials[m], "eta_E1" if k == "eta" else k) or NOMINAL_LOSS for m, k in targets]
+    )
     values = {(m, k): v for (m, k), v in zip(targets, nominal)}
     nominal_materials = []
     for m in {m for m, _ in targets}:
@@ -97,10 +112,21 @@ def damping_scores(model: SpecimenModel, configurations, damping_std_rel: float)
     a = np.array(rows)
     weighted = a / np.array(sigma)[:, None]
     if len(a) < len(targets):
-        return DampingScores(tuple(targets), nominal, np.full(len(targets), math.inf), math.inf, Verdict.SINGULAR,
-                             damping_std_rel)
+        return DampingScores(
+            tuple(targets),
+            nominal,
+            np.full(len(targets), math.inf),
+            math.inf,
+            Verdict.SINGULAR,
+            damping_std_rel,
+        )
     s = np.linalg.svd(a, compute_uv=False)
     condition = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
-    std = np.sqrt(np.diag(np.linalg.pinv(weighted.T @ weighted))) if math.isfinite(condition) else \
-        np.full(len(targets), math.inf)
-    return DampingScores(tuple(targets), nominal, std, condition, condition_verdict(condition), damping_std_rel)
+    std = (
+        np.sqrt(np.diag(np.linalg.pinv(weighted.T @ weighted)))
+        if math.isfinite(condition)
+        else np.full(len(targets), math.inf)
+    )
+    return DampingScores(
+        tuple(targets), nominal, std, condition, condition_verdict(condition), damping_std_rel
+    )

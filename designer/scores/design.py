@@ -1,5 +1,6 @@
 """A scored test set: the configurations to measure (the original plate first), the
 frequencies to expect and how well they identify every parameter."""
+
 from __future__ import annotations
 
 import math
@@ -34,7 +35,9 @@ def describe(configuration: Configuration) -> str:
     for face in ("bottom", "top"):
         layers = getattr(configuration, face)
         if layers:
-            parts.append(f"{face}: " + ", ".join(f"{l.material.name} {l.thickness * 1e3:g} mm" for l in layers))
+            parts.append(
+                f"{face}: " + ", ".join(f"{l.material.name} {l.thickness * 1e3:g} mm" for l in layers)
+            )
     return "; ".join(parts) or "-"
 
 
@@ -78,9 +81,18 @@ class Design:
         if prior:
             robust = RobustScores(problem.space.prior_range, (nominal,) + tuple(scored(p) for p in prior))
         targets = tuple(problem.space.target(p.kind) for p in problem.parameters)
-        return cls(tuple(solved), measured, problem.parameters, problem.values, nominal, sigma,
-                   tuple(added_mass(s.configuration, problem.area) for s in solved), robust, targets,
-                   not problem.space.targets_given)
+        return cls(
+            tuple(solved),
+            measured,
+            problem.parameters,
+            problem.values,
+            nominal,
+            sigma,
+            tuple(added_mass(s.configuration, problem.area) for s in solved),
+            robust,
+            targets,
+            not problem.space.targets_given,
+        )
 
     def loss(self, criterion: str) -> float:
         """What sets are ranked by: the criterion's worst case over the prior when the
@@ -95,8 +107,11 @@ class Design:
 
     def target_misses(self) -> list[tuple[Parameter, float, float]]:
         """(parameter, predicted relative std, target) of every parameter over its target."""
-        return [(p, float(s), t) for p, s, t in zip(self.parameters, self.judged_std_rel, self.targets)
-                if t is not None and not s <= t]
+        return [
+            (p, float(s), t)
+            for p, s, t in zip(self.parameters, self.judged_std_rel, self.targets)
+            if t is not None and not s <= t
+        ]
 
     @property
     def meets_targets(self) -> bool:
@@ -106,11 +121,16 @@ class Design:
         kinds = {}
         for p, t in zip(self.parameters, self.targets):
             kinds.setdefault(p.kind, t)
-        return {"std_rel": kinds, "default": self.targets_default,
-                "basis": "worst over the prior" if self.robust is not None else "nominal",
-                "met": self.meets_targets,
-                "missed": [{"parameter": p.name, "predicted_std_rel": finite_or_none(s), "target_std_rel": t}
-                           for p, s, t in self.target_misses()]}
+        return {
+            "std_rel": kinds,
+            "default": self.targets_default,
+            "basis": "worst over the prior" if self.robust is not None else "nominal",
+            "met": self.meets_targets,
+            "missed": [
+                {"parameter": p.name, "predicted_std_rel": finite_or_none(s), "target_std_rel": t}
+                for p, s, t in self.target_misses()
+            ],
+        }
 
     def targets_report(self) -> str:
         """One line: the targets and which parameters miss them."""
@@ -126,9 +146,13 @@ class Design:
         misses = self.target_misses()
         if not misses:
             return f"target std ({stated}; {where}): met by all {len(self.parameters)} parameters{basis}"
-        listed = ", ".join(f"{p.name} {100 * s:.3g} %" for p, s, _ in misses[:6]) + (" ..." if len(misses) > 6 else "")
-        return (f"target std ({stated}; {where}): MISSED by {len(misses)} of {len(self.parameters)} "
-                f"parameters{basis}: {listed}")
+        listed = ", ".join(f"{p.name} {100 * s:.3g} %" for p, s, _ in misses[:6]) + (
+            " ..." if len(misses) > 6 else ""
+        )
+        return (
+            f"target std ({stated}; {where}): MISSED by {len(misses)} of {len(self.parameters)} "
+            f"parameters{basis}: {listed}"
+        )
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -148,22 +172,33 @@ class Design:
         out: dict[str, dict] = {}
         for p, std, rel in zip(self.parameters, self.std, self.scores.std_rel):
             key, value = display(p, std)
-            out.setdefault(p.target, {})[p.kind if relative else key] = finite_or_none(rel if relative else value)
+            out.setdefault(p.target, {})[p.kind if relative else key] = finite_or_none(
+                rel if relative else value
+            )
         return out
 
     def configurations_dict(self) -> list[dict]:
         rows = []
         for s, measured, mass in zip(self.solved, self.measured, self.added_mass):
             c = s.configuration
-            rows.append({
-                "name": c.name,
-                "added": [{"face": face, "material": l.material.name, "thickness_mm": round(l.thickness * 1e3, 6)}
-                          for face in ("bottom", "top") for l in getattr(c, face)],
-                "added_mass_g": round(mass * 1e3, 3),
-                "frequencies_hz": s.frequencies_hz[: measured.size].round(4),
-                "labels": list(s.labels[: measured.size]),
-                "measured": measured,
-            })
+            rows.append(
+                {
+                    "name": c.name,
+                    "added": [
+                        {
+                            "face": face,
+                            "material": l.material.name,
+                            "thickness_mm": round(l.thickness * 1e3, 6),
+                        }
+                        for face in ("bottom", "top")
+                        for l in getattr(c, face)
+                    ],
+                    "added_mass_g": round(mass * 1e3, 3),
+                    "frequencies_hz": s.frequencies_hz[: measured.size].round(4),
+                    "labels": list(s.labels[: measured.size]),
+                    "measured": measured,
+                }
+            )
         return rows
 
     def to_dict(self) -> dict:
@@ -183,7 +218,8 @@ class Design:
 
     def summary(self) -> str:
         """One line: configurations and condition number."""
-        return f"{' + '.join(self.names)}: condition number {self.scores.condition_number:.4g} ({self.scores.verdict})"
+        scores = self.scores
+        return f"{' + '.join(self.names)}: condition number {scores.condition_number:.4g} ({scores.verdict})"
 
     def report(self) -> str:
         """Fixed sections: statistics, configurations with the frequencies to expect,
@@ -201,40 +237,63 @@ class Design:
         ]
         if self.robust is not None:
             r = self.robust
-            lines.append(f"over the prior range (identified properties x 1/{1 + r.range_rel:g}..{1 + r.range_rel:g}, "
-                         f"{len(r.scores) - 1} samples + nominal): condition number worst {r.worst('condition'):.4g}, "
-                         f"mean {r.mean('condition'):.4g}; log det F worst {r.worst('d'):.5g}, mean {r.mean('d'):.5g}")
+            lines.append(
+                f"over the prior range (identified properties x 1/{1 + r.range_rel:g}..{1 + r.range_rel:g}, "
+                f"{len(r.scores) - 1} samples + nominal): condition number worst {r.worst('condition'):.4g}, "
+                f"mean {r.mean('condition'):.4g}; log det F worst {r.worst('d'):.5g}, mean {r.mean('d'):.5g}"
+            )
         lines += ["", "configurations: added layers, added mass, frequencies to expect [Hz] ([not measured])"]
         width = max(len(n) for n in self.names)
         added = [describe(s.configuration) for s in self.solved]
         added_width = max(len(a) for a in added)
         for s, measured, mass, what in zip(self.solved, self.measured, self.added_mass, added):
             freqs = " ".join(f"{f:.1f}" if m else f"[{f:.1f}]" for f, m in zip(s.frequencies_hz, measured))
-            lines.append(f"  {s.configuration.name:<{width}s}  {what:<{added_width}s}  {mass * 1e3:6.1f} g  {freqs}")
+            lines.append(
+                f"  {s.configuration.name:<{width}s}  {what:<{added_width}s}  {mass * 1e3:6.1f} g  {freqs}"
+            )
         width = max(len(par.name) for par in self.parameters)
         worst = self.robust.worst_std_rel if self.robust is not None else None
-        lines += ["", f"  {'parameter':<{width}s}  {'nominal':>13s}  {'predicted std':>13s}  {'relative':>9s}"
-                  + (f"  {'worst':>9s}" if worst is not None else "") + f"  {'target':>7s}"]
+        lines += [
+            "",
+            f"  {'parameter':<{width}s}  {'nominal':>13s}  {'predicted std':>13s}  {'relative':>9s}"
+            + (f"  {'worst':>9s}" if worst is not None else "")
+            + f"  {'target':>7s}",
+        ]
         for j, (par, value, std, rel) in enumerate(zip(self.parameters, self.values, self.std, sc.std_rel)):
             key, v = display(par, value)
             _, s_ = display(par, std)
             unit = " GPa" if key.endswith("GPa") else "    "
             target = self.targets[j] if self.targets else None
             judged = self.judged_std_rel[j]
-            flag = "  singular" if not np.isfinite(rel) else ("  weakly identifiable" if rel > WEAK_STD_REL else "")
+            flag = (
+                "  singular"
+                if not np.isfinite(rel)
+                else ("  weakly identifiable" if rel > WEAK_STD_REL else "")
+            )
             if target is not None and not judged <= target:
                 flag += "  misses target"
-            lines.append(f"  {par.name:<{width}s}  {v:>9.4g}{unit}  {s_:>9.3g}{unit}  {100 * rel:>7.3g} %"
-                         + (f"  {100 * worst[j]:>7.3g} %" if worst is not None else "")
-                         + (f"  {100 * target:>5.3g} %" if target is not None else f"  {'-':>7s}") + flag)
+            lines.append(
+                f"  {par.name:<{width}s}  {v:>9.4g}{unit}  {s_:>9.3g}{unit}  {100 * rel:>7.3g} %"
+                + (f"  {100 * worst[j]:>7.3g} %" if worst is not None else "")
+                + (f"  {100 * target:>5.3g} %" if target is not None else f"  {'-':>7s}")
+                + flag
+            )
         if np.all(np.isfinite(sc.correlation)):
             i, j = np.triu_indices(p, 1)
-            strong = sorted(((abs(sc.correlation[a, b]), a, b) for a, b in zip(i, j)
-                             if abs(sc.correlation[a, b]) > STRONG_CORRELATION), reverse=True)
+            strong = sorted(
+                (
+                    (abs(sc.correlation[a, b]), a, b)
+                    for a, b in zip(i, j)
+                    if abs(sc.correlation[a, b]) > STRONG_CORRELATION
+                ),
+                reverse=True,
+            )
             if strong:
                 lines += ["", f"strong correlations of the estimates (|r| > {STRONG_CORRELATION}):"]
-                lines += [f"  {self.parameters[a].name} ~ {self.parameters[b].name}: {sc.correlation[a, b]:+.3f}"
-                          for _, a, b in strong[:8]]
+                lines += [
+                    f"  {self.parameters[a].name} ~ {self.parameters[b].name}: {sc.correlation[a, b]:+.3f}"
+                    for _, a, b in strong[:8]
+                ]
         return "\n".join(lines)
 
 

@@ -6,6 +6,7 @@ For one orthotropic layer the rule is length/width = (E1/E2)^(1/4); for a lamina
 bending stiffnesses take the moduli's place: (D11/D22)^(1/4), the same for one layer
 since D11/D22 = E1/E2 there.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -48,13 +49,19 @@ class PoissonPlate:
 
     def to_dict(self) -> dict:
         length, width = self.cut_to
-        return {"length_width_ratio": self.ratio, "suggested_ratio": self.suggested_ratio,
-                "suggested_width_mm": self.suggested_width * 1e3, "cut_to_mm": [length * 1e3, width * 1e3],
-                "complies": self.complies}
+        return {
+            "length_width_ratio": self.ratio,
+            "suggested_ratio": self.suggested_ratio,
+            "suggested_width_mm": self.suggested_width * 1e3,
+            "cut_to_mm": [length * 1e3, width * 1e3],
+            "complies": self.complies,
+        }
 
     def report(self) -> str:
-        head = (f"Poisson-plate rule (paper eq. 16): length/width = (D11/D22)^(1/4) = {self.suggested_ratio:.4f} "
-                f"at the nominal properties; this plate: {self.ratio:.4f}")
+        head = (
+            f"Poisson-plate rule (paper eq. 16): length/width = (D11/D22)^(1/4) = {self.suggested_ratio:.4f} "
+            f"at the nominal properties; this plate: {self.ratio:.4f}"
+        )
         if self.complies:
             return head + f" (within {100 * TOLERANCE:g} %: a Poisson plate)"
         length, width = self.cut_to

@@ -8,6 +8,7 @@ plausible as one 23 % low).  A fixed, seeded Latin hypercube of ``prior_samples`
 box, nu12 kept inside the positive-definite range (nu12^2 < E1/E2).  Duck-typed on the
 design problem (``problem.Problem``: ``parameters``, ``values``, ``space``, ``at``).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -60,10 +61,15 @@ class Prior:
     @classmethod
     def of(cls, problem) -> Prior:
         space = problem.space
-        values = physical(problem, problem.values * prior_factors(len(problem.parameters), space.prior_samples,
-                                                                    space.prior_range))
-        point_space = replace(space, prior_range=0.0)  # a sample is a point, not scored over a prior of its own
-        problems = tuple(replace(problem.at(dict(zip(problem.parameters, v))), space=point_space) for v in values)
+        values = physical(
+            problem,
+            problem.values * prior_factors(len(problem.parameters), space.prior_samples, space.prior_range),
+        )
+        # a sample is a point, not scored over a prior of its own
+        point_space = replace(space, prior_range=0.0)
+        problems = tuple(
+            replace(problem.at(dict(zip(problem.parameters, v))), space=point_space) for v in values
+        )
         return cls(space.prior_range, values / problem.values, (problem,) + problems)
 
     @property

@@ -10,6 +10,7 @@ singular values s_k and right singular vectors V of S:
 - E-optimality lambda_min(F) = (s_min / sigma)^2;
 - predicted std of parameter j, relative to its value: sigma sqrt(sum_k V_jk^2 / s_k^2).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -85,13 +86,19 @@ class Scores:
     def loss(self, criterion: str) -> float:
         """The criterion as a number to minimise (as ``loss`` of singular values)."""
         with np.errstate(divide="ignore"):
-            return float({"condition": np.log(self.condition_number), "d": -self.logdet_fisher,
-                          "e": -np.log(self.min_eigenvalue_fisher)}[criterion])
+            return float(
+                {
+                    "condition": np.log(self.condition_number),
+                    "d": -self.logdet_fisher,
+                    "e": -np.log(self.min_eigenvalue_fisher),
+                }[criterion]
+            )
 
     def value(self, criterion: str) -> float:
         """The number the criterion ranks by, in its own units."""
-        return {"condition": self.condition_number, "d": self.logdet_fisher,
-                "e": self.min_eigenvalue_fisher}[criterion]
+        return {"condition": self.condition_number, "d": self.logdet_fisher, "e": self.min_eigenvalue_fisher}[
+            criterion
+        ]
 
 
 def score(rows: np.ndarray, sigma: float) -> Scores:

@@ -9,6 +9,7 @@ other beside it.  Symmetric means equal in the properties and thicknesses (not t
 names) at the nominal values: two coatings that are different materials with equal
 start values count, which is exactly when the ties appear.
 """
+
 from __future__ import annotations
 
 from fem.laminates.laminate import Layer
@@ -38,8 +39,9 @@ def set_key(configurations) -> tuple:
 
 def mirror_key(configurations) -> tuple:
     """The key of the set turned upside down."""
-    return tuple(sorted((top, bottom) for bottom, top in (signature(c) for c in configurations
-                                                          if not c.is_original)))
+    return tuple(
+        sorted((top, bottom) for bottom, top in (signature(c) for c in configurations if not c.is_original))
+    )
 
 
 def collapse(designs: list, configurations_of, symmetric: bool) -> tuple[list, list]:

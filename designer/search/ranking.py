@@ -5,6 +5,7 @@ configurations under the original plate's.  Few sets: every one is scored (batch
 SVD).  Many: the convex relaxation (``relaxation``) picks a set and bounds how far it
 can be from optimal, and exchange swaps improve it.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -52,13 +53,23 @@ class Bound:
         of = "" if self.basis == "nominal" else " (of the Fisher information averaged over the prior samples)"
         if self.criterion == "d":
             gap = max(self.relaxed - self.chosen, 0.0)
-            return (f"relaxation bound{of}: log det F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} (gap {gap:.3g}): "
-                    f"its confidence ellipsoid is at most {math.exp(gap / 2):.4f} x the volume of the best set's")
-        return (f"relaxation bound{of}: smallest eigenvalue of F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} "
-                f"({100 * self.chosen / self.relaxed:.3g} % of the bound)")
+            return (
+                f"relaxation bound{of}: log det F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} (gap "
+                f"{gap:.3g}): "
+                f"its confidence ellipsoid is at most {math.exp(gap / 2):.4f} x the volume of the best set's"
+            )
+        return (
+            f"relaxation bound{of}: smallest eigenvalue of F <= {self.relaxed:.5g}; chosen {self.chosen:.5g} "
+            f"({100 * self.chosen / self.relaxed:.3g} % of the bound)"
+        )
 
     def to_dict(self) -> dict:
-        return {"criterion": self.criterion, "relaxed": self.relaxed, "chosen": self.chosen, "basis": self.basis}
+        return {
+            "criterion": self.criterion,
+            "relaxed": self.relaxed,
+            "chosen": self.chosen,
+            "basis": self.basis,
+        }
 
 
 @dataclass(frozen=True)
@@ -95,16 +106,26 @@ class Recommendation:
     def to_dict(self) -> dict:
         designs = []
         for d, mirror in zip(self.designs, self.mirrors or [None] * len(self.designs)):
-            designs.append({**d.to_dict(), "mirror": None if mirror is None else
-                            [c.name for c in mirror if not c.is_original]})
+            designs.append(
+                {
+                    **d.to_dict(),
+                    "mirror": None if mirror is None else [c.name for c in mirror if not c.is_original],
+                }
+            )
         return {
             "designs": designs,
-            "search": {"criterion": self.criterion, "method": self.method, "candidates": self.candidates,
-                       "sets": self.sets, "excluded": self.excluded, "seconds": round(self.seconds, 3),
-                       "bound": self.bound.to_dict() if self.bound else None,
-                       "ranked_by": "worst over the prior" if self.prior_samples else "nominal",
-                       "prior_samples": self.prior_samples,
-                       "mirrors_collapsed": sum(m is not None for m in self.mirrors)},
+            "search": {
+                "criterion": self.criterion,
+                "method": self.method,
+                "candidates": self.candidates,
+                "sets": self.sets,
+                "excluded": self.excluded,
+                "seconds": round(self.seconds, 3),
+                "bound": self.bound.to_dict() if self.bound else None,
+                "ranked_by": "worst over the prior" if self.prior_samples else "nominal",
+                "prior_samples": self.prior_samples,
+                "mirrors_collapsed": sum(m is not None for m in self.mirrors),
+            },
             "limits": self.limits.to_dict() if self.limits is not None else None,
             "baseline": self.baseline.to_dict() if self.baseline else None,
             "poisson_plate": self.poisson.to_dict(),
@@ -115,43 +136,66 @@ class Recommendation:
 
     def report(self) -> str:
         robust = self.best.robust
-        how = (f"scored at the nominal properties and {self.prior_samples} prior samples (+-"
-               f"{100 * robust.range_rel:g} %), ranked by the worst case of" if robust is not None else
-               "scored at the spec's nominal properties, ranked by")
-        lines = [f"searched {self.sets} sets of {len(self.best.solved) - 1} added plates from {self.candidates} "
-                 f"candidates ({self.method}, {self.seconds:.1f} s), {how} {CRITERIA[self.criterion]}"]
+        how = (
+            f"scored at the nominal properties and {self.prior_samples} prior samples (+-"
+            f"{100 * robust.range_rel:g} %), ranked by the worst case of"
+            if robust is not None
+            else "scored at the spec's nominal properties, ranked by"
+        )
+        lines = [
+            f"searched {self.sets} sets of {len(self.best.solved) - 1} added plates from {self.candidates} "
+            f"candidates ({self.method}, {self.seconds:.1f} s), {how} {CRITERIA[self.criterion]}"
+        ]
         if robust is None:
-            lines.append("(the start values are what is unknown: set [design] prior_range_rel, e.g. 0.3, to score "
-                         "every set over that range)")
+            lines.append(
+                "(the start values are what is unknown: set [design] prior_range_rel, e.g. 0.3, to score "
+                "every set over that range)"
+            )
         if self.limits is not None:
             lines.append(self.limits.describe())
         if self.excluded:
-            lines.append(f"left out {len(self.excluded)} candidates: " + "; ".join(
-                f"{name} ({why})" for name, why in list(self.excluded.items())[:5])
-                + (" ..." if len(self.excluded) > 5 else ""))
+            lines.append(
+                f"left out {len(self.excluded)} candidates: "
+                + "; ".join(f"{name} ({why})" for name, why in list(self.excluded.items())[:5])
+                + (" ..." if len(self.excluded) > 5 else "")
+            )
         if self.bound:
             lines.append(self.bound.report())
-        worst = f"  {'worst ' + {'condition': 'cond', 'd': 'log det', 'e': 'min eig'}[self.criterion]:>12s}" \
-            if robust is not None else ""
-        lines += ["", f"{'rank':>4s}  {'condition':>10s}  {'log det F':>10s}{worst}  {'verdict':<15s} "
-                      f"{'targets':<9s} added plates"]
+        worst = (
+            f"  {'worst ' + {'condition': 'cond', 'd': 'log det', 'e': 'min eig'}[self.criterion]:>12s}"
+            if robust is not None
+            else ""
+        )
+        lines += [
+            "",
+            f"{'rank':>4s}  {'condition':>10s}  {'log det F':>10s}{worst}  {'verdict':<15s} "
+            f"{'targets':<9s} added plates",
+        ]
 
         def row(label: str, d: Design) -> str:
             w = f"  {d.robust.worst(self.criterion):>12.5g}" if d.robust is not None else ""
             met = "met" if d.meets_targets else f"{len(d.target_misses())} miss"
-            return (f"{label:>4s}  {d.scores.condition_number:>10.4g}  {d.scores.logdet_fisher:>10.5g}{w}  "
-                    f"{d.scores.verdict:<15s} {met:<9s} {', '.join(d.names[1:])}")
+            return (
+                f"{label:>4s}  {d.scores.condition_number:>10.4g}  {d.scores.logdet_fisher:>10.5g}{w}  "
+                f"{d.scores.verdict:<15s} {met:<9s} {', '.join(d.names[1:])}"
+            )
 
         notes = []
         for rank, (d, mirror) in enumerate(zip(self.designs, self.mirrors or [None] * len(self.designs)), 1):
             lines.append(row(str(rank), d))
             if mirror is not None:
-                notes.append(f"rank {rank} stands for its mirror too: {', '.join(c.name for c in mirror if not c.is_original)}")
+                notes.append(
+                    f"rank {rank} stands for its mirror too: "
+                    f"{', '.join(c.name for c in mirror if not c.is_original)}"
+                )
         if self.baseline is not None:
             lines.append(row("spec", self.baseline) + " (the spec's configurations)")
         if notes:
-            lines += ["", "mirror designs (top and bottom swapped) score alike on this mid-plane symmetric specimen; "
-                          "each is shown once:"] + [f"  {n}" for n in notes]
+            lines += [
+                "",
+                "mirror designs (top and bottom swapped) score alike on this mid-plane symmetric specimen; "
+                "each is shown once:",
+            ] + [f"  {n}" for n in notes]
         lines += ["", "best design", self.best.report(), "", self.poisson.report()]
         return "\n".join(lines)
 
@@ -166,8 +210,14 @@ def stacked_rows(problem: Problem, solved: list[Solved]) -> np.ndarray:
     return out
 
 
-def exhaustive(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int, top: int,
-               progress: Progress | None = None) -> tuple[list[tuple[int, ...]], int]:
+def exhaustive(
+    problem: Problem,
+    original: np.ndarray,
+    blocks: np.ndarray,
+    n: int,
+    top: int,
+    progress: Progress | None = None,
+) -> tuple[list[tuple[int, ...]], int]:
     """Every set of ``n`` of the candidate ``blocks``: the ``top`` best by the criterion
     (ties broken by enumeration order), and the number of sets scored.
 
@@ -187,8 +237,13 @@ def exhaustive(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: in
             if chunk.size == 0:
                 break
             sets = chunk.reshape(-1, n)
-            stacks = np.concatenate([np.broadcast_to(original[:, None], (k, len(sets)) + original.shape[1:]),
-                                     blocks[:, sets].reshape(k, len(sets), n * r, p)], axis=2)
+            stacks = np.concatenate(
+                [
+                    np.broadcast_to(original[:, None], (k, len(sets)) + original.shape[1:]),
+                    blocks[:, sets].reshape(k, len(sets), n * r, p),
+                ],
+                axis=2,
+            )
             losses = loss(singular_values(stacks), problem.space.frequency_std_rel, problem.space.criterion)
             best_loss = np.concatenate([best_loss, losses.max(axis=0)])
             best_sets = np.concatenate([best_sets, sets])
@@ -198,8 +253,9 @@ def exhaustive(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: in
     return [tuple(int(i) for i in s) for s in best_sets], total
 
 
-def relaxed(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int,
-            top: int) -> tuple[list[tuple[int, ...]], int, Bound]:
+def relaxed(
+    problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int, top: int
+) -> tuple[list[tuple[int, ...]], int, Bound]:
     """The convex relaxation, rounded and improved by swaps: the ``top`` best sets seen,
     the number of sets scored, and the relaxation's bound (in Fisher-information units).
 
@@ -226,8 +282,13 @@ def relaxed(problem: Problem, original: np.ndarray, blocks: np.ndarray, n: int,
     return best, len(seen), bound
 
 
-def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "auto", pool=None,
-              progress: Progress | None = None) -> Recommendation:
+def recommend(
+    problem: Problem | SpecimenModel,
+    top: int = 5,
+    method: str = "auto",
+    pool=None,
+    progress: Progress | None = None,
+) -> Recommendation:
     """The ``top`` best sets of ``space.size - 1`` candidates for the original plate.
     ``problem``: a planning problem, or a model (its ``[design]`` table makes the problem).
 
@@ -243,9 +304,11 @@ def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "aut
         raise DesignError(f"--top {top!r}: need a whole number >= 1")
     n, p = space.size - 1, len(problem.parameters)
     if space.size * problem.modes < p:
-        raise DesignError(f"[design].configurations = {space.size} x [model].modes = {problem.modes} gives "
-                          f"{space.size * problem.modes} frequencies for {p} parameters: every set is singular; "
-                          f"measure at least {math.ceil(p / space.size)} modes per plate or add configurations")
+        raise DesignError(
+            f"[design].configurations = {space.size} x [model].modes = {problem.modes} gives "
+            f"{space.size * problem.modes} frequencies for {p} parameters: every set is singular; "
+            f"measure at least {math.ceil(p / space.size)} modes per plate or add configurations"
+        )
     offered = candidates(space, problem.specimen)
     points = problem.points()
     at_points = solve_points(points, (ORIGINAL,) + offered.configurations, pool=pool, progress=progress)
@@ -258,13 +321,18 @@ def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "aut
         if problem.measured(s).any():
             usable.append(i)
         else:
-            excluded[s.configuration.name] = "no mode inside band_hz" if space.limits.band else "no separable mode"
+            excluded[s.configuration.name] = (
+                "no mode inside band_hz" if space.limits.band else "no separable mode"
+            )
     if len(usable) < n:
         raise DesignError(
             f"[design].configurations = {space.size} needs {n} added plates but the design space offers "
-            f"{len(usable)} candidate(s) ({len(space.materials)} materials x {len(space.thicknesses)} thicknesses x "
-            f"{len(space.placements)} placements, {len(excluded)} left out by the limits); lower configurations "
-            "or add materials, thicknesses or placements")
+            f"{len(usable)} candidate(s) ({len(space.materials)} materials x {len(space.thicknesses)} "
+            "thicknesses x "
+            f"{len(space.placements)} placements, {len(excluded)} left out by the limits); lower "
+            "configurations "
+            "or add materials, thicknesses or placements"
+        )
     rows0 = np.stack([stacked_rows(problem, [row[0]])[0] for row in at_points])
     blocks = np.stack([stacked_rows(problem, [row[1 + i] for i in usable]) for row in at_points])
     symmetric = is_mirror_symmetric(problem.specimen)
@@ -286,6 +354,18 @@ def recommend(problem: Problem | SpecimenModel, top: int = 5, method: str = "aut
     baseline = None
     if len(problem.specimen.configurations) > 1:
         baseline = score_design(problem, problem.specimen.configurations, pool=pool)
-    return Recommendation(tuple(designs[:top]), space.criterion, method, len(usable), sets, excluded, bound, baseline,
-                          poisson_plate(problem.specimen), time.perf_counter() - start, tuple(mirrors[:top]),
-                          space.limits, len(points) - 1)
+    return Recommendation(
+        tuple(designs[:top]),
+        space.criterion,
+        method,
+        len(usable),
+        sets,
+        excluded,
+        bound,
+        baseline,
+        poisson_plate(problem.specimen),
+        time.perf_counter() - start,
+        tuple(mirrors[:top]),
+        space.limits,
+        len(points) - 1,
+    )

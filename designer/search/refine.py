@@ -12,6 +12,7 @@ ground to size would gain.  After an exhaustive search every stock combination h
 scored already, so the refinement can only confirm the chosen set; after the convex
 relaxation it may improve it.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -74,16 +75,23 @@ class Refinement:
     stock: tuple[tuple[float, ...], ...] = ()
 
     def to_dict(self) -> dict:
-        out = {"thicknesses_mm": [round(t * 1e3, 4) for t in self.thicknesses],
-               "bounds_mm": [[lo * 1e3, hi * 1e3] for lo, hi in self.bounds],
-               "evaluations": self.evaluations, "design": self.design.to_dict(), "improved": self.improved,
-               "criterion": self.criterion,
-               "stock_tried_mm": [[round(t * 1e3, 4) for t in ts] for ts in self.stock],
-               "continuous_thicknesses_mm": [round(t * 1e3, 4) for t in self.continuous]}
+        out = {
+            "thicknesses_mm": [round(t * 1e3, 4) for t in self.thicknesses],
+            "bounds_mm": [[lo * 1e3, hi * 1e3] for lo, hi in self.bounds],
+            "evaluations": self.evaluations,
+            "design": self.design.to_dict(),
+            "improved": self.improved,
+            "criterion": self.criterion,
+            "stock_tried_mm": [[round(t * 1e3, 4) for t in ts] for ts in self.stock],
+            "continuous_thicknesses_mm": [round(t * 1e3, 4) for t in self.continuous],
+        }
         if self.continuous_design is not None:
             sc = self.continuous_design.scores
-            out["continuous"] = {"condition_number": sc.condition_number, "logdet_fisher": sc.logdet_fisher,
-                                 "min_eigenvalue_fisher": sc.min_eigenvalue_fisher}
+            out["continuous"] = {
+                "condition_number": sc.condition_number,
+                "logdet_fisher": sc.logdet_fisher,
+                "min_eigenvalue_fisher": sc.min_eigenvalue_fisher,
+            }
         return out
 
     def _scores(self, d: Design) -> str:
@@ -95,18 +103,24 @@ class Refinement:
     def report(self) -> str:
         plates = ", ".join(f"{s.configuration.name}" for s in self.design.solved[1:])
         if self.improved:
-            head = (f"refined to stock thicknesses: {plates}; {self._scores(self.start)} -> "
-                    f"{self._scores(self.design)}")
+            head = (
+                f"refined to stock thicknesses: {plates}; {self._scores(self.start)} -> "
+                f"{self._scores(self.design)}"
+            )
         else:
-            head = ("refinement: no combination of the stock thicknesses next to the continuous optimum "
-                    f"improves the {self.criterion} criterion within the limits; the chosen set stands")
+            head = (
+                "refinement: no combination of the stock thicknesses next to the continuous optimum "
+                f"improves the {self.criterion} criterion within the limits; the chosen set stands"
+            )
         lines = [head]
         if self.continuous_design is not None:
             c, s = self.continuous_design.scores, self.start.scores
             ground = ", ".join(f"{t * 1e3:.3g} mm" for t in self.continuous)
-            lines.append(f"  (plates ground to size, continuous optimum by nlopt BOBYQA in {self.evaluations} "
-                         f"evaluations at the nominal values: {ground}; condition number {s.condition_number:.4g} -> "
-                         f"{c.condition_number:.4g}, log det F {s.logdet_fisher:.5g} -> {c.logdet_fisher:.5g})")
+            lines.append(
+                f"  (plates ground to size, continuous optimum by nlopt BOBYQA in {self.evaluations} "
+                f"evaluations at the nominal values: {ground}; condition number {s.condition_number:.4g} -> "
+                f"{c.condition_number:.4g}, log det F {s.logdet_fisher:.5g} -> {c.logdet_fisher:.5g})"
+            )
         return "\n".join(lines)
 
 
@@ -114,16 +128,21 @@ def _thickness(configuration: Configuration) -> float:
     return getattr(configuration, outer_face(configuration))[-1].thickness
 
 
-def stock_near(problem: Problem, configuration: Configuration, x: float, bounds: tuple[float, float]) -> tuple:
+def stock_near(
+    problem: Problem, configuration: Configuration, x: float, bounds: tuple[float, float]
+) -> tuple:
     """The stock thicknesses [m] next to ``x`` (below and above) and the plate's own,
     within ``bounds`` and the limits."""
-    stock = sorted(t for t in problem.space.thicknesses if bounds[0] * (1 - 1e-9) <= t <= bounds[1] * (1 + 1e-9))
+    stock = sorted(
+        t for t in problem.space.thicknesses if bounds[0] * (1 - 1e-9) <= t <= bounds[1] * (1 + 1e-9)
+    )
     below = [t for t in stock if t <= x]
     above = [t for t in stock if t >= x]
     near = {_thickness(configuration)} | set(below[-1:]) | set(above[:1])
     limits = problem.space.limits
-    return tuple(sorted(t for t in near
-                        if not limits.violations(with_plate_thickness(configuration, t), problem.area)))
+    return tuple(
+        sorted(t for t in near if not limits.violations(with_plate_thickness(configuration, t), problem.area))
+    )
 
 
 def refine(problem: Problem, design: Design) -> Refinement:
@@ -174,6 +193,15 @@ def refine(problem: Problem, design: Design) -> Refinement:
         candidate = score_design(problem, candidate_configurations)
         if candidate.loss(criterion) < chosen_loss - IMPROVEMENT * abs(chosen_loss):
             chosen, chosen_loss, chosen_x = candidate, candidate.loss(criterion), tuple(combination)
-    return Refinement(design, chosen, tuple(float(t) for t in chosen_x), tuple(bounds), opt.get_numevals(),
-                      criterion, chosen is not design, tuple(float(t) for t in x), continuous,
-                      tuple(tuple(float(t) for t in ts) for ts in stock))
+    return Refinement(
+        design,
+        chosen,
+        tuple(float(t) for t in chosen_x),
+        tuple(bounds),
+        opt.get_numevals(),
+        criterion,
+        chosen is not design,
+        tuple(float(t) for t in x),
+        continuous,
+        tuple(tuple(float(t) for t in ts) for ts in stock),
+    )

@@ -7,6 +7,7 @@ lambda_min(F) (E-optimality) concave in w: a convex program (cvxpy) whose optimu
 an upper bound on every set's value.  The largest weights give a set; swaps of one
 chosen configuration for another (Fedorov exchange) improve it while they help.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -61,10 +62,14 @@ def relax(info0: np.ndarray, infos: np.ndarray, n: int, criterion: str) -> Relax
     try:
         problem.solve(solver=cp.CLARABEL)
     except cp.SolverError as exc:
-        raise DesignError(f"the convex relaxation failed ({exc}); use --method exhaustive on a smaller space") from None
+        raise DesignError(
+            f"the convex relaxation failed ({exc}); use --method exhaustive on a smaller space"
+        ) from None
     if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or w.value is None:
-        raise DesignError(f"the convex relaxation ended {problem.status}: every candidate set may be singular; "
-                          "check with plan-tests check or add modes")
+        raise DesignError(
+            f"the convex relaxation ended {problem.status}: every candidate set may be singular; "
+            "check with plan-tests check or add modes"
+        )
     bound = problem.value + p * np.log(scale) if relaxed == "d" else problem.value * scale
     return Relaxation(np.clip(w.value, 0.0, 1.0), float(bound), relaxed)
 

@@ -10,6 +10,7 @@ frequencies), and the misfit falls to the noise level.
 
     .venv/bin/python docs/examples/hidden_sensor.py
 """
+
 import tempfile
 import tomllib
 from pathlib import Path
@@ -21,8 +22,11 @@ import tomli_w
 import identify
 from identify.examples import COATED_PLATE
 
-TABLE_1 = {"bottom_coating": (68.0, 71.0, 24.0, 0.32), "steel": (201.0, 200.0, 78.0, 0.29),
-           "top_coating": (73.0, 70.0, 25.0, 0.34)}
+TABLE_1 = {
+    "bottom_coating": (68.0, 71.0, 24.0, 0.32),
+    "steel": (201.0, 200.0, 78.0, 0.29),
+    "top_coating": (73.0, 70.0, 25.0, 0.34),
+}
 SENSOR = {"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0}
 SCATTER = 5e-4  # relative std of a measured frequency
 MODES = 8  # per configuration: five leave the sensor's position undetermined
@@ -48,9 +52,14 @@ def measure(model, path: Path, seed: int = 3) -> Path:
     rows = []
     for configuration, frequencies in identify.predict(model).frequencies_hz.items():
         for mode, f in enumerate(frequencies, 1):
-            rows.append({"configuration": configuration, "mode": mode,
-                         "frequency_hz": round(f * (1 + SCATTER * rng.standard_normal()), 3),
-                         "std_hz": round(SCATTER * f, 3)})
+            rows.append(
+                {
+                    "configuration": configuration,
+                    "mode": mode,
+                    "frequency_hz": round(f * (1 + SCATTER * rng.standard_normal()), 3),
+                    "std_hz": round(SCATTER * f, 3),
+                }
+            )
     pd.DataFrame(rows).to_csv(path, index=False)
     return path
 

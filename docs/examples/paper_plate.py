@@ -9,6 +9,7 @@ the paper's Table 6 values, the measurement is a virtual one of the Table 1 plat
 
     .venv/bin/python docs/examples/paper_plate.py
 """
+
 import designer
 import identify
 from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
@@ -21,7 +22,10 @@ def main() -> identify.FitResult:
     print(f"three configurations: condition number {three['condition_number']:.1f} ({three['verdict']})")
     original = model.specimen.configurations[:1]
     one = designer.check(model.with_options(modes=15).with_configurations(original)).to_dict()
-    print(f"the original plate alone, 15 modes: condition number {one['condition_number']:.3g} ({one['verdict']})")
+    print(
+        f"the original plate alone, 15 modes: condition number {one['condition_number']:.3g} "
+        f"({one['verdict']})"
+    )
 
     data = identify.load_measurements(COATED_PLATE_MEASURED, model)
     result = identify.fit(model, data)

@@ -10,6 +10,7 @@ where to tap, where to put the sensor, and the frequencies to expect.
 
     .venv/bin/python docs/examples/planning.py
 """
+
 import designer
 import identify
 from identify.examples import COATED_PLATE
@@ -24,8 +25,10 @@ def main() -> dict:
     print(check.report())
     sheet = check.to_dict()
     for entry in sheet["test_sheet"]:
-        print(f"{entry['configuration']}: sensor at {entry['sensor_point_mm']} mm, tap at "
-              f"{entry['excitation_point_mm']} mm, supports at {entry['support_points_mm']} mm")
+        print(
+            f"{entry['configuration']}: sensor at {entry['sensor_point_mm']} mm, tap at "
+            f"{entry['excitation_point_mm']} mm, supports at {entry['support_points_mm']} mm"
+        )
     return sheet
 
 

@@ -11,6 +11,7 @@ merges into one peak), and `fit` identifies the layers from the three peak lists
 
     .venv/bin/python docs/examples/recordings_to_layers.py [FOLDER]
 """
+
 import sys
 import tempfile
 import tomllib
@@ -25,10 +26,13 @@ from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
 
 #: The paper's Table 1 layer properties (the truth the recordings are made from).
-TABLE_1 = {"bottom_coating": (68.0, 71.0, 24.0, 0.32), "steel": (201.0, 200.0, 78.0, 0.29),
-           "top_coating": (73.0, 70.0, 25.0, 0.34)}
+TABLE_1 = {
+    "bottom_coating": (68.0, 71.0, 24.0, 0.32),
+    "steel": (201.0, 200.0, 78.0, 0.29),
+    "top_coating": (73.0, 70.0, 25.0, 0.34),
+}
 SAMPLE_RATE = 4000.0  # Hz: the modes of interest lie below 1 kHz
-DURATION = 1.5        # s per hit
+DURATION = 1.5  # s per hit
 HITS = 3
 
 
@@ -57,10 +61,12 @@ def hit(frequencies_hz: np.ndarray, rng: np.random.Generator) -> pd.DataFrame:
     for i, f in enumerate(frequencies_hz):
         w = 2 * np.pi * f * (1 + 2e-4 * rng.standard_normal())
         zeta = 0.004 + 0.001 * i
-        spectrum += (-1) ** i * -omega**2 / (w**2 - omega**2 + 2j * zeta * w * omega)
+        spectrum += (-1) ** i * -(omega**2) / (w**2 - omega**2 + 2j * zeta * w * omega)
     response = np.fft.irfft(spectrum * np.fft.rfft(force), n)
     response += 1e-3 * np.abs(response).max() * rng.standard_normal(n)
-    return pd.DataFrame({"time_s": t, "force": force + 1e-3 * rng.standard_normal(n), "acceleration": response})
+    return pd.DataFrame(
+        {"time_s": t, "force": force + 1e-3 * rng.standard_normal(n), "acceleration": response}
+    )
 
 
 def main(folder: Path | None = None) -> identify.FitResult:

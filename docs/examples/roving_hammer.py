@@ -13,6 +13,7 @@ the model's, and where on the plate the shapes disagree.
 
     .venv/bin/python docs/examples/roving_hammer.py [FOLDER]
 """
+
 import sys
 import tempfile
 import tomllib
@@ -28,8 +29,11 @@ from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
 from identify.recordings.tap_simulation import TapOptions, roving_hits, write_roving
 
-TABLE_1 = {"bottom_coating": (68.0, 71.0, 24.0, 0.32), "steel": (201.0, 200.0, 78.0, 0.29),
-           "top_coating": (73.0, 70.0, 25.0, 0.34)}
+TABLE_1 = {
+    "bottom_coating": (68.0, 71.0, 24.0, 0.32),
+    "steel": (201.0, 200.0, 78.0, 0.29),
+    "top_coating": (73.0, 70.0, 25.0, 0.34),
+}
 SENSOR = {"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0}
 MODES = 8
 GRID_X, GRID_Y = np.linspace(7.5, 142.5, 5), np.linspace(7.5, 142.5, 4)
@@ -60,8 +64,16 @@ def tap(truth, configuration: str, points: pd.DataFrame, folder: Path, seed: int
         return lambda x, y: float((deflection_operator(solution.units, x / 1000, y / 1000) @ field[:, r])[0])
 
     damping = np.linspace(0.004, 0.007, MODES)
-    hits = roving_hits(solution.frequencies_hz[:MODES], damping, [shape(r) for r in range(MODES)],
-                       (SENSOR["x_mm"], SENSOR["y_mm"]), points, hits=2, seed=seed, options=RECORDING)
+    hits = roving_hits(
+        solution.frequencies_hz[:MODES],
+        damping,
+        [shape(r) for r in range(MODES)],
+        (SENSOR["x_mm"], SENSOR["y_mm"]),
+        points,
+        hits=2,
+        seed=seed,
+        options=RECORDING,
+    )
     write_roving(hits, folder)
     points.to_csv(folder / "points.csv", index=False)
 
@@ -70,21 +82,45 @@ def main(folder: Path | None = None) -> identify.FitResult:
     folder = Path(folder or tempfile.mkdtemp())
     folder.mkdir(parents=True, exist_ok=True)
     truth = identify.load_spec(spec(folder, "truth.toml", truth=True))
-    points = pd.DataFrame([(f"P{i}{j}", x, y) for i, x in enumerate(GRID_X) for j, y in enumerate(GRID_Y)],
-                          columns=["point", "x_mm", "y_mm"])
+    points = pd.DataFrame(
+        [(f"P{i}{j}", x, y) for i, x in enumerate(GRID_X) for j, y in enumerate(GRID_Y)],
+        columns=["point", "x_mm", "y_mm"],
+    )
     peaks, shapes = [], []
     for seed, name in enumerate(c.name for c in truth.specimen.configurations):
         tap(truth, name, points, folder / name, seed)
         peaks.append(folder / f"{name}_peaks.csv")
         shapes.append(folder / f"{name}_shapes.csv")
-        identify_layers(["peaks", "--points", str(folder / name / "points.csv"), "--configuration", name,
-                         "--band", *map(str, BAND_HZ), "--out", str(peaks[-1]), "--shapes-out", str(shapes[-1])])
+        identify_layers(
+            [
+                "peaks",
+                "--points",
+                str(folder / name / "points.csv"),
+                "--configuration",
+                name,
+                "--band",
+                *map(str, BAND_HZ),
+                "--out",
+                str(peaks[-1]),
+                "--shapes-out",
+                str(shapes[-1]),
+            ]
+        )
     for parts, name in ((peaks, "peaks.csv"), (shapes, "shapes.csv")):
         pd.concat([pd.read_csv(p, dtype=str) for p in parts]).to_csv(folder / name, index=False)
 
     start = spec(folder, "spec.toml", truth=False)  # the paper's Table 6 start values
-    identify_layers(["fit", str(start), str(folder / "peaks.csv"), "--shapes", str(folder / "shapes.csv"),
-                     "--report", str(folder / "report")])
+    identify_layers(
+        [
+            "fit",
+            str(start),
+            str(folder / "peaks.csv"),
+            "--shapes",
+            str(folder / "shapes.csv"),
+            "--report",
+            str(folder / "report"),
+        ]
+    )
     model = identify.load_spec(start)
     measurements = identify.load_measurements(folder / "peaks.csv", model)
     from identify.measured_shapes import load_shapes

@@ -14,6 +14,7 @@ tool predict them from the true properties:
 
     .venv/bin/python docs/examples/soft_bond_line.py
 """
+
 import json
 import tempfile
 from pathlib import Path
@@ -25,8 +26,11 @@ import identify
 REFERENCE = Path(__file__).resolve().parents[2] / "tests" / "data" / "solid3d" / "laminate_on_adhesive.json"
 CONFIGURATION = "al_bottom"
 MODES = 10
-MODELS = {"Kirchhoff": "", "Mindlin (thick_plate)": '\n[[effects]]\nkind = "thick_plate"\n',
-          "layerwise": None}
+MODELS = {
+    "Kirchhoff": "",
+    "Mindlin (thick_plate)": '\n[[effects]]\nkind = "thick_plate"\n',
+    "layerwise": None,
+}
 
 
 def reference() -> tuple[str, np.ndarray]:
@@ -48,7 +52,10 @@ def main() -> dict[str, float]:
         predicted = identify.predict(identify.load_spec(path)).frequencies_hz[CONFIGURATION][:MODES]
         error = predicted / solid - 1
         worst[name] = float(np.abs(error).max())
-        print(f"{name:22s} largest error against 3-D elasticity, first {MODES} modes: {100 * worst[name]:7.3f} %")
+        print(
+            f"{name:22s} largest error against 3-D elasticity, first {MODES} modes: {100 * worst[name]:7.3f} "
+            "%"
+        )
     return worst
 
 

@@ -7,6 +7,7 @@ order, so the membrane-bending coupling (B != 0 in bonded, unsymmetric
 configurations) converges at the same rate as bending.  The element is C1 and
 conforming: eigenvalues converge from above at O(h^4).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,9 +19,16 @@ def _hermite_1d(s: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nda
     Order: value at 0, slope at 0, value at 1, slope at 1 (slopes per unit x).
     """
     one = np.ones_like(s)
-    value = np.array([1 - 3 * s**2 + 2 * s**3, h * (s - 2 * s**2 + s**3), 3 * s**2 - 2 * s**3, h * (-(s**2) + s**3)])
-    first = np.array([-6 * s + 6 * s**2, h * (1 - 4 * s + 3 * s**2), 6 * s - 6 * s**2, h * (-2 * s + 3 * s**2)]) / h
-    second = np.array([-6 * one + 12 * s, h * (-4 * one + 6 * s), 6 * one - 12 * s, h * (-2 * one + 6 * s)]) / h**2
+    value = np.array(
+        [1 - 3 * s**2 + 2 * s**3, h * (s - 2 * s**2 + s**3), 3 * s**2 - 2 * s**3, h * (-(s**2) + s**3)]
+    )
+    first = (
+        np.array([-6 * s + 6 * s**2, h * (1 - 4 * s + 3 * s**2), 6 * s - 6 * s**2, h * (-2 * s + 3 * s**2)])
+        / h
+    )
+    second = (
+        np.array([-6 * one + 12 * s, h * (-4 * one + 6 * s), 6 * one - 12 * s, h * (-2 * one + 6 * s)]) / h**2
+    )
     return value, first, second
 
 
@@ -122,7 +130,8 @@ class HermitePlate:
     def strain_operators(self) -> tuple[np.ndarray, np.ndarray]:
         """Membrane and curvature operators at the quadrature points, each (nq, 3, 48)."""
         membrane = np.stack(
-            [self._field("Nx", "u"), self._field("Ny", "v"), self._field("Ny", "u") + self._field("Nx", "v")], axis=1
+            [self._field("Nx", "u"), self._field("Ny", "v"), self._field("Ny", "u") + self._field("Nx", "v")],
+            axis=1,
         )
         curvature = -np.stack(
             [self._field("Nxx", "w"), self._field("Nyy", "w"), 2 * self._field("Nxy", "w")], axis=1
@@ -135,11 +144,18 @@ class HermitePlate:
         ``EnergyQuadrature``, their quadratic forms (18, k) instead."""
         integral = quadrature or MatrixQuadrature(self.weights)
         bm, bk = map(integral.operator, self.strain_operators())
-        return np.array([k for first, second, symmetrise in ((bm, bm, False), (bm, bk, True), (bk, bk, False))
-                         for k in self._coupling(integral, first, second, pairs, symmetrise)])
+        return np.array(
+            [
+                k
+                for first, second, symmetrise in ((bm, bm, False), (bm, bk, True), (bk, bk, False))
+                for k in self._coupling(integral, first, second, pairs, symmetrise)
+            ]
+        )
 
     @staticmethod
-    def _coupling(integral, first: np.ndarray, second: np.ndarray, pairs, symmetrise: bool) -> list[np.ndarray]:
+    def _coupling(
+        integral, first: np.ndarray, second: np.ndarray, pairs, symmetrise: bool
+    ) -> list[np.ndarray]:
         """int first^T E_ij second dA for each Voigt pair (E_ij the symmetric unit matrix),
         plus its transpose when the two operators differ (a cross term of the energy)."""
         out = []

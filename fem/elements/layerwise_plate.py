@@ -35,6 +35,7 @@ stiffness matrix per pair (a <= b) of the through-thickness functions f = [1, z,
 Lambda_s] and Voigt pair, one per group shear term, one per stretching layer; one unit mass
 matrix per pair of f, and per pair of [1, Psi_s] beyond the first.
 """
+
 from __future__ import annotations
 
 from functools import cache
@@ -71,26 +72,37 @@ class LayerwisePlate(HermitePlate):
         """The element class for n shear groups and m stretching layers (the same class
         object for equal counts)."""
         if n < 1 or m < 0:
-            raise ValueError(f"a layerwise element needs at least one shear group; got {n} groups, {m} stretching")
-        fields = tuple(f"{c}{k + 1}" for k in range(n) for c in ("gx", "gy")) + tuple(f"e{s + 1}" for s in range(m))
+            raise ValueError(
+                f"a layerwise element needs at least one shear group; got {n} groups, {m} stretching"
+            )
+        fields = tuple(f"{c}{k + 1}" for k in range(n) for c in ("gx", "gy")) + tuple(
+            f"e{s + 1}" for s in range(m)
+        )
         name = f"LayerwisePlate{n}" + (f"_{m}" if m else "")
-        cls = type(name, (LayerwisePlate,), {
-            "GROUPS": n,
-            "STRETCH": m,
-            "FIELDS": HermitePlate.FIELDS + fields,
-            "NODE_DOFS": HermitePlate.NODE_DOFS + tuple(f + s for f in fields for s in ("", "_x", "_y", "_xy")),
-            "__doc__": f"Layerwise plate element: {n} shear group(s), {m} stretching layer(s), "
-                       f"{12 + 8 * n + 4 * m} DOFs per node.",
-            "__module__": __name__,
-        })
+        cls = type(
+            name,
+            (LayerwisePlate,),
+            {
+                "GROUPS": n,
+                "STRETCH": m,
+                "FIELDS": HermitePlate.FIELDS + fields,
+                "NODE_DOFS": HermitePlate.NODE_DOFS
+                + tuple(f + s for f in fields for s in ("", "_x", "_y", "_xy")),
+                "__doc__": f"Layerwise plate element: {n} shear group(s), {m} stretching layer(s), "
+                f"{12 + 8 * n + 4 * m} DOFs per node.",
+                "__module__": __name__,
+            },
+        )
         globals()[name] = cls  # found by name, so solutions holding it pickle to worker processes
         return cls
 
     def zigzag_curvature(self, k: int) -> np.ndarray:
         """kappa_k = [gx_k,x, gy_k,y, gx_k,y + gy_k,x] at the quadrature points (nq, 3, N)."""
         gx, gy = f"gx{k + 1}", f"gy{k + 1}"
-        return np.stack([self._field("Nx", gx), self._field("Ny", gy), self._field("Ny", gx) + self._field("Nx", gy)],
-                        axis=1)
+        return np.stack(
+            [self._field("Nx", gx), self._field("Ny", gy), self._field("Ny", gx) + self._field("Nx", gy)],
+            axis=1,
+        )
 
     def stretch_curvature(self, s: int) -> np.ndarray:
         """chi_s = -[e_s,xx, e_s,yy, 2 e_s,xy] at the quadrature points (nq, 3, N)."""
@@ -104,15 +116,20 @@ class LayerwisePlate(HermitePlate):
     def in_plane_strains(self) -> list[np.ndarray]:
         """The in-plane strain operators of the functions [1, z, Phi_k, Lambda_s], each (nq, 3, N)."""
         membrane, curvature = self.strain_operators()
-        return ([membrane, curvature] + [self.zigzag_curvature(k) for k in range(self.GROUPS)]
-                + [self.stretch_curvature(s) for s in range(self.STRETCH)])
+        return (
+            [membrane, curvature]
+            + [self.zigzag_curvature(k) for k in range(self.GROUPS)]
+            + [self.stretch_curvature(s) for s in range(self.STRETCH)]
+        )
 
     def in_plane_displacements(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """The (x, y) in-plane displacement operators of the functions [1, z, Phi_k, Lambda_s]."""
         bx, by = HermitePlate.rotations(self)  # the Kirchhoff rotation -grad w
         out = [(self._field("N", "u"), self._field("N", "v")), (bx, by)]
         out += [(self._field("N", f"gx{k + 1}"), self._field("N", f"gy{k + 1}")) for k in range(self.GROUPS)]
-        out += [(-self._field("Nx", f"e{s + 1}"), -self._field("Ny", f"e{s + 1}")) for s in range(self.STRETCH)]
+        out += [
+            (-self._field("Nx", f"e{s + 1}"), -self._field("Ny", f"e{s + 1}")) for s in range(self.STRETCH)
+        ]
         return out
 
     def unit_stiffness(self, pairs, quadrature: Quadrature | None = None) -> np.ndarray:
@@ -155,7 +172,7 @@ class LayerwisePlate(HermitePlate):
 def __getattr__(name: str):
     """``LayerwisePlateN`` / ``LayerwisePlateN_M`` made on first use (PEP 562), e.g. when a
     worker process unpickles a solution that refers to one."""
-    counts = name[len("LayerwisePlate"):].split("_") if name.startswith("LayerwisePlate") else []
+    counts = name[len("LayerwisePlate") :].split("_") if name.startswith("LayerwisePlate") else []
     if counts and all(c.isdigit() for c in counts) and len(counts) <= 2:
         return LayerwisePlate.with_groups(*map(int, counts))
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -14,6 +14,7 @@ lock: as the shear stiffness grows, the solution tends to the Kirchhoff element'
 use the same bicubic Hermite basis (C1, Q3 per element), so every strain converges at
 the Kirchhoff element's rate and eigenvalues keep O(h^4).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -36,7 +37,11 @@ class ShearDifferencePlate(HermitePlate):
         """Membrane and curvature operators at the quadrature points, each (nq, 3, 80)."""
         membrane, kirchhoff = super().strain_operators()
         shear_part = np.stack(
-            [self._field("Nx", "gx"), self._field("Ny", "gy"), self._field("Ny", "gx") + self._field("Nx", "gy")],
+            [
+                self._field("Nx", "gx"),
+                self._field("Ny", "gy"),
+                self._field("Ny", "gx") + self._field("Nx", "gy"),
+            ],
             axis=1,
         )
         return membrane, kirchhoff + shear_part

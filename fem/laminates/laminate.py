@@ -5,6 +5,7 @@ The reference surface is the geometric mid-plane of the whole stack, z from -H/2
 (bottom) to +H/2 (top).  Stiffness coefficients are ordered as ``COEFFICIENTS``:
 the 18 numbers ``X`` such that the plate stiffness matrix is ``K = sum_c X_c K_c``.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,7 +15,12 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import SpecError
-from .laminate_shear import rotated_shear_moduli, shear_correction_factors, shear_stiffness, shear_stiffness_derivative
+from .laminate_shear import (
+    rotated_shear_moduli,
+    shear_correction_factors,
+    shear_stiffness,
+    shear_stiffness_derivative,
+)
 from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
 
 #: Index pairs (in Voigt 1, 2, 6 notation mapped to 0, 1, 2) of the six coefficients per matrix.
@@ -26,12 +32,12 @@ COEFFICIENTS = tuple(f"{m}{p}" for m in "ABD" for p in _PAIR_NAMES)
 # Off-axis transformation Qbar6 = T(theta) @ [Q11, Q12, Q22, Q66] written as
 # polynomials in m = cos(theta), n = sin(theta): entry -> [(coefficient, power of m, power of n)].
 _T_POLY = (
-    ((( 1, 4, 0),), (( 2, 2, 2),), (( 1, 0, 4),), (( 4, 2, 2),)),                         # Qb11
-    ((( 1, 2, 2),), (( 1, 4, 0), (1, 0, 4)), (( 1, 2, 2),), ((-4, 2, 2),)),               # Qb12
-    ((( 1, 0, 4),), (( 2, 2, 2),), (( 1, 4, 0),), (( 4, 2, 2),)),                         # Qb22
-    ((( 1, 2, 2),), ((-2, 2, 2),), (( 1, 2, 2),), (( 1, 4, 0), (-2, 2, 2), (1, 0, 4))),   # Qb66
-    ((( 1, 3, 1),), ((-1, 3, 1), (1, 1, 3)), ((-1, 1, 3),), ((-2, 3, 1), (2, 1, 3))),     # Qb16
-    ((( 1, 1, 3),), ((-1, 1, 3), (1, 3, 1)), ((-1, 3, 1),), ((-2, 1, 3), (2, 3, 1))),     # Qb26
+    (((1, 4, 0),), ((2, 2, 2),), ((1, 0, 4),), ((4, 2, 2),)),  # Qb11
+    (((1, 2, 2),), ((1, 4, 0), (1, 0, 4)), ((1, 2, 2),), ((-4, 2, 2),)),  # Qb12
+    (((1, 0, 4),), ((2, 2, 2),), ((1, 4, 0),), ((4, 2, 2),)),  # Qb22
+    (((1, 2, 2),), ((-2, 2, 2),), ((1, 2, 2),), ((1, 4, 0), (-2, 2, 2), (1, 0, 4))),  # Qb66
+    (((1, 3, 1),), ((-1, 3, 1), (1, 1, 3)), ((-1, 1, 3),), ((-2, 3, 1), (2, 1, 3))),  # Qb16
+    (((1, 1, 3),), ((-1, 1, 3), (1, 3, 1)), ((-1, 3, 1),), ((-2, 1, 3), (2, 3, 1))),  # Qb26
 )
 
 
@@ -190,9 +196,7 @@ class Laminate:
                 j = hit[0]
                 dz = (np.arange(n_layers + 1) > j).astype(float) - 0.5
                 z = self.interfaces
-                d_moments = np.stack(
-                    [np.diff(dz), np.diff(z * dz), np.diff(z**2 * dz)], axis=1
-                )
+                d_moments = np.stack([np.diff(dz), np.diff(z * dz), np.diff(z**2 * dz)], axis=1)
         elif kind not in ELASTIC_CONSTANTS + SHEAR_MODULI + ("density", "angle"):
             raise ValueError(f"unknown parameter kind {kind!r}")
         qbar = np.array([layer.off_axis_stiffness for layer in self.layers])
@@ -256,13 +260,17 @@ class Laminate:
                 if kind in ELASTIC_CONSTANTS:
                     d_qbar = layer.off_axis_derivatives[kind]
                     d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
-                follows = [kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
-                           for name in SHEAR_MODULI]
+                follows = [
+                    kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
+                    for name in SHEAR_MODULI
+                ]
                 d_shear[k] = rotated_shear_moduli(*map(float, follows), layer.angle)
             elif kind == "angle" and layer.label == target:
                 d_qbar = layer.off_axis_derivatives["angle"]
                 d_q11[k], d_q22[k] = d_qbar[0], d_qbar[2]
-                d_shear[k] = rotated_shear_moduli(*material.transverse_shear_moduli, layer.angle, derivative=True)
+                d_shear[k] = rotated_shear_moduli(
+                    *material.transverse_shear_moduli, layer.angle, derivative=True
+                )
             elif kind == "thickness" and layer.label == target:
                 d_t[k] = 1.0
         return d_t, d_q11, d_q22, d_shear

@@ -24,6 +24,7 @@ exact derivatives by complex-step (forward-mode) differentiation: Im f(x + i h d
 involves no subtraction, and its truncation error, O(h^2), is nil at h = 1e-30, so it is
 exact to rounding (Squire and Trapp 1998, SIAM Review 40:110-112).
 """
+
 from __future__ import annotations
 
 import math
@@ -50,8 +51,10 @@ def _energy_equivalent(thickness: np.ndarray, axial: np.ndarray, shear: np.ndarr
     """D*^2 / int g^2 / G dz for one bending direction: axial = Qb11 (or Qb22), shear =
     Qb55 (or Qb44) per layer (last axis; leading axes are stacks evaluated at once).
     Returns the shear stiffness [N/m]."""
-    z = np.concatenate([np.zeros_like(thickness[..., :1]), np.cumsum(thickness, axis=-1)], axis=-1) \
+    z = (
+        np.concatenate([np.zeros_like(thickness[..., :1]), np.cumsum(thickness, axis=-1)], axis=-1)
         - np.sum(thickness, axis=-1, keepdims=True) / 2
+    )
     a = np.sum(axial * thickness, axis=-1, keepdims=True)
     b = np.sum(axial * np.diff(z**2, axis=-1), axis=-1, keepdims=True) / 2
     d = np.sum(axial * np.diff(z**3, axis=-1), axis=-1, keepdims=True) / 3
@@ -81,16 +84,22 @@ def shear_stiffness(
     return np.stack([a44, a55, a45], axis=-1)
 
 
-def shear_correction_factors(thickness: np.ndarray, q11: np.ndarray, q22: np.ndarray, shear_moduli: np.ndarray):
+def shear_correction_factors(
+    thickness: np.ndarray, q11: np.ndarray, q22: np.ndarray, shear_moduli: np.ndarray
+):
     """(k44, k55): the shear correction factors of the stack [-] (5/6 when homogeneous)."""
     a = shear_stiffness(thickness, q11, q22, shear_moduli)
     raw = thickness @ shear_moduli
     return float(a[0] / raw[0]), float(a[1] / raw[1])
 
 
-def shear_stiffness_derivative(inputs: tuple[np.ndarray, ...], directions: tuple[np.ndarray, ...]) -> np.ndarray:
+def shear_stiffness_derivative(
+    inputs: tuple[np.ndarray, ...], directions: tuple[np.ndarray, ...]
+) -> np.ndarray:
     """Exact directional derivative of ``shear_stiffness(*inputs)`` along ``directions``
     (the inputs' shapes, or with a leading axis of several directions: one row each), by
     complex step."""
-    perturbed = (np.asarray(x, dtype=complex) + 1j * COMPLEX_STEP * np.asarray(dx) for x, dx in zip(inputs, directions))
+    perturbed = (
+        np.asarray(x, dtype=complex) + 1j * COMPLEX_STEP * np.asarray(dx) for x, dx in zip(inputs, directions)
+    )
     return shear_stiffness(*perturbed).imag / COMPLEX_STEP

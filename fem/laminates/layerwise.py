@@ -65,6 +65,7 @@ G12, nu12, G13, G23, density, thickness, angle) are complex-step directional der
 along the closed-form per-layer directions (``fem.laminates.laminate``), exact to rounding (Squire
 and Trapp 1998, SIAM Review 40:110-112), as ``fem.laminates.laminate_shear`` does.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -182,16 +183,22 @@ def _profiles(c0: np.ndarray, c1: np.ndarray, t: np.ndarray, z: np.ndarray, loca
     tc = t[:, :, None]
     zeros = np.zeros((len(t), 1, c0.shape[2]), dtype=np.result_type(c0, c1, t))
     p_bottom = np.concatenate([zeros, np.cumsum(c0 * tc + c1 * tc**2 / 2, axis=1)], axis=1)
-    l_bottom = np.concatenate([zeros, np.cumsum(p_bottom[:, :-1] * tc + c0 * tc**2 / 2 + c1 * tc**3 / 6, axis=1)],
-                              axis=1)
+    l_bottom = np.concatenate(
+        [zeros, np.cumsum(p_bottom[:, :-1] * tc + c0 * tc**2 / 2 + c1 * tc**3 / 6, axis=1)], axis=1
+    )
 
     def inside(p_b, l_b, a, b, h):  # P and L at height h above a layer's bottom
         return p_b + a * h + b * h**2 / 2, l_b + p_b * h + a * h**2 / 2 + b * h**3 / 6
 
     k0 = min(int(np.searchsorted(np.real(z[0]), 0.0, side="right")) - 1, t.shape[1] - 1)
     p0, l0 = inside(p_bottom[:, k0], l_bottom[:, k0], c0[:, k0], c1[:, k0], -z[:, k0, None])
-    p, lam = inside(p_bottom[:, :-1, None, :], l_bottom[:, :-1, None, :], c0[:, :, None, :], c1[:, :, None, :],
-                    local[..., None])
+    p, lam = inside(
+        p_bottom[:, :-1, None, :],
+        l_bottom[:, :-1, None, :],
+        c0[:, :, None, :],
+        c1[:, :, None, :],
+        local[..., None],
+    )
     z_q = (z[:, :-1, None] + local)[..., None]
     return p - p0[:, None, None], lam - l0[:, None, None] - p0[:, None, None] * z_q
 
@@ -201,13 +208,22 @@ def _jourawski(t: np.ndarray, axial: np.ndarray, z: np.ndarray, z_q: np.ndarray)
     a = np.sum(axial * t, axis=1)
     z_n = (np.sum(axial * np.diff(z**2, axis=1), axis=1) / 2 / a)[:, None]
     step = axial * np.diff((z - z_n) ** 2, axis=1) / 2
-    g_bottom = np.concatenate([np.zeros((len(t), 1), dtype=step.dtype), np.cumsum(step, axis=1)[:, :-1]], axis=1)
+    g_bottom = np.concatenate(
+        [np.zeros((len(t), 1), dtype=step.dtype), np.cumsum(step, axis=1)[:, :-1]], axis=1
+    )
     z_n = z_n[:, :, None]
     return g_bottom[:, :, None] + axial[:, :, None] * ((z_q - z_n) ** 2 - (z[:, :-1, None] - z_n) ** 2) / 2
 
 
-def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarray, qbar: np.ndarray,
-                 shear: np.ndarray, e3: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def coefficients(
+    groups: tuple[int, ...],
+    stretch: tuple[int, ...],
+    t: np.ndarray,
+    qbar: np.ndarray,
+    shear: np.ndarray,
+    e3: np.ndarray,
+    rho: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """(stiffness, inertia) generalised coefficients (``stiffness_names``, ``inertia_names``
     order) from per-layer thickness t [m], Qbar (N, 6) [Pa], transverse shear moduli
     [Qb44, Qb55, Qb45] (N, 3) [Pa], through-thickness modulus E3 [Pa] and density
@@ -218,8 +234,10 @@ def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarra
         stiffness, inertia = coefficients(groups, stretch, *(x[None] for x in (t, qbar, shear, e3, rho)))
         return stiffness[0], inertia[0]
     batch, n_layers, n, m = len(t), len(groups), max(groups) + 1, 2 * len(stretch)
-    z = np.concatenate([np.zeros((batch, 1), dtype=t.dtype), np.cumsum(t, axis=1)], axis=1) \
+    z = (
+        np.concatenate([np.zeros((batch, 1), dtype=t.dtype), np.cumsum(t, axis=1)], axis=1)
         - np.sum(t, axis=1, keepdims=True) / 2
+    )
     points, weights = _GAUSS
     local = t[:, :, None] * (points + 1) / 2  # height above each layer's bottom
     z_q = z[:, :-1, None] + local
@@ -244,7 +262,8 @@ def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarra
     transverse_mass = np.einsum("xl,xlq,xlqa,xlqb->xab", rho, w_q, transverse, transverse)
     normal_pairs = np.array(basis_pairs(1 + m)[1:], dtype=int).reshape(-1, 2)
     inertia.append(transverse_mass[:, normal_pairs[:, 0], normal_pairs[:, 1]])
-    raw = np.einsum("ln,xlc->xnc", group_member, t[:, :, None] * shear)  # int Qb44, Qb55, Qb45 over each group
+    # int Qb44, Qb55, Qb45 over each group
+    raw = np.einsum("ln,xlc->xnc", group_member, t[:, :, None] * shear)
     corrected = []
     for axial, modulus in ((qbar[:, :, 2], shear[:, :, 0]), (qbar[:, :, 0], shear[:, :, 1])):
         g = _jourawski(t, axial, z, z_q)
@@ -255,16 +274,28 @@ def coefficients(groups: tuple[int, ...], stretch: tuple[int, ...], t: np.ndarra
     a45 = np.sqrt(a44 / raw[:, :, 0] * a55 / raw[:, :, 1]) * raw[:, :, 2]
     index = np.array(stretch, dtype=int)
     normal = np.stack([e3[:, index] * t[:, index], e3[:, index] * t[:, index] / 3], axis=2)
-    return (np.concatenate([stiffness, np.stack([a44, a55, a45], axis=2).reshape(batch, -1),
-                            normal.reshape(batch, 2 * len(stretch))], axis=1),
-            np.concatenate(inertia, axis=1))
+    return (
+        np.concatenate(
+            [
+                stiffness,
+                np.stack([a44, a55, a45], axis=2).reshape(batch, -1),
+                normal.reshape(batch, 2 * len(stretch)),
+            ],
+            axis=1,
+        ),
+        np.concatenate(inertia, axis=1),
+    )
 
 
 def _layer_inputs(laminate: Laminate):
     layers = laminate.layers
-    return (np.array([l.thickness for l in layers]), np.array([l.off_axis_stiffness for l in layers]),
-            np.array([l.shear_moduli for l in layers]), np.array([normal_modulus(l.material) for l in layers]),
-            np.array([l.material.density for l in layers]))
+    return (
+        np.array([l.thickness for l in layers]),
+        np.array([l.off_axis_stiffness for l in layers]),
+        np.array([l.shear_moduli for l in layers]),
+        np.array([normal_modulus(l.material) for l in layers]),
+        np.array([l.material.density for l in layers]),
+    )
 
 
 def _layer_directions(laminate: Laminate, kind: str, target: str):
@@ -278,8 +309,10 @@ def _layer_directions(laminate: Laminate, kind: str, target: str):
             if kind in ELASTIC_CONSTANTS:
                 qbar[k] = layer.off_axis_derivatives[kind]
             # A defaulted G13 or G23 follows G12, a defaulted E3 follows E2.
-            follows = [kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
-                       for name in SHEAR_MODULI]
+            follows = [
+                kind == name or (kind == "G12" and name in material.defaulted_shear_moduli)
+                for name in SHEAR_MODULI
+            ]
             shear[k] = rotated_shear_moduli(*map(float, follows), layer.angle)
             e3[k] = float(kind == "E2" and getattr(material, "E3", None) is None)
         elif kind == "density" and material.name == target:
@@ -304,7 +337,9 @@ class LayerwiseLaminate:
 
     @classmethod
     def of(cls, laminate: Laminate, grouping: str = "auto", core_stretch: bool = True) -> LayerwiseLaminate:
-        return cls(laminate, layer_groups(laminate, grouping), stretching_layers(laminate) if core_stretch else ())
+        return cls(
+            laminate, layer_groups(laminate, grouping), stretching_layers(laminate) if core_stretch else ()
+        )
 
     @property
     def n_groups(self) -> int:
@@ -332,7 +367,7 @@ class LayerwiseLaminate:
         member[np.arange(len(self.groups)), self.groups] = 1.0
         raw = member.T @ (t[:, None] * shear)
         n, m = self.n_groups, 2 * len(self.stretch)
-        s = self.stiffness[len(self.stiffness) - m - 3 * n:len(self.stiffness) - m].reshape(-1, 3)
+        s = self.stiffness[len(self.stiffness) - m - 3 * n : len(self.stiffness) - m].reshape(-1, 3)
         return s[:, :2] / raw[:, :2]
 
     def derivative(self, kind: str, target: str) -> tuple[np.ndarray, np.ndarray]:
@@ -345,8 +380,10 @@ class LayerwiseLaminate:
         """``derivative`` of every (kind, target) of ``parameters`` at once, (P, stiffness)
         and (P, inertia): one complex-step pass whose batch holds every direction."""
         directions = [_layer_directions(self.laminate, kind, target) for kind, target in parameters]
-        perturbed = [x + 1j * COMPLEX_STEP * np.stack([d[i] for d in directions])
-                     for i, x in enumerate(_layer_inputs(self.laminate))]
+        perturbed = [
+            x + 1j * COMPLEX_STEP * np.stack([d[i] for d in directions])
+            for i, x in enumerate(_layer_inputs(self.laminate))
+        ]
         stiffness, inertia = coefficients(self.groups, self.stretch, *perturbed)
         return stiffness.imag / COMPLEX_STEP, inertia.imag / COMPLEX_STEP
 

@@ -1,4 +1,5 @@
 """Orthotropic ply materials in plane stress (SI units inside: Pa, kg/m^3)."""
+
 from __future__ import annotations
 
 import math
@@ -27,8 +28,15 @@ DAMPING_PARAMETERS = ("eta",) + LOSS_FACTORS
 #: damping layers reach 1-1.5 at their glass transition; beyond 2 a "modal" resonance no
 #: longer exists in a free-plate test.
 MAX_LOSS_FACTOR = 2.0
-DEFAULT_BOUNDS = {"E1": MODULUS_RANGE, "E2": MODULUS_RANGE, "G12": MODULUS_RANGE, "G13": MODULUS_RANGE,
-                  "G23": MODULUS_RANGE, "nu12": (0.0, 0.5), "density": DENSITY_RANGE}
+DEFAULT_BOUNDS = {
+    "E1": MODULUS_RANGE,
+    "E2": MODULUS_RANGE,
+    "G12": MODULUS_RANGE,
+    "G13": MODULUS_RANGE,
+    "G23": MODULUS_RANGE,
+    "nu12": (0.0, 0.5),
+    "density": DENSITY_RANGE,
+}
 
 
 @dataclass(frozen=True)
@@ -54,8 +62,9 @@ class Material:
     G13: float | None = None
     G23: float | None = None
     identify: tuple[str, ...] = ()
-    bounds: tuple[tuple[str, float, float], ...] = ()   # (kind, lower, upper) [SI] set in the spec
-    E3: float | None = None  # through-thickness modulus [Pa]: a stretching core's (layerwise model); None = E2
+    bounds: tuple[tuple[str, float, float], ...] = ()  # (kind, lower, upper) [SI] set in the spec
+    # through-thickness modulus [Pa]: a stretching core's (layerwise model); None = E2
+    E3: float | None = None
     # Loss factors of E1, E2 and G12 [-] (E*(1 + i eta)); None = not given (taken as 0, an
     # elastic material, and said so by a damping identification).  The transverse shear
     # moduli G13, G23 carry eta_G12.
@@ -65,11 +74,19 @@ class Material:
     identify_damping: tuple[str, ...] = ()  # of DAMPING_PARAMETERS; () = known loss factors
 
     def __post_init__(self):
-        kinds = ELASTIC_CONSTANTS if self.identify is True else () if self.identify is False else tuple(self.identify)
+        kinds = (
+            ELASTIC_CONSTANTS
+            if self.identify is True
+            else ()
+            if self.identify is False
+            else tuple(self.identify)
+        )
         unknown = [k for k in kinds if k not in MATERIAL_PARAMETERS]
         if unknown:
-            raise SpecError(f"material '{self.name}': identify = {list(kinds)!r}: {unknown[0]!r} is not a material "
-                            f"property; use true, false or a list of {', '.join(MATERIAL_PARAMETERS)}")
+            raise SpecError(
+                f"material '{self.name}': identify = {list(kinds)!r}: {unknown[0]!r} is not a material "
+                f"property; use true, false or a list of {', '.join(MATERIAL_PARAMETERS)}"
+            )
         object.__setattr__(self, "identify", kinds)
         for field in ("E1", "E2", "G12", "density"):
             value = getattr(self, field)
@@ -84,28 +101,41 @@ class Material:
         for field in ("E1", "E2", "G12", "G13", "G23", "E3"):
             value = getattr(self, field)
             if value is not None and value < MODULUS_RANGE[0]:
-                raise SpecError(f"material '{self.name}': {field} = {value:g} Pa is below {MODULUS_RANGE[0]:g} Pa: a "
-                                f"unit slip? Moduli are in Pa here (e.g. {value:g}e9 for {value:g} GPa); specs give GPa")
+                raise SpecError(
+                    f"material '{self.name}': {field} = {value:g} Pa is below {MODULUS_RANGE[0]:g} Pa: a "
+                    f"unit slip? Moduli are in Pa here (e.g. {value:g}e9 for {value:g} GPa); specs give GPa"
+                )
         if self.density < DENSITY_RANGE[0]:
-            raise SpecError(f"material '{self.name}': density = {self.density:g} kg/m^3 is below {DENSITY_RANGE[0]:g}: "
-                            "a unit slip? Densities are in kg/m^3 (7850 for steel, not 7.85)")
+            raise SpecError(
+                f"material '{self.name}': density = {self.density:g} kg/m^3 is below {DENSITY_RANGE[0]:g}: "
+                "a unit slip? Densities are in kg/m^3 (7850 for steel, not 7.85)"
+            )
         for field in LOSS_FACTORS:
             value = getattr(self, field)
-            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)
-                                          and 0 <= value <= MAX_LOSS_FACTOR):
-                raise SpecError(f"material '{self.name}': {field} = {value!r} must be a loss factor 0..{MAX_LOSS_FACTOR:g} "
-                                "(0.001 for steel, 0.01-0.1 for polymers, up to 1-1.5 for damping layers)")
+            if value is not None and not (
+                isinstance(value, (int, float)) and math.isfinite(value) and 0 <= value <= MAX_LOSS_FACTOR
+            ):
+                raise SpecError(
+                    f"material '{self.name}': {field} = {value!r} must be a loss factor "
+                    f"0..{MAX_LOSS_FACTOR:g} "
+                    "(0.001 for steel, 0.01-0.1 for polymers, up to 1-1.5 for damping layers)"
+                )
         unknown = [k for k in self.identify_damping if k not in DAMPING_PARAMETERS]
         if unknown or ("eta" in self.identify_damping and len(self.identify_damping) > 1):
-            raise SpecError(f"material '{self.name}': identify_damping = {list(self.identify_damping)!r}: need true, "
-                            f"false or a list of {', '.join(LOSS_FACTORS)}, or [\"eta\"] alone (one loss factor for "
-                            "all three moduli)")
+            raise SpecError(
+                f"material '{self.name}': identify_damping = {list(self.identify_damping)!r}: need true, "
+                f'false or a list of {", ".join(LOSS_FACTORS)}, or ["eta"] alone (one loss factor for '
+                "all three moduli)"
+            )
         isotropic = self.E1 == self.E2 and abs(self.G12 * 2 * (1 + self.nu12) / self.E1 - 1) < 1e-6
         if isotropic and not -1 < self.nu12 < 0.5:
-            raise SpecError(f"material '{self.name}': nu12 = {self.nu12!r} for an isotropic material "
-                            "(E1 = E2, G12 = E/2(1 + nu)): need -1 < nu < 0.5 (steel 0.3, rubber 0.499)")
+            raise SpecError(
+                f"material '{self.name}': nu12 = {self.nu12!r} for an isotropic material "
+                "(E1 = E2, G12 = E/2(1 + nu)): need -1 < nu < 0.5 (steel 0.3, rubber 0.499)"
+            )
         limit = self.E1 / self.E2
-        if not (math.isfinite(self.nu12) and abs(self.nu12) < math.sqrt(limit)):  # nu12^2 < E1/E2, no overflow
+        # nu12^2 < E1/E2, no overflow
+        if not (math.isfinite(self.nu12) and abs(self.nu12) < math.sqrt(limit)):
             raise SpecError(
                 f"material '{self.name}': nu12 = {self.nu12!r} makes the ply stiffness not positive "
                 f"definite: need nu12^2 < E1/E2 = {limit:.4g} (|nu12| < {math.sqrt(limit):.4g})"

@@ -8,6 +8,7 @@ laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``,
 cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
 element matrices (``combined_data``).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -82,9 +83,9 @@ class UnitMatrices:
         first = matrices(self.elements[0]).reshape(-1, self.element_dofs.shape[1] ** 2)
         if first.nbytes * len(self.elements) <= SPARSE_UNITS_ABOVE:
             out = np.empty((first.shape[0], len(self.elements) * first.shape[1]))
-            out[:, :first.shape[1]] = first
+            out[:, : first.shape[1]] = first
             for g, element in enumerate(self.elements[1:], start=1):
-                out[:, g * first.shape[1]:(g + 1) * first.shape[1]] = matrices(element).reshape(first.shape)
+                out[:, g * first.shape[1] : (g + 1) * first.shape[1]] = matrices(element).reshape(first.shape)
             return out
         rest = (sp.csr_matrix(matrices(e).reshape(first.shape)) for e in self.elements[1:])
         return sp.hstack([sp.csr_matrix(first), *rest], format="csr")
@@ -136,7 +137,9 @@ class UnitMatrices:
     def combined_data(self, weights: np.ndarray, element_matrices: np.ndarray | sp.csr_matrix) -> np.ndarray:
         """CSR data of sum_c weights_c (assembled element_matrices_c), summed per element
         first: one aggregation instead of n_c unit data arrays in memory."""
-        combined = element_matrices.T @ weights if sp.issparse(element_matrices) else weights @ element_matrices
+        combined = (
+            element_matrices.T @ weights if sp.issparse(element_matrices) else weights @ element_matrices
+        )
         return self._pattern[2] @ combined
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
@@ -232,7 +235,7 @@ class UnitMatrices:
         for g, element in enumerate(self.elements):
             x = local if len(self.elements) == 1 else local[group == g]
             for start in range(0, len(x), chunk):
-                part = x[start:start + chunk]
+                part = x[start : start + chunk]
                 yield element, part.transpose(1, 0, 2).reshape(part.shape[1], -1)
 
     @cached_property
@@ -240,19 +243,23 @@ class UnitMatrices:
         """The element type's six rigid-body displacement fields on this mesh (n_dofs, 6)."""
         return self.element_type.rigid_body_modes(self.mesh.node_xy)
 
-
     @property
     def nbytes(self) -> int:
         """What the unit set holds so far [bytes] (its parts are made when first used)."""
-        return sum(_nbytes(part) for value in self.__dict__.values()
-                   for part in (value if isinstance(value, tuple) else (value,)))
+        return sum(
+            _nbytes(part)
+            for value in self.__dict__.values()
+            for part in (value if isinstance(value, tuple) else (value,))
+        )
 
 
 def _nbytes(part) -> int:
     if isinstance(part, np.ndarray):
         return part.nbytes
     if sp.issparse(part):
-        return sum(getattr(part, name).nbytes for name in ("data", "indices", "indptr") if hasattr(part, name))
+        return sum(
+            getattr(part, name).nbytes for name in ("data", "indices", "indptr") if hasattr(part, name)
+        )
     return 0
 
 

@@ -15,6 +15,7 @@ the footprint's points):
     d(lambda)/dm = -lambda |phi(x, y)|^2,  d(lambda)/dx = -lambda m d|phi|^2/dx,
     d(lambda)/dk = sum over points w(x_p, y_p)^2.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -59,21 +60,30 @@ def check_attachment(attachment, length: float, width: float) -> None:
     """Reject negative masses or stiffnesses and points off the plate."""
     if isinstance(attachment, PointMass):
         if not (np.isfinite(attachment.mass) and attachment.mass >= 0):
-            raise SpecError(f"point mass '{attachment.label}': mass = {attachment.mass!r} kg must not be negative")
+            raise SpecError(
+                f"point mass '{attachment.label}': mass = {attachment.mass!r} kg must not be negative"
+            )
         if not (np.isfinite(attachment.base) and 0 <= attachment.base <= 0.5 * min(length, width)):
-            raise SpecError(f"point mass '{attachment.label}': base = {1e3 * attachment.base:g} mm must be 0 (a point) "
-                            f"up to half the plate's shorter side ({500 * min(length, width):g} mm); it is the side "
-                            "of the sensor's square footprint in mm")
+            raise SpecError(
+                f"point mass '{attachment.label}': base = {1e3 * attachment.base:g} mm must be 0 (a point) "
+                f"up to half the plate's shorter side ({500 * min(length, width):g} mm); it is the side "
+                "of the sensor's square footprint in mm"
+            )
         points = [(attachment.x, attachment.y)]
     else:
         if not (np.isfinite(attachment.stiffness) and attachment.stiffness >= 0):
-            raise SpecError(f"suspension '{attachment.label}': stiffness = {attachment.stiffness!r} N/m "
-                            "must not be negative")
+            raise SpecError(
+                f"suspension '{attachment.label}': stiffness = {attachment.stiffness!r} N/m "
+                "must not be negative"
+            )
         points = attachment.points
     for x, y in points:
         if not (0 <= x <= length and 0 <= y <= width):
-            raise SpecError(f"'{attachment.label}': point ({1e3 * x:g}, {1e3 * y:g}) mm is outside the plate "
-                            f"(0..{1e3 * length:g} x 0..{1e3 * width:g} mm); coordinates are from the corner at the origin")
+            raise SpecError(
+                f"'{attachment.label}': point ({1e3 * x:g}, {1e3 * y:g}) mm is outside the plate "
+                f"(0..{1e3 * length:g} x 0..{1e3 * width:g} mm); coordinates are from the corner at the "
+                "origin"
+            )
 
 
 def point_operators(units: UnitMatrices, x: float, y: float) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -116,8 +126,10 @@ def base_square(mass: PointMass, length: float, width: float) -> tuple[float, fl
     """The corner (x0, y0) [m] of a mass's square base of side ``mass.base`` centred on it,
     shifted inside a ``length`` x ``width`` plate where it would overhang an edge."""
     half = 0.5 * mass.base
-    return (float(np.clip(mass.x - half, 0.0, length - mass.base)),
-            float(np.clip(mass.y - half, 0.0, width - mass.base)))
+    return (
+        float(np.clip(mass.x - half, 0.0, length - mass.base)),
+        float(np.clip(mass.y - half, 0.0, width - mass.base)),
+    )
 
 
 def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, float, bool, bool]]:
@@ -134,11 +146,13 @@ def footprint(units: UnitMatrices, mass: PointMass) -> list[tuple[float, float, 
     nodes, weights = np.polynomial.legendre.leggauss(FOOTPRINT_GAUSS)
     per_axis = []
     for start, lines in ((x0, mesh.x), (y0, mesh.y)):
-        cuts = np.unique(np.concatenate([[start, start + mass.base],
-                                         lines[(lines > start) & (lines < start + mass.base)]]))
+        cuts = np.unique(
+            np.concatenate([[start, start + mass.base], lines[(lines > start) & (lines < start + mass.base)]])
+        )
         a, b = cuts[:-1, None], cuts[1:, None]
-        per_axis.append(((0.5 * (a + b) + 0.5 * (b - a) * nodes).ravel(),
-                         (0.5 * (b - a) * weights / mass.base).ravel()))
+        per_axis.append(
+            ((0.5 * (a + b) + 0.5 * (b - a) * nodes).ravel(), (0.5 * (b - a) * weights / mass.base).ravel())
+        )
     (xs, wx), (ys, wy) = per_axis
     return [(float(x), float(y), float(a * b), *moves) for x, a in zip(xs, wx) for y, b in zip(ys, wy)]
 
@@ -164,12 +178,17 @@ def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.nd
     nnz = units._pattern[0].size
     stiffness, mass = np.zeros(nnz), np.zeros(nnz)
     for is_mass, dofs, rows, weight in _point_terms(units, attachments):
-        np.add.at(mass if is_mass else stiffness, _data_positions(units, dofs),
-                  weight * sum(np.outer(row, row) for row in rows))
+        np.add.at(
+            mass if is_mass else stiffness,
+            _data_positions(units, dofs),
+            weight * sum(np.outer(row, row) for row in rows),
+        )
     return stiffness, mass
 
 
-def projected_attachments(units: UnitMatrices, basis: np.ndarray, attachments) -> tuple[np.ndarray, np.ndarray]:
+def projected_attachments(
+    units: UnitMatrices, basis: np.ndarray, attachments
+) -> tuple[np.ndarray, np.ndarray]:
     """The stiffness and mass the attachments add, projected on a basis V (n_dofs, r):
     (r, r) each, from the basis's values at their points (the terms of
     ``attachment_data``, on the few DOFs of the elements that hold them)."""
@@ -182,8 +201,9 @@ def projected_attachments(units: UnitMatrices, basis: np.ndarray, attachments) -
     return stiffness, mass
 
 
-def eigenvalue_derivative(units: UnitMatrices, attachment, kind: str, shapes: np.ndarray,
-                          eigenvalues: np.ndarray) -> np.ndarray:
+def eigenvalue_derivative(
+    units: UnitMatrices, attachment, kind: str, shapes: np.ndarray, eigenvalues: np.ndarray
+) -> np.ndarray:
     """d(omega^2)/dp of every mode for an attachment parameter (mass [kg], x, y [m],
     stiffness [N/m])."""
     if isinstance(attachment, PointMass):
@@ -195,10 +215,13 @@ def eigenvalue_derivative(units: UnitMatrices, attachment, kind: str, shapes: np
             local = shapes[dofs]
             if kind == "mass":
                 total += share * sum((n[f] @ local) ** 2 for f in ("u", "v", "w"))
-            elif (moves_x if kind == "x" else moves_y):
+            elif moves_x if kind == "x" else moves_y:
                 suffix = "_" + kind
-                total += share * attachment.mass * sum(2 * (n[f] @ local) * (n[f + suffix] @ local)
-                                                       for f in ("u", "v", "w"))
+                total += (
+                    share
+                    * attachment.mass
+                    * sum(2 * (n[f] @ local) * (n[f + suffix] @ local) for f in ("u", "v", "w"))
+                )
         return -eigenvalues * total
     if kind != "stiffness":
         raise SpecError(f"suspension '{attachment.label}' has no parameter {kind!r}; it has: stiffness")

@@ -14,6 +14,7 @@ first elastic mode), the rigid-body fields deflated as in ``fem.solver.modal``, 
 shift-invert for the lowest modes; each complex mode is paired with a real mode by
 the mass-weighted MAC, so the loss factors come in the real modes' order.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -62,8 +63,10 @@ def complex_loss_factors(model: SpecimenModel, configuration: str) -> np.ndarray
     the order of their Re(lambda), and only their lambda-weighted sum is comparable with
     the first-order estimate mode by mode."""
     if model.options.theory != "single_layer":
-        raise ModelError(f"the complex eigenproblem is built for the single-layer plate theories, not "
-                         f"{model.options.theory!r}; use the first-order loss factors (fem.solver.damping)")
+        raise ModelError(
+            f"the complex eigenproblem is built for the single-layer plate theories, not "
+            f"{model.options.theory!r}; use the first-order loss factors (fem.solver.damping)"
+        )
     real = model.solve(configuration)
     return _solve(real, complex_coefficients(real.laminate, real.transverse_shear))
 
@@ -85,14 +88,16 @@ def _solve(real: LaminateSolution, coefficients: np.ndarray) -> np.ndarray:
     sigma = -0.1 * modes.eigenvalues[0]
     lu = spla.splu((k_matrix - sigma * m_matrix).tocsc())
     n_dofs = units.n_dofs
-    operator = spla.LinearOperator((n_dofs, n_dofs), matvec=lambda x: deflate(lu.solve(x.astype(complex))),
-                                   dtype=complex)
+    operator = spla.LinearOperator(
+        (n_dofs, n_dofs), matvec=lambda x: deflate(lu.solve(x.astype(complex))), dtype=complex
+    )
     extra = 6 if suspended else 0
     k = min(n_modes + 4 + extra, n_dofs - 2)
     start = deflate(np.random.default_rng(0).standard_normal(n_dofs).astype(complex))
     try:
-        lam, phi = spla.eigs(k_matrix, k=k, M=m_matrix, sigma=sigma, which="LM", v0=start, tol=1e-10,
-                             OPinv=operator)
+        lam, phi = spla.eigs(
+            k_matrix, k=k, M=m_matrix, sigma=sigma, which="LM", v0=start, tol=1e-10, OPinv=operator
+        )
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the complex eigen-solver did not converge for {k} modes: {exc}") from exc
     # Pair with the real modes by the mass-weighted MAC (|a^T M b|^2, a real and
@@ -109,7 +114,9 @@ def _solve(real: LaminateSolution, coefficients: np.ndarray) -> np.ndarray:
         order[members] = sorted(order[members], key=lambda j: lam[j].real)
     worst = grouped[np.arange(n_modes), order].min()
     if worst < PAIRING_MAC:
-        raise ModelError(f"a damped mode could not be paired with its elastic one (MAC {worst:.2f}): the damping "
-                         "changes the mode shapes too much for modal loss factors")
+        raise ModelError(
+            f"a damped mode could not be paired with its elastic one (MAC {worst:.2f}): the damping "
+            "changes the mode shapes too much for modal loss factors"
+        )
     lam = lam[order]
     return lam.imag / lam.real

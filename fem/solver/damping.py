@@ -18,6 +18,7 @@ too (a G13 or G23 not given follows G12 already; a given one is added to eta_G12
 weight).  ``eta`` is one loss factor for all of them.  The layerwise model's through-
 thickness modulus E3 is taken as elastic.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -65,8 +66,12 @@ def loss_columns(model: SpecimenModel, targets: list[tuple[str, str]]) -> np.nda
 
 def known_targets(model: SpecimenModel) -> list[tuple[str, str]]:
     """(material, loss factor) of every loss factor that is not identified, every material."""
-    return [(m.name, kind) for m in model.specimen.materials.values() for kind in LOSS_FACTORS
-            if kind not in m.identify_damping and "eta" not in m.identify_damping]
+    return [
+        (m.name, kind)
+        for m in model.specimen.materials.values()
+        for kind in LOSS_FACTORS
+        if kind not in m.identify_damping and "eta" not in m.identify_damping
+    ]
 
 
 def first_order_loss_factors(model: SpecimenModel) -> dict[str, np.ndarray]:
@@ -79,7 +84,7 @@ def first_order_loss_factors(model: SpecimenModel) -> dict[str, np.ndarray]:
         return {c.name: np.zeros(n) for c in model.specimen.configurations}
     etas = np.array([materials[name].loss_factor(kind) for name, kind in targets])
     stacked = loss_columns(model, targets) @ etas
-    return {c.name: stacked[k * n:(k + 1) * n] for k, c in enumerate(model.specimen.configurations)}
+    return {c.name: stacked[k * n : (k + 1) * n] for k, c in enumerate(model.specimen.configurations)}
 
 
 def loss_from_ratio(zeta):

@@ -1,4 +1,5 @@
 """Structured rectangular meshes of a plate."""
+
 from __future__ import annotations
 
 import math
@@ -100,15 +101,19 @@ class PlateMesh:
     def __post_init__(self):
         if self.nx < 1 or self.ny < 1:
             raise ModelError(f"mesh: nx = {self.nx}, ny = {self.ny}; need at least one element each way")
-        for name, nodes, n, side in (("x_nodes", self.x_nodes, self.nx, self.length),
-                                     ("y_nodes", self.y_nodes, self.ny, self.width)):
-            if nodes is not None and (len(nodes) != n + 1 or nodes[0] != 0.0 or nodes[-1] != side
-                                      or np.any(np.diff(nodes) <= 0)):
+        for name, nodes, n, side in (
+            ("x_nodes", self.x_nodes, self.nx, self.length),
+            ("y_nodes", self.y_nodes, self.ny, self.width),
+        ):
+            if nodes is not None and (
+                len(nodes) != n + 1 or nodes[0] != 0.0 or nodes[-1] != side or np.any(np.diff(nodes) <= 0)
+            ):
                 raise ModelError(f"mesh: {name} must rise from 0 to {side:g} m in {n + 1} positions")
 
     @classmethod
-    def with_element_size(cls, length: float, width: float, divisions: int,
-                          edge_size: float | None = None, bases=()) -> PlateMesh:
+    def with_element_size(
+        cls, length: float, width: float, divisions: int, edge_size: float | None = None, bases=()
+    ) -> PlateMesh:
         """``divisions`` elements along the longer side, a matching count along the other;
         with ``edge_size`` [m], graded towards the four edges (``_spacing``); each of
         ``bases`` ((x0, x1, y0, y1) [m], a sensor's footprint) divided into
@@ -121,7 +126,12 @@ class PlateMesh:
         if bases and FOOTPRINT_ELEMENTS:
             x = with_footprints(x, [(b[0], b[1]) for b in bases], FOOTPRINT_ELEMENTS)
             y = with_footprints(y, [(b[2], b[3]) for b in bases], FOOTPRINT_ELEMENTS)
-        if len(x) == nx + 1 and len(y) == ny + 1 and np.allclose(np.diff(x), x[1]) and np.allclose(np.diff(y), y[1]):
+        if (
+            len(x) == nx + 1
+            and len(y) == ny + 1
+            and np.allclose(np.diff(x), x[1])
+            and np.allclose(np.diff(y), y[1])
+        ):
             return cls(length, width, nx, ny)
         return cls(length, width, len(x) - 1, len(y) - 1, tuple(map(float, x)), tuple(map(float, y)))
 

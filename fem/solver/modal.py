@@ -1,4 +1,5 @@
 """Free-free modal solve: sparse shift-invert Lanczos, rigid-body modes removed."""
+
 from __future__ import annotations
 
 import math
@@ -103,10 +104,13 @@ def solve_modes(
         rigid = all_rigid @ combos[:, ~held]
     else:
         rigid = all_rigid
-        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (abs(stiffness).max() * np.linalg.norm(rigid, axis=0))
+        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (
+            abs(stiffness).max() * np.linalg.norm(rigid, axis=0)
+        )
         if leak.max() > RIGID_LEAK:
             raise ModelError(
-                f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free plate"
+                f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free "
+                "plate"
             )
     k = n_modes + 2 + n_suspension
     if k >= n_dofs // 2:
@@ -114,7 +118,9 @@ def solve_modes(
     sigma = -0.1 * shift_scale
     shifted = stiffness_data - sigma * mass_data
     try:
-        factor = sla.cholesky_banded(units.banded(shifted), lower=False, overwrite_ab=True, check_finite=False)
+        factor = sla.cholesky_banded(
+            units.banded(shifted), lower=False, overwrite_ab=True, check_finite=False
+        )
     except sla.LinAlgError as exc:
         raise ModelError(
             "the stiffness matrix is not positive semi-definite: check the material values and units"
@@ -133,8 +139,11 @@ def solve_modes(
         return x - rigid_basis @ (rigid_basis.T @ x)
 
     transformed_mass = spla.LinearOperator(
-        (n_dofs, n_dofs), dtype=float,
-        matvec=lambda x: deflate(_transposed_solve(factor, (mass @ _solve(reversed_factor, deflate(x))[rank])[order])),
+        (n_dofs, n_dofs),
+        dtype=float,
+        matvec=lambda x: deflate(
+            _transposed_solve(factor, (mass @ _solve(reversed_factor, deflate(x))[rank])[order])
+        ),
     )
     start = deflate(np.random.default_rng(0).standard_normal(n_dofs))
     try:
@@ -156,7 +165,8 @@ def solve_modes(
         if suspension.sum() != n_suspension or not suspension[:n_suspension].all():
             raise ModelError(
                 f"the {n_suspension} suspension modes cannot be told from the elastic ones (found "
-                f"{int(suspension.sum())} rigid-like among the lowest); the suspension is too stiff for a free test"
+                f"{int(suspension.sum())} rigid-like among the lowest); the suspension is too stiff for a "
+                "free test"
             )
         lam, phi = lam[~suspension], phi[:, ~suspension]
     lam, phi = lam[:n_modes], phi[:, :n_modes]
@@ -166,4 +176,3 @@ def solve_modes(
             "check for a zero modulus or a disconnected layer"
         )
     return Modes(lam, phi)
-

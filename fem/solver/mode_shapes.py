@@ -13,6 +13,7 @@ y, "(i,j)", as before; a mode that mixes two products about equally (the square 
 ring and X modes, (2,0) + (0,2) and (2,0) - (0,2)) is labelled with both and the sign
 that tells them apart.  Beam functions are signed so that phi_k(0) > 0.
 """
+
 from __future__ import annotations
 
 import math
@@ -60,8 +61,12 @@ def beam_functions(xi: np.ndarray, order: int = ORDER) -> np.ndarray:
         # ((1 - s) e^{b xi} + (1 + s) e^{-b xi}) / 2, 1 - s = (cos b - sin b - e^{-b}) / (sinh b - sin b).
         one_minus_s = (math.cos(b) - math.sin(b) - math.exp(-b)) / (math.sinh(b) - math.sin(b))
         s = 1.0 - one_minus_s
-        out[k] = (one_minus_s * np.exp(b * xi) / 2 + (1 + s) * np.exp(-b * xi) / 2
-                  + np.cos(b * xi) - s * np.sin(b * xi))
+        out[k] = (
+            one_minus_s * np.exp(b * xi) / 2
+            + (1 + s) * np.exp(-b * xi) / 2
+            + np.cos(b * xi)
+            - s * np.sin(b * xi)
+        )
     return out
 
 
@@ -92,8 +97,9 @@ def deflection_operator(units: UnitMatrices, x: np.ndarray, y: np.ndarray) -> sp
             rows.append(np.arange(x.size))
             cols.append(node * per_node + w_first + d)
             data.append(vx[2 * i + ax] * vy[2 * j + ay])
-    return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(x.size, units.n_dofs))
+    return sp.csr_matrix(
+        (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(x.size, units.n_dofs)
+    )
 
 
 def deflection_sampler(units: UnitMatrices) -> sp.csr_matrix:
@@ -176,4 +182,15 @@ def label_shares(coefficients: np.ndarray, mode_labels, label: str) -> np.ndarra
     return np.where(np.asarray(mode_labels) == "in-plane", 0.0, shares)
 
 
-__all__ = ["beam_functions", "beam_coefficients", "deflection_operator", "in_plane", "label_of", "pattern", "affinity", "label_shares", "ORDER", "LABEL_SHARE"]
+__all__ = [
+    "beam_functions",
+    "beam_coefficients",
+    "deflection_operator",
+    "in_plane",
+    "label_of",
+    "pattern",
+    "affinity",
+    "label_shares",
+    "ORDER",
+    "LABEL_SHARE",
+]

@@ -16,6 +16,7 @@ screens trial steps on it (``identify.engine.objective.TrialScreen``), the peak-
 screen searches moduli on it (``identify.engine.peak_screen``) and the point-mass screen
 positions (``identify.fitting.point_mass_screen``); each solves what it accepts in full.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -74,8 +75,10 @@ class RitzSolution(LaminateSolution):
             return super().energies
         y = self.modes.coordinates
         stiffness, mass = self.projected
-        return ModalEnergies(np.einsum("ri,crs,si->ci", y, stiffness, y, optimize=True),
-                             np.einsum("ri,crs,si->ci", y, mass, y, optimize=True))
+        return ModalEnergies(
+            np.einsum("ri,crs,si->ci", y, stiffness, y, optimize=True),
+            np.einsum("ri,crs,si->ci", y, mass, y, optimize=True),
+        )
 
 
 @dataclass(frozen=True)
@@ -88,13 +91,18 @@ class Reanalysis:
     configuration: str
     options: ModelOptions
     base: LaminateSolution
-    basis: np.ndarray             # (n_dofs, r)
+    basis: np.ndarray  # (n_dofs, r)
     stiffness: np.ndarray | None  # (n_c, r, r) V^T K_c V; None: assembled
-    mass: np.ndarray | None       # (n_i, r, r) V^T M_j V; None: assembled
+    mass: np.ndarray | None  # (n_i, r, r) V^T M_j V; None: assembled
 
     @classmethod
-    def of(cls, model: SpecimenModel, configuration: str, extra: np.ndarray | None = None,
-           assembled: bool = False) -> Reanalysis:
+    def of(
+        cls,
+        model: SpecimenModel,
+        configuration: str,
+        extra: np.ndarray | None = None,
+        assembled: bool = False,
+    ) -> Reanalysis:
         """The reanalysis of ``configuration`` on ``model``'s full solve (cached), its basis
         enlarged by the ``extra`` fields (n_dofs, k), e.g. the modes at another point on
         the same mesh and theory: the basis then spans the modes between the two too.  The
@@ -115,7 +123,9 @@ class Reanalysis:
         raw = np.hstack(fields)
         coefficients, inertia = _weights(base, base.laminate, base.layerwise)
         if assembled:
-            gram = raw.T @ (units.matrix(system_data(units, coefficients, inertia, base.attachments)[1]) @ raw)
+            gram = raw.T @ (
+                units.matrix(system_data(units, coefficients, inertia, base.attachments)[1]) @ raw
+            )
         else:
             stiffness, mass = units.projections(raw)
             gram = np.tensordot(inertia, mass, 1)
@@ -126,9 +136,14 @@ class Reanalysis:
         transform = q[:, kept] / np.sqrt(mu[kept])
         if assembled:
             return cls(configuration, model.options, base, raw @ transform, None, None)
-        return cls(configuration, model.options, base, raw @ transform,
-                   np.einsum("ra,crs,sb->cab", transform, stiffness, transform, optimize=True),
-                   np.einsum("ra,crs,sb->cab", transform, mass, transform, optimize=True))
+        return cls(
+            configuration,
+            model.options,
+            base,
+            raw @ transform,
+            np.einsum("ra,crs,sb->cab", transform, stiffness, transform, optimize=True),
+            np.einsum("ra,crs,sb->cab", transform, mass, transform, optimize=True),
+        )
 
     @property
     def rigid(self) -> int:
@@ -148,8 +163,10 @@ class Reanalysis:
         coefficients, inertia = _weights(base, laminate, stack)
         if self.stiffness is None:
             units, basis = base.units, self.basis
-            stiffness, mass = (basis.T @ (units.matrix(data) @ basis)
-                               for data in system_data(units, coefficients, inertia, specimen.attachments))
+            stiffness, mass = (
+                basis.T @ (units.matrix(data) @ basis)
+                for data in system_data(units, coefficients, inertia, specimen.attachments)
+            )
             return stiffness, mass, stack
         stiffness = np.tensordot(coefficients, self.stiffness, 1)
         mass = np.tensordot(inertia, self.mass, 1)
@@ -180,13 +197,21 @@ class Reanalysis:
         stiffness, mass, stack = self._system(specimen)
         eigenvalues, coordinates = sla.eigh(stiffness, mass, check_finite=False)
         eigenvalues, coordinates = eigenvalues[self._elastic], coordinates[:, self._elastic]
-        return RitzSolution(specimen.laminate(self.configuration), base.units,
-                            RitzModes(eigenvalues, self.basis, coordinates), base.inertia_terms, base.transverse_shear,
-                            specimen.attachments, stack,
-                            projected=None if self.stiffness is None else (self.stiffness, self.mass))
+        return RitzSolution(
+            specimen.laminate(self.configuration),
+            base.units,
+            RitzModes(eigenvalues, self.basis, coordinates),
+            base.inertia_terms,
+            base.transverse_shear,
+            specimen.attachments,
+            stack,
+            projected=None if self.stiffness is None else (self.stiffness, self.mass),
+        )
 
 
-def _weights(base: LaminateSolution, laminate, stack: LayerwiseLaminate | None) -> tuple[np.ndarray, np.ndarray]:
+def _weights(
+    base: LaminateSolution, laminate, stack: LayerwiseLaminate | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The weights of the unit stiffness and mass matrices of ``base``'s theory for
     ``laminate``: its layerwise ``stack``'s generalised coefficients, else the single-layer
     theory's (``system_coefficients``)."""

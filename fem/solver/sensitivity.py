@@ -19,6 +19,7 @@ phi^T M phi = 1).  The matrix is regular for a simple eigenvalue; one factorizat
 mode serves every parameter.  Near-repeated eigenvalues make it ill-conditioned: their
 shapes' derivatives are large and not unique in the limit, as the physics says.
 """
+
 from __future__ import annotations
 
 import math
@@ -56,13 +57,21 @@ def eigenvalue_derivatives(
     return (d_stiffness @ energies.stiffness).T - eigenvalues[:, None] * (d_inertia @ energies.inertia).T
 
 
-def eigenvector_derivatives(stiffness: sp.spmatrix, mass: sp.spmatrix, eigenvalue: float, shape: np.ndarray,
-                            d_stiffness: list[sp.spmatrix], d_mass: list[sp.spmatrix]) -> tuple[np.ndarray, np.ndarray]:
+def eigenvector_derivatives(
+    stiffness: sp.spmatrix,
+    mass: sp.spmatrix,
+    eigenvalue: float,
+    shape: np.ndarray,
+    d_stiffness: list[sp.spmatrix],
+    d_mass: list[sp.spmatrix],
+) -> tuple[np.ndarray, np.ndarray]:
     """dphi/dp (n_dofs, p) and dlambda/dp (p,) of one mass-normalised mode (eigenvalue
     [rad^2/s^2], shape (n_dofs,)) for the parameters whose dK/dp and dM/dp are given, by
     the algebraic method (module docstring)."""
     m_phi = mass @ shape
-    bordered = sp.bmat([[stiffness - eigenvalue * mass, -m_phi[:, None]], [-m_phi[None, :], None]], format="csc")
+    bordered = sp.bmat(
+        [[stiffness - eigenvalue * mass, -m_phi[:, None]], [-m_phi[None, :], None]], format="csc"
+    )
     rhs = np.empty((len(shape) + 1, len(d_stiffness)))
     for k, (dk, dm) in enumerate(zip(d_stiffness, d_mass, strict=True)):
         dm_phi = dm @ shape

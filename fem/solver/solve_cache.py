@@ -12,6 +12,7 @@ unit set the cache lets go is found again while a solve still holds it (never bu
 twice), and the solves that hold it are let go with it (``on_drop``), so that the budget
 is what the process keeps.
 """
+
 from __future__ import annotations
 
 import threading
@@ -154,8 +155,13 @@ class SharedCache:
 
     def info(self) -> CacheInfo:
         with self._lock:
-            return CacheInfo(self._hits, self._misses, len(self._kept),
-                             sum(int(self.size_of(v)) for v in self._kept.values()), self.budget)
+            return CacheInfo(
+                self._hits,
+                self._misses,
+                len(self._kept),
+                sum(int(self.size_of(v)) for v in self._kept.values()),
+                self.budget,
+            )
 
 
 __all__ = ["CacheInfo", "SOLVE_CACHE_BYTES", "UNIT_CACHE_BYTES", "SharedCache", "bytes_bounded_cache"]

@@ -25,6 +25,7 @@ parallel processes when that pays; the selection is finally refitted in full
 (iterations, pairing check), and that refit's own status says whether the data are now
 explained.
 """
+
 from __future__ import annotations
 
 import math
@@ -186,14 +187,20 @@ class Candidate:
 
     def to_dict(self) -> dict:
         check = self.precheck
-        return {"effect": self.kind, "rms_rel_error_after": self.rms_rel_error if self.fit else None,
-                "bic_gain": finite_or_none(self.gain), "gain_over_c": finite_or_none(self.scaled_gain),
-                "status": self.status,
-                "parameters": self.effect_values(), "std": self.effect_std(),
-                "plausible": self.plausible, "implausible": list(self.added.implausible),
-                "condition_number": finite_or_none(check.condition_number) if check else None,
-                "seconds": finite_or_none(self.added.seconds),
-                "note": " ".join(x for x in (self.note, self.error) if x)}
+        return {
+            "effect": self.kind,
+            "rms_rel_error_after": self.rms_rel_error if self.fit else None,
+            "bic_gain": finite_or_none(self.gain),
+            "gain_over_c": finite_or_none(self.scaled_gain),
+            "status": self.status,
+            "parameters": self.effect_values(),
+            "std": self.effect_std(),
+            "plausible": self.plausible,
+            "implausible": list(self.added.implausible),
+            "condition_number": finite_or_none(check.condition_number) if check else None,
+            "seconds": finite_or_none(self.added.seconds),
+            "note": " ".join(x for x in (self.note, self.error) if x),
+        }
 
 
 def _key(p) -> str:
@@ -209,8 +216,11 @@ def _values(fit: FitResult, parameters, std: bool = False) -> dict:
         out[_key(p)] = finite_or_none(display(p, value)) if std else display(p, value)
         if isinstance(p, Tied):  # a follower: its ratio to the leader
             for follower, ratio in p.followers:
-                out[_key(follower)] = finite_or_none(display(follower, ratio * value)) if std else \
-                    display(follower, ratio * value)
+                out[_key(follower)] = (
+                    finite_or_none(display(follower, ratio * value))
+                    if std
+                    else display(follower, ratio * value)
+                )
     return out
 
 
@@ -225,15 +235,22 @@ class Step:
     candidates: tuple[Candidate, ...]
     chosen: Candidate | None
     reason: str
-    skipped: tuple[str, ...] = ()   # refinements not tried (what they refine did not pay)
-    seconds: float = float("nan")   # the round's wall time
-    above_start: tuple[str, ...] = ()  # candidates whose refit ended above ``start`` (``fitting.ended_worse``)
+    skipped: tuple[str, ...] = ()  # refinements not tried (what they refine did not pay)
+    seconds: float = float("nan")  # the round's wall time
+    # candidates whose refit ended above ``start`` (``fitting.ended_worse``)
+    above_start: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
-        return {"round": self.number, "with": list(self.selected_before), "rms_rel_error": self.start.rms_rel_error,
-                "candidates": [c.to_dict() for c in self.candidates], "not_tried": list(self.skipped),
-                "chosen": self.chosen.kind if self.chosen else None, "reason": self.reason,
-                "seconds": finite_or_none(self.seconds)}
+        return {
+            "round": self.number,
+            "with": list(self.selected_before),
+            "rms_rel_error": self.start.rms_rel_error,
+            "candidates": [c.to_dict() for c in self.candidates],
+            "not_tried": list(self.skipped),
+            "chosen": self.chosen.kind if self.chosen else None,
+            "reason": self.reason,
+            "seconds": finite_or_none(self.seconds),
+        }
 
 
 @dataclass(frozen=True)
@@ -248,7 +265,7 @@ class Diagnosis:
     steps: tuple[Step, ...] = ()
     final: FitResult | None = None
     seconds: float = float("nan")
-    dropped: tuple[str, ...] = ()   # chosen in a round, taken out at the end (``_determined_final``)
+    dropped: tuple[str, ...] = ()  # chosen in a round, taken out at the end (``_determined_final``)
 
     @property
     def at_noise_level(self) -> bool:
@@ -256,7 +273,9 @@ class Diagnosis:
 
     @property
     def selected(self) -> tuple[Candidate, ...]:
-        return tuple(s.chosen for s in self.steps if s.chosen is not None and s.chosen.kind not in self.dropped)
+        return tuple(
+            s.chosen for s in self.steps if s.chosen is not None and s.chosen.kind not in self.dropped
+        )
 
     @property
     def above_start(self) -> tuple[str, ...]:
@@ -280,14 +299,21 @@ class Diagnosis:
             return "no candidate effect explains the misfit well enough to pay for its parameters"
         final = self.final
         chain = " + ".join(c.kind for c in self.selected)
-        text = (f"missing: {chain} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
-                f"{100 * final.rms_rel_error:.3g} %, refit {final.status.value})")
+        text = (
+            f"missing: {chain} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
+            f"{100 * final.rms_rel_error:.3g} %, refit {final.status.value})"
+        )
         odd = [c.kind for c in self.selected if not c.plausible]
         if odd:
-            text += f"; implausible estimate of {', '.join(odd)}: read it as a sign of what is missing, not a value"
+            text += (
+                f"; implausible estimate of {', '.join(odd)}: "
+                "read it as a sign of what is missing, not a value"
+            )
         if self.dropped:
-            text += (f"; {', '.join(self.dropped)} taken out: with it the refit fitted but did not determine its "
-                     "parameters")
+            text += (
+                f"; {', '.join(self.dropped)} taken out: with it the refit fitted but did not determine its "
+                "parameters"
+            )
         if not final.converged:
             text += "; the refit still does not explain the data"
         return text
@@ -296,15 +322,27 @@ class Diagnosis:
         final = self.final
         return {
             "rms_rel_error": self.baseline.rms_rel_error,
-            "reduced_chi2": self.baseline.statistics.reduced_chi2 if self.baseline.statistics.scatter_known else None,
+            "reduced_chi2": self.baseline.statistics.reduced_chi2
+            if self.baseline.statistics.scatter_known
+            else None,
             "verdict": self.verdict,
             "at_noise_level": self.at_noise_level,
             "explained": self.explained,
             "ranking": [c.to_dict() for c in self.candidates],
-            "selected": [{"effect": c.kind, "rms_rel_error_after": c.rms_rel_error, "bic_gain": finite_or_none(c.gain),
-                          "parameters": c.effect_values(), "plausible": c.plausible} for c in self.selected],
+            "selected": [
+                {
+                    "effect": c.kind,
+                    "rms_rel_error_after": c.rms_rel_error,
+                    "bic_gain": finite_or_none(c.gain),
+                    "parameters": c.effect_values(),
+                    "plausible": c.plausible,
+                }
+                for c in self.selected
+            ],
             "path": [s.to_dict() for s in self.steps],
-            "final": None if final is None else {"effects": [c.kind for c in self.selected], **final.to_dict()},
+            "final": None
+            if final is None
+            else {"effects": [c.kind for c in self.selected], **final.to_dict()},
             "dropped": list(self.dropped),
             "above_start": list(self.above_start),
             "seconds": finite_or_none(self.seconds),
@@ -319,18 +357,23 @@ class Diagnosis:
         return diagnosis_text(self)
 
 
-
-
 def _signs(ordered, best) -> str:
     """Candidates not selectable (implausible, or singular at their solution) that explain
     more than the chosen one would: reported as signs."""
     floor = best.fit.statistics.sum_squares if best is not None else float("inf")
     out = []
     for c in ordered:
-        if c.eligible and not c.selectable and c.fit.statistics.sum_squares < floor and c.scaled_gain > MIN_GAIN:
+        if (
+            c.eligible
+            and not c.selectable
+            and c.fit.statistics.sum_squares < floor
+            and c.scaled_gain > MIN_GAIN
+        ):
             why = "implausible" if not c.plausible else "singular at its solution"
-            out.append(f"{c.kind} would pay (gain / c = {c.scaled_gain:.1f}) but is {why}, not taken: "
-                       + effect(c.kind).sign)
+            out.append(
+                f"{c.kind} would pay (gain / c = {c.scaled_gain:.1f}) but is {why}, not taken: "
+                + effect(c.kind).sign
+            )
     return ("; " + "; ".join(out)) if out else ""
 
 
@@ -353,8 +396,11 @@ def _refine(kind: str, kinds, selected, candidates, state: FitResult) -> bool:
     if any(c.scaled_gain > MIN_GAIN for c in candidates if c.kind in refined):
         return True
     nothing_pays = not any(c.selectable and c.scaled_gain > MIN_GAIN for c in candidates)
-    return (nothing_pays and state.statistics.reduced_chi2 > FAR_FROM_NOISE
-            and any(c.eligible and c.gain > 0 for c in candidates if c.kind in refined))
+    return (
+        nothing_pays
+        and state.statistics.reduced_chi2 > FAR_FROM_NOISE
+        and any(c.eligible and c.gain > 0 for c in candidates if c.kind in refined)
+    )
 
 
 def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int, float, str]]:
@@ -376,8 +422,11 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
     another candidate explains now, so it cannot be this round's choice (the layerwise
     refit is 70 % of a round on a thick 3-D plate, 140-160 s, and in a later round it
     only repeated its earlier margin)."""
-    explained = [(state.statistics.sum_squares - c.fit.statistics.sum_squares, c.kind)
-                 for c in candidates if c.selectable]
+    explained = [
+        (state.statistics.sum_squares - c.fit.statistics.sum_squares, c.kind)
+        for c in candidates
+        if c.selectable
+    ]
     if not explained:
         return {}
     best, by = max(explained)
@@ -385,8 +434,10 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
     for kind in refining:
         if kind in margins and margins[kind][1] * PRUNE_FACTOR < best:
             number, margin, of = margins[kind]
-            held[kind] = (f"; {kind} not refitted again: in round {number} it explained a chi^2 of {margin:.4g} beyond "
-                          f"{of}, less than 1/{PRUNE_FACTOR:g} of the {best:.4g} {by} explains now")
+            held[kind] = (
+                f"; {kind} not refitted again: in round {number} it explained a chi^2 of {margin:.4g} beyond "
+                f"{of}, less than 1/{PRUNE_FACTOR:g} of the {best:.4g} {by} explains now"
+            )
     return held
 
 
@@ -404,9 +455,15 @@ def _more_complete(best: Candidate | None, ordered, selected, c_hat: float) -> C
     if best is None:
         return None
     mine = _canonical(list(selected) + [best.kind])
-    fuller = [c for c in ordered if c is not best and c.selectable
-              and _canonical(list(selected) + [c.kind]) > mine and c.fit.statistics.k == best.fit.statistics.k
-              and c.bic - best.bic < COMPLETE_MARGIN * c_hat]
+    fuller = [
+        c
+        for c in ordered
+        if c is not best
+        and c.selectable
+        and _canonical(list(selected) + [c.kind]) > mine
+        and c.fit.statistics.k == best.fit.statistics.k
+        and c.bic - best.bic < COMPLETE_MARGIN * c_hat
+    ]
     return min(fuller, key=lambda c: c.bic) if fuller else best
 
 
@@ -461,8 +518,9 @@ def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
     return max(1, min(2, os.cpu_count() or 1, tasks))
 
 
-def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, measurements: Measurements, nominal,
-                        hints, say) -> list[Candidate]:
+def _leader_freed_again(
+    candidates: list[Candidate], held, state: FitResult, measurements: Measurements, nominal, hints, say
+) -> list[Candidate]:
     """The round's leading candidate (the lowest criterion of those refitted, plausible
     or not) refitted again with the shear moduli ``held`` that ``state`` holds because they
     ran out while other physics was missing (``fitting.held_shear_moduli``) freed, where
@@ -484,18 +542,31 @@ def _leader_freed_again(candidates: list[Candidate], held, state: FitResult, mea
         say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
         again = _candidate(state, _add(_job(state, prepared, measurements, nominal, hints, None)))
     if again.fit is None or not again.fit.statistics.sum_squares < leader.fit.statistics.sum_squares:
-        note = (f"{leader.kind} refitted with the held G13, G23 free again: "
-                + (again.error if again.fit is None else f"RMS {100 * again.rms_rel_error:.3g} %, not lower: "
-                   "kept without them"))
-        return [replace(c, note="; ".join(filter(None, [c.note, note]))) if c is leader else c for c in candidates]
+        note = f"{leader.kind} refitted with the held G13, G23 free again: " + (
+            again.error
+            if again.fit is None
+            else f"RMS {100 * again.rms_rel_error:.3g} %, not lower: kept without them"
+        )
+        return [
+            replace(c, note="; ".join(filter(None, [c.note, note]))) if c is leader else c for c in candidates
+        ]
     return [again if c is leader else c for c in candidates]
-
 
 
 def _job(state: FitResult, prepared: Prepared, measurements: Measurements, nominal, hints, below) -> dict:
     """The keyword arguments of one candidate's refit (``_add``); ``below``: ``prune_below``."""
-    return dict(state=state, kind=prepared.kind, measurements=measurements, nominal=nominal, hints=hints,
-                settle="quick", skip_singular=True, options=CANDIDATE_OPTIONS, prune_below=below, prepared=prepared)
+    return dict(
+        state=state,
+        kind=prepared.kind,
+        measurements=measurements,
+        nominal=nominal,
+        hints=hints,
+        settle="quick",
+        skip_singular=True,
+        options=CANDIDATE_OPTIONS,
+        prune_below=below,
+        prepared=prepared,
+    )
 
 
 def _add(job: dict):
@@ -503,8 +574,17 @@ def _add(job: dict):
     return add_effect(**job)
 
 
-def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal, hints, pool,
-         n_workers: int, starts: dict | None = None, free_again=()) -> list[Candidate]:
+def _try(
+    state: FitResult,
+    kinds: list[str],
+    measurements: Measurements,
+    nominal,
+    hints,
+    pool,
+    n_workers: int,
+    starts: dict | None = None,
+    free_again=(),
+) -> list[Candidate]:
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
     (here), then refitted most promising first (by the linearised bound), each only when
     it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
@@ -524,10 +604,16 @@ def _try(state: FitResult, kinds: list[str], measurements: Measurements, nominal
         # keep the right physics from being refitted, nor may one that does not pay for
         # itself (blind02, held-out: a thickness refit at gain / c 2.2 pruned the
         # orientation, whose linearised bound is second order in the angles).
-        explained = [state.statistics.sum_squares - c.fit.statistics.sum_squares for c in out
-                     if c.selectable and c.scaled_gain > MIN_GAIN]
+        explained = [
+            state.statistics.sum_squares - c.fit.statistics.sum_squares
+            for c in out
+            if c.selectable and c.scaled_gain > MIN_GAIN
+        ]
         below = max(explained) if explained else None
-        jobs = [_job(state, r, measurements, nominal, hints, below) for r in ready[i:i + (n_workers if pool else 1)]]
+        jobs = [
+            _job(state, r, measurements, nominal, hints, below)
+            for r in ready[i : i + (n_workers if pool else 1)]
+        ]
         out += [_candidate(state, a) for a in _added(jobs, pool)]
     return out
 
@@ -545,8 +631,13 @@ def _added(jobs: list[dict], pool) -> list:
     return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
 
 
-def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] | None = None,
-             progress: Callable[[str], None] | None = None, workers: int | None = 1) -> Diagnosis:
+def diagnose(
+    model: SpecimenModel,
+    measurements: Measurements,
+    kinds: list[str] | None = None,
+    progress: Callable[[str], None] | None = None,
+    workers: int | None = 1,
+) -> Diagnosis:
     """Find the effects the model misses: forward selection over ``kinds`` (default: every
     registered effect), see the module doc.  ``workers``: processes for the candidate
     refits (1: all here, the default; None: 2 when a round has several and the fit is not
@@ -567,7 +658,8 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
     peak_list = measurements
     respec = spec_start(model, matched_peaks(baseline, peak_list), baseline)
     state, selected, steps, closed = baseline, [], [], set()
-    margins: dict[str, tuple[int, float, str]] = {}  # refinement -> (round, chi^2 it explained beyond, of what)
+    # refinement -> (round, chi^2 it explained beyond, of what)
+    margins: dict[str, tuple[int, float, str]] = {}
     pool = None
     try:
         for number in range(1, len(kinds) + 1):
@@ -575,31 +667,55 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             measurements = matched_peaks(state, peak_list)  # the candidates' data: the state's matched peaks
             trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
             if not trying:
-                steps.append(Step(number, tuple(c.kind for c in selected), state, (), None,
-                                  "stop: no candidate left to try"))
+                steps.append(
+                    Step(
+                        number,
+                        tuple(c.kind for c in selected),
+                        state,
+                        (),
+                        None,
+                        "stop: no candidate left to try",
+                    )
+                )
                 break
-            hints = point_mass_starts(model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy) \
-                if state is baseline else point_mass_hints(state)
+            hints = (
+                point_mass_starts(
+                    model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy
+                )
+                if state is baseline
+                else point_mass_hints(state)
+            )
             n_workers = _workers(workers, len(trying), baseline_seconds)
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
-                say(f"round {number}: trying {', '.join(batch)}"  # noqa: B023
-                    + (f" in {n_workers} processes" if pool else ""))  # noqa: B023
+                in_processes = f" in {n_workers} processes" if pool else ""  # noqa: B023
+                say(f"round {number}: trying {', '.join(batch)}{in_processes}")  # noqa: B023
                 return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if not effect(k).refines])
-            candidates = _leader_freed_again(candidates, held_shear_moduli(state, [c.added for c in selected]),
-                                             state, measurements, nominal, hints, say)
+            candidates = _leader_freed_again(
+                candidates,
+                held_shear_moduli(state, [c.added for c in selected]),
+                state,
+                measurements,
+                nominal,
+                hints,
+                say,
+            )
             restart = restarted_from_spec(trying, state, baseline, respec)
             if restart:
                 # The thin-plate fit ran to its bounds: the shear candidates from the spec's values too.
                 again = {c.kind: c for c in run(restart, {k: respec for k in restart})}
-                candidates = [_candidate(state, better_start(c.added, again[c.kind].added)) if c.kind in again
-                              else c for c in candidates]
-            refining = [k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state)]
+                candidates = [
+                    _candidate(state, better_start(c.added, again[c.kind].added)) if c.kind in again else c
+                    for c in candidates
+                ]
+            refining = [
+                k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state)
+            ]
             skipped = [k for k in trying if effect(k).refines and k not in refining]
             held = _held_back(refining, margins, state, candidates)
             refining = [k for k in refining if k not in held]
@@ -610,13 +726,21 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
                 margins.update(_margins(refining, candidates, number))
             candidates = _continue_unfinished(candidates, measurements, state, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
-            above = tuple(c.kind for c in candidates if c.fit is not None and c.fit.finished
-                          and ended_worse(c.fit, state))
+            above = tuple(
+                c.kind
+                for c in candidates
+                if c.fit is not None and c.fit.finished and ended_worse(c.fit, state)
+            )
             finished = [c for c in candidates if c.eligible]
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
-            ordered = plausible_first([c for c in candidates if c.fit is not None], c_hat, PLAUSIBILITY_MARGIN,
-                                      key=lambda c: c.bic, judged=lambda c: c.plausible,
-                                      related=lambda a, b: _nested(a.kind, b.kind, names))  # noqa: B023 (used now)
+            ordered = plausible_first(
+                [c for c in candidates if c.fit is not None],
+                c_hat,
+                PLAUSIBILITY_MARGIN,
+                key=lambda c: c.bic,
+                judged=lambda c: c.plausible,
+                related=lambda a, b: _nested(a.kind, b.kind, names),  # noqa: B023 (used now)
+            )
             ordered += [c for c in candidates if c.fit is None]
             best = next((c for c in ordered if c.selectable), None)
             plausible_best = best
@@ -624,34 +748,59 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             if best is not plausible_best:
                 ordered = [best] + [c for c in ordered if c is not best]
             for c in candidates:
-                say(f"  {c.kind}: " + (f"RMS {100 * c.rms_rel_error:.4f} %, BIC gain {c.gain:.1f}" if c.fit
-                                       else c.error) + f" ({c.added.seconds:.1f} s)")
+                say(
+                    f"  {c.kind}: "
+                    + (f"RMS {100 * c.rms_rel_error:.4f} %, BIC gain {c.gain:.1f}" if c.fit else c.error)
+                    + f" ({c.added.seconds:.1f} s)"
+                )
             before = tuple(c.kind for c in selected)
             if best is None or not best.scaled_gain > MIN_GAIN:
-                reason = ("stop: no plausible, identifiable candidate could be refitted" if best is None else
-                          f"stop: the best, {best.kind}, does not pay for itself (gain / c = {best.scaled_gain:.1f} "
-                          f"<= {MIN_GAIN:g})")
+                reason = (
+                    "stop: no plausible, identifiable candidate could be refitted"
+                    if best is None
+                    else f"stop: the best, {best.kind}, does not pay for itself "
+                    f"(gain / c = {best.scaled_gain:.1f} <= {MIN_GAIN:g})"
+                )
                 reason += _signs(ordered, best) + "".join(held.values())
-                steps.append(Step(number, before, state, tuple(ordered), None, reason, tuple(skipped),
-                                  time.perf_counter() - round_started, above))
+                steps.append(
+                    Step(
+                        number,
+                        before,
+                        state,
+                        tuple(ordered),
+                        None,
+                        reason,
+                        tuple(skipped),
+                        time.perf_counter() - round_started,
+                        above,
+                    )
+                )
                 break
             reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
             lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
             if best is not plausible_best:
-                reason += (f"; preferred to {plausible_best.kind}: the same free parameters and physics a real plate "
-                           f"has besides, and {plausible_best.kind}'s criterion is only "
-                           f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within {COMPLETE_MARGIN:g}")
+                reason += (
+                    f"; preferred to {plausible_best.kind}: the same free parameters and physics a real "
+                    "plate "
+                    f"has besides, and {plausible_best.kind}'s criterion is only "
+                    f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within {COMPLETE_MARGIN:g}"
+                )
             elif lowest is not best:
-                reason += (f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
-                           "whose estimate is implausible or singular")
+                reason += (
+                    f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
+                    "whose estimate is implausible or singular"
+                )
             reason += _signs(ordered, best) + "".join(held.values())
             # The chosen refit is taken to convergence (the candidates stopped once their misfit
             # settled) before the next round looks again.
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = rematched(best.fit, peak_list, state, FINAL_OPTIONS, pool) if rematch else \
-                continued(best.fit, peak_list, FINAL_OPTIONS)
+            polished = (
+                rematched(best.fit, peak_list, state, FINAL_OPTIONS, pool)
+                if rematch
+                else continued(best.fit, peak_list, FINAL_OPTIONS)
+            )
             polished, notes = with_determined_shear(polished, peak_list, nominal, FINAL_OPTIONS)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
@@ -661,39 +810,78 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
             # case is in docs/diagnosis.md, "Peak lists").
             if not rematch:
                 polished = released(polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle="quick")
-            if rematch or (polished.finished and (notes or polished.statistics.sum_squares
-                                                  <= best.fit.statistics.sum_squares)):
-                added = replace(best.added, result=polished, notes=best.added.notes + tuple(notes),
-                                added=tuple(p for p in polished.parameters if p not in state.parameters))
+            if rematch or (
+                polished.finished
+                and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares)
+            ):
+                added = replace(
+                    best.added,
+                    result=polished,
+                    notes=best.added.notes + tuple(notes),
+                    added=tuple(p for p in polished.parameters if p not in state.parameters),
+                )
                 # Re-matched, the misfit is over other peaks than the state's: the gain stays
                 # the one the candidate won on the state's.
                 best = replace(best, added=added) if rematch else _candidate(state, added)
                 ordered = [best if c.kind == best.kind else c for c in ordered]
-            steps.append(Step(number, before, state, tuple(ordered), best, reason, tuple(skipped),
-                              time.perf_counter() - round_started, above))
+            steps.append(
+                Step(
+                    number,
+                    before,
+                    state,
+                    tuple(ordered),
+                    best,
+                    reason,
+                    tuple(skipped),
+                    time.perf_counter() - round_started,
+                    above,
+                )
+            )
             selected.append(best)
             state = best.fit
             if state.statistics.consistent:
-                steps.append(Step(number + 1, tuple(c.kind for c in selected), state, (), None,
-                                  "stop: the misfit is at the noise level"))
+                steps.append(
+                    Step(
+                        number + 1,
+                        tuple(c.kind for c in selected),
+                        state,
+                        (),
+                        None,
+                        "stop: the misfit is at the noise level",
+                    )
+                )
                 break
     finally:
         if pool is not None:
             pool.shutdown()
     completion_started = time.perf_counter()
     matched = state  # the last state a peak list was matched to (the completion is refitted on its matching)
-    completion = _completed(state, selected, kinds, matched_peaks(state, peak_list), nominal, say) if selected \
+    completion = (
+        _completed(state, selected, kinds, matched_peaks(state, peak_list), nominal, say)
+        if selected
         else None
+    )
     if completion is not None:
         before = tuple(c.kind for c in selected)
         completed = " + ".join(sorted(set(before) & set(effect(completion.kind).completes)))
-        reason = (f"add {completion.kind} in place of the single shear layer (gain / c = "
-                  f"{completion.scaled_gain:.1f}): the more complete theory, refitted from the selection's end"
-                  if effect(completion.kind).replaces else
-                  f"add {completion.kind} beside {completed} (gain / c = {completion.scaled_gain:.1f}): "
-                  "the physics every real plate has besides, with no parameter more, and the misfit falls")
-        steps.append(Step(len(steps) + 1, before, state, (completion,), completion, reason,
-                          seconds=time.perf_counter() - completion_started))
+        reason = (
+            f"add {completion.kind} in place of the single shear layer (gain / c = "
+            f"{completion.scaled_gain:.1f}): the more complete theory, refitted from the selection's end"
+            if effect(completion.kind).replaces
+            else f"add {completion.kind} beside {completed} (gain / c = {completion.scaled_gain:.1f}): "
+            "the physics every real plate has besides, with no parameter more, and the misfit falls"
+        )
+        steps.append(
+            Step(
+                len(steps) + 1,
+                before,
+                state,
+                (completion,),
+                completion,
+                reason,
+                seconds=time.perf_counter() - completion_started,
+            )
+        )
         selected.append(completion)
         state = completion.fit
     final = _final(state, peak_list, baseline, selected, nominal, say, like=matched) if selected else None
@@ -704,12 +892,20 @@ def diagnose(model: SpecimenModel, measurements: Measurements, kinds: list[str] 
         steps.append(step)
         taken_out = (step.candidates[0].kind,)
     first = steps[0].candidates if steps else ()
-    return Diagnosis(baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started,
-                     taken_out)
+    return Diagnosis(
+        baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started, taken_out
+    )
 
 
-def _determined_final(final: FitResult | None, steps: list[Step], selected: list[Candidate],
-                      measurements: Measurements, baseline: FitResult, nominal, say) -> tuple[FitResult, Step] | None:
+def _determined_final(
+    final: FitResult | None,
+    steps: list[Step],
+    selected: list[Candidate],
+    measurements: Measurements,
+    baseline: FitResult,
+    nominal,
+    say,
+) -> tuple[FitResult, Step] | None:
     """When the final refit fits the frequencies but does not determine its parameters
     (``not_identifiable``: the sensitivity matrix singular at the solution), the last
     selected effect is taken out and the selection before it refitted in full; kept (the
@@ -725,19 +921,26 @@ def _determined_final(final: FitResult | None, steps: list[Step], selected: list
         return None
     last = selected[-1]
     before = next(s for s in reversed(steps) if s.chosen is last)
-    say(f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without {last.kind}")
+    say(
+        f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without "
+        f"{last.kind}"
+    )
     again = _final(before.start, measurements, baseline, selected[:-1], nominal, say)
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
-    reason = (f"drop {last.kind}: the refit with it fits the frequencies (RMS {100 * final.rms_rel_error:.3g} %) but "
-              f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g}); "
-              f"without it the refit's parameters are determined (RMS {100 * again.rms_rel_error:.3g} %, "
-              f"{again.status.value}): an effect the data cannot tell from the layers is not an answer")
+    reason = (
+        f"drop {last.kind}: the refit with it fits the frequencies (RMS {100 * final.rms_rel_error:.3g} %) "
+        "but "
+        f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g}); "
+        f"without it the refit's parameters are determined (RMS {100 * again.rms_rel_error:.3g} %, "
+        f"{again.status.value}): an effect the data cannot tell from the layers is not an answer"
+    )
     return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
 
 
-def _continue_unfinished(candidates: list[Candidate], measurements: Measurements, state: FitResult,
-                         say) -> list[Candidate]:
+def _continue_unfinished(
+    candidates: list[Candidate], measurements: Measurements, state: FitResult, say
+) -> list[Candidate]:
     """Candidates where one that stopped at the iteration limit with a lower criterion than
     every finished one (its misfit still falling) is continued, each at most once."""
     candidates = list(candidates)
@@ -755,7 +958,9 @@ def _continue_unfinished(candidates: list[Candidate], measurements: Measurements
     return candidates
 
 
-def _completed(state: FitResult, selected, kinds, measurements: Measurements, nominal, say) -> Candidate | None:
+def _completed(
+    state: FitResult, selected, kinds, measurements: Measurements, nominal, say
+) -> Candidate | None:
     """The more complete physics from the selection's end: each effect that ``completes`` a
     selected one (``Effect.completes``), a fuller theory in its place first
     (``Effect.replaces``), then what joins it; the first kept is returned.
@@ -774,13 +979,22 @@ def _completed(state: FitResult, selected, kinds, measurements: Measurements, no
         completing = effect(kind)
         completed = sorted(names & set(completing.completes))
         offered = kind in kinds or any(kind in effect(k).physics and not effect(k).refines for k in kinds)
-        if (not completed or not offered or completing.adds_nothing(state.model)
-                or any(completing.physics <= effect(n).physics for n in names)):
+        if (
+            not completed
+            or not offered
+            or completing.adds_nothing(state.model)
+            or any(completing.physics <= effect(n).physics for n in names)
+        ):
             continue
-        why = "in place of {} (the more complete theory, from the selection's end)" if completing.replaces \
+        why = (
+            "in place of {} (the more complete theory, from the selection's end)"
+            if completing.replaces
             else "beside {} (the more complete physics)"
+        )
         say(f"trying {kind} " + why.format(" + ".join(completed)))
-        candidate = _candidate(state, add_effect(state, kind, measurements, nominal, options=CANDIDATE_OPTIONS))
+        candidate = _candidate(
+            state, add_effect(state, kind, measurements, nominal, options=CANDIDATE_OPTIONS)
+        )
         if candidate.fit is None or not candidate.selectable:
             continue
         if not completing.replaces:
@@ -788,15 +1002,24 @@ def _completed(state: FitResult, selected, kinds, measurements: Measurements, no
                 return candidate
             continue
         c_hat = _over_dispersion(min(candidate.fit, state, key=lambda f: f.statistics.bic))
-        fuller = (candidate.fit.statistics.k <= state.statistics.k
-                  and candidate.fit.statistics.bic - state.statistics.bic < COMPLETE_MARGIN * c_hat)
+        fuller = (
+            candidate.fit.statistics.k <= state.statistics.k
+            and candidate.fit.statistics.bic - state.statistics.bic < COMPLETE_MARGIN * c_hat
+        )
         if candidate.scaled_gain > 0 or fuller:
             return candidate
     return None
 
 
-def _final(state: FitResult, measurements: Measurements, baseline: FitResult, selected, nominal, say,
-           like: FitResult | None = None) -> FitResult:
+def _final(
+    state: FitResult,
+    measurements: Measurements,
+    baseline: FitResult,
+    selected,
+    nominal,
+    say,
+    like: FitResult | None = None,
+) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
     check (a peak list matched again from ``like``'s matching, default ``state``'s), the
     layer properties the thin-plate fit held freed again where the data now determine
@@ -806,8 +1029,12 @@ def _final(state: FitResult, measurements: Measurements, baseline: FitResult, se
     result = continued(state, measurements, FINAL_OPTIONS, settle=True, like=like)
     result = with_causes(with_budget(released(result, measurements, baseline, nominal, FINAL_OPTIONS)))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
-    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
-                   effect_notes=notes, baseline=baseline)
+    return replace(
+        result,
+        warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+        effect_notes=notes,
+        baseline=baseline,
+    )
 
 
 __all__ = ["Candidate", "Diagnosis", "Step", "diagnose", "MIN_GAIN", "PLAUSIBILITY_MARGIN"]

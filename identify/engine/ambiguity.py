@@ -12,6 +12,7 @@ The mirror.  When a 90-degree turn maps every configuration onto itself with onl
 identified materials' axes exchanged, E1 <-> E2 (nu12 -> nu21) of all identified
 materials together changes no frequency; the answer is oriented like the start values.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -64,8 +65,11 @@ def _adjacent_unlabelled(table, pinned=None) -> list[tuple[int, int, float, bool
     pinned = table["label"].to_numpy() != "" if pinned is None else pinned
     for name in dict.fromkeys(configuration):
         rows = np.flatnonzero(configuration == name)
-        out += [(int(a), int(b), f[b] / f[a] - 1, bool(mode[b] == mode[a] + 1))
-                for a, b in zip(rows[:-1], rows[1:]) if not pinned[a] and not pinned[b]]
+        out += [
+            (int(a), int(b), f[b] / f[a] - 1, bool(mode[b] == mode[a] + 1))
+            for a, b in zip(rows[:-1], rows[1:])
+            if not pinned[a] and not pinned[b]
+        ]
     return out
 
 
@@ -78,22 +82,31 @@ def ambiguous_pair_count(table, pinned=None) -> int:
 def close_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Rows of adjacent measured modes (consecutive ranks) closer than ``CLOSE_MODES`` with
     no labels."""
-    return [(a, b) for a, b, gap, consecutive in _adjacent_unlabelled(objective.measurements.table, objective.measurements.pinned)
-            if consecutive and gap < CLOSE_MODES]
+    return [
+        (a, b)
+        for a, b, gap, consecutive in _adjacent_unlabelled(
+            objective.measurements.table, objective.measurements.pinned
+        )
+        if consecutive and gap < CLOSE_MODES
+    ]
 
 
 def near_pairs(objective: Objective) -> list[tuple[int, int]]:
     """Adjacent unlabelled measured modes from ``CLOSE_MODES`` to ``NEAR_MODES`` apart: a
     start model off by a few per cent can have them the other way round (a CFRP plate's
     pair 1.2 % apart was), and the fit may then settle on a twin."""
-    return [(a, b) for a, b, gap, _ in _adjacent_unlabelled(objective.measurements.table, objective.measurements.pinned)
-            if CLOSE_MODES <= gap < NEAR_MODES]
+    return [
+        (a, b)
+        for a, b, gap, _ in _adjacent_unlabelled(objective.measurements.table, objective.measurements.pinned)
+        if CLOSE_MODES <= gap < NEAR_MODES
+    ]
 
 
 def describe_pairs(objective: Objective, pairs) -> str:
     table = objective.measurements.table
-    return ", ".join(f"{table['configuration'].iloc[a]} {table['mode'].iloc[a]}/{table['mode'].iloc[b]}"
-                     for a, b in pairs)
+    return ", ".join(
+        f"{table['configuration'].iloc[a]} {table['mode'].iloc[a]}/{table['mode'].iloc[b]}" for a, b in pairs
+    )
 
 
 def swapped(objective: Objective, e: Evaluation, rows: tuple[int, int]) -> Evaluation:
@@ -137,7 +150,9 @@ def mirror_symmetric(objective: Objective) -> bool:
         m = layer.material
         if m.name not in identified and abs(m.E1 - m.E2) > 1e-12 * m.E1:
             return False
-    return all({Parameter(k, t) for k in ("E1", "E2", "nu12")} <= set(objective.parameters) for t in identified)
+    return all(
+        {Parameter(k, t) for k in ("E1", "E2", "nu12")} <= set(objective.parameters) for t in identified
+    )
 
 
 def mirrored(objective: Objective, values: np.ndarray) -> np.ndarray:
@@ -174,7 +189,9 @@ def same_or_mirror(objective: Objective, a: Evaluation, b: Evaluation, tolerance
     def close(x, y):
         return bool(np.all(np.abs(x - y) < tolerance * np.maximum(np.abs(y), 1e-300)))
 
-    return close(a.values, b.values) or (mirror_symmetric(objective) and close(mirrored(objective, a.values), b.values))
+    return close(a.values, b.values) or (
+        mirror_symmetric(objective) and close(mirrored(objective, a.values), b.values)
+    )
 
 
 class LoneMode(NamedTuple):
@@ -224,8 +241,11 @@ def _describe(objective: Objective, kind: str, what) -> str:
         return f"close modes {describe_pairs(objective, [what])}"
     row, index = what
     table = objective.measurements.table
-    return (f"{table['configuration'].iloc[row]} {table['frequency_hz'].iloc[row]:.2f} Hz as model mode {index + 1} "
-            "(two modes lie there, one peak)")
+    return (
+        f"{table['configuration'].iloc[row]} {table['frequency_hz'].iloc[row]:.2f} Hz as model mode "
+        f"{index + 1} "
+        "(two modes lie there, one peak)"
+    )
 
 
 def beneficial_swaps(objective: Objective, e: Evaluation) -> list[tuple[int, int]]:
@@ -240,7 +260,9 @@ def beneficial_swaps(objective: Objective, e: Evaluation) -> list[tuple[int, int
             if pinned[a] or pinned[b]:
                 continue
             now = ((model[a] - measured[a]) / sigma[a]) ** 2 + ((model[b] - measured[b]) / sigma[b]) ** 2
-            swapped_cost = ((model[b] - measured[a]) / sigma[a]) ** 2 + ((model[a] - measured[b]) / sigma[b]) ** 2
+            swapped_cost = ((model[b] - measured[a]) / sigma[a]) ** 2 + (
+                (model[a] - measured[b]) / sigma[b]
+            ) ** 2
             if swapped_cost < now - 1e-9 * max(now, 1e-300):
                 out.append((int(a), int(b)))
     return out
@@ -275,18 +297,31 @@ def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) ->
             state = swapped(objective, state, what) if kind == "swap" else moved(objective, state, *what)
         out.append((state, "; ".join(_describe(objective, kind, what) for kind, what in combo)))
     fresh = objective.evaluate(current.values, None)
-    if any(np.any(fresh.pairings[c].indices != current.pairings[c].indices) for c in objective.configurations):
+    if any(
+        np.any(fresh.pairings[c].indices != current.pairings[c].indices) for c in objective.configurations
+    ):
         out.append((fresh, "the pairing made afresh at the solution (by rank and label)"))
     near = near_pairs(objective)
-    out += [(swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])}") for rows in near]
-    out += [(swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])} (equal and opposite "
-                                                "residuals)")
-            for rows in beneficial_swaps(objective, current) if rows not in pairs and rows not in near]
+    out += [
+        (swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])}") for rows in near
+    ]
+    out += [
+        (
+            swapped(objective, current, rows),
+            f"modes {describe_pairs(objective, [rows])} (equal and opposite residuals)",
+        )
+        for rows in beneficial_swaps(objective, current)
+        if rows not in pairs and rows not in near
+    ]
     return out
 
 
-def settle_pairings(objective: Objective, current: Evaluation, history: list,
-                    refit: Callable[[Evaluation, list, int], tuple[Evaluation, object]]):
+def settle_pairings(
+    objective: Objective,
+    current: Evaluation,
+    history: list,
+    refit: Callable[[Evaluation, list, int], tuple[Evaluation, object]],
+):
     """Check the pairing at the solution and refit the alternatives frequencies cannot
     rule out:
 
@@ -323,13 +358,18 @@ def settle_pairings(objective: Objective, current: Evaluation, history: list,
         # above it).
         if len(candidates) > MAX_REFITS:
             best_chi2 = 2 * objective.cost(best[0])
-            guesses = sorted(((predicted_chi2(objective, state), state, what) for state, what in candidates),
-                             key=lambda g: g[0])
+            guesses = sorted(
+                ((predicted_chi2(objective, state), state, what) for state, what in candidates),
+                key=lambda g: g[0],
+            )
             for chi2, _, what in guesses[MAX_REFITS:]:
                 if chi2 - best_chi2 < TWIN_CHI2 * unit:
                     guessed["; ".join(w for w in (best[2], what) if w)] = chi2 - best_chi2
-            candidates = [(state, what) for chi2, state, what in guesses[:MAX_REFITS]
-                          if chi2 - best_chi2 <= SCREEN_CHI2 * unit]
+            candidates = [
+                (state, what)
+                for chi2, state, what in guesses[:MAX_REFITS]
+                if chi2 - best_chi2 <= SCREEN_CHI2 * unit
+            ]
         screened = []
         for state, what in candidates:
             branch = best[1][:]
@@ -355,12 +395,17 @@ def settle_pairings(objective: Objective, current: Evaluation, history: list,
         history[:] = branch
         notes.append(f"re-paired {what}: lower misfit than the pairing followed from the start")
     if symmetric:
-        notes.append("square plate, known layers in-plane isotropic: exchanging E1 and E2 (nu12 -> nu21) of all "
-                     "identified materials changes no frequency; the orientation of the start values "
-                     "(sign of D11 - D22) is given. Mode-shape labels or a non-square plate remove this ambiguity")
+        notes.append(
+            "square plate, known layers in-plane isotropic: exchanging E1 and E2 (nu12 -> nu21) of all "
+            "identified materials changes no frequency; the orientation of the start values "
+            "(sign of D11 - D22) is given. Mode-shape labels or a non-square plate remove this ambiguity"
+        )
     unit = objective.statistics(state).chi2_unit
-    others = [(o[0], o[2], 2 * (objective.cost(o[0]) - objective.cost(best[0])) / unit) for o in outcomes
-              if o is not best and not same_or_mirror(objective, o[0], state)]
+    others = [
+        (o[0], o[2], 2 * (objective.cost(o[0]) - objective.cost(best[0])) / unit)
+        for o in outcomes
+        if o is not best and not same_or_mirror(objective, o[0], state)
+    ]
     twins = [o for o in others if o[2] < TWIN_CHI2]
     if twins:
         scale = np.maximum(np.abs(state.values), 1e-300)
@@ -368,21 +413,32 @@ def settle_pairings(objective: Objective, current: Evaluation, history: list,
         worst = np.argsort(-spread)[:3]
         names = ", ".join(f"{objective.parameters[i].name} {100 * spread[i]:.2g} %" for i in worst)
         alternatives = "; ".join(t[1] or "the pairing followed from the start" for t in twins)
-        notes.append(f"{len(twins)} other pairing(s) fit within the scatter ({alternatives}): twin solutions; "
-                     f"largest differences: {names}; give mode-shape labels (a 'label' column) for these modes to "
-                     "decide")
+        notes.append(
+            f"{len(twins)} other pairing(s) fit within the scatter ({alternatives}): twin solutions; "
+            f"largest differences: {names}; give mode-shape labels (a 'label' column) for these modes to "
+            "decide"
+        )
     guessed = {what: chi2 for what, chi2 in guessed.items() if all(o[2] != what for o in outcomes)}
     if guessed:
         shown = "; ".join(list(guessed)[:3]) + (f" and {len(guessed) - 3} more" if len(guessed) > 3 else "")
-        notes.append(f"{len(guessed)} further pairing(s) were judged by a linearised step only (more than "
-                     f"{MAX_REFITS} candidates a round) and are predicted to fit within the scatter ({shown}): "
-                     "likely twins, not refitted, so the std do not include them; give mode-shape labels for "
-                     "these modes, or leave out close modes you cannot label")
+        notes.append(
+            f"{len(guessed)} further pairing(s) were judged by a linearised step only (more than "
+            f"{MAX_REFITS} candidates a round) and are predicted to fit within the scatter ({shown}): "
+            "likely twins, not refitted, so the std do not include them; give mode-shape labels for "
+            "these modes, or leave out close modes you cannot label"
+        )
     # Every other pairing that converged enters the uncertainty, weighted by its fit.  (Not
     # the predicted twins: an undamped linearised step along the square plate's near-null
     # directions overshoots, and widened the std 14x on the paper's plate.)
     return state, what, notes, [(o[0].values, o[2]) for o in others]
 
 
-__all__ = ["CLOSE_MODES", "ambiguous_pair_count", "close_pairs", "settle_pairings", "mirror_symmetric", "swapped",
-           "beneficial_swaps"]
+__all__ = [
+    "CLOSE_MODES",
+    "ambiguous_pair_count",
+    "close_pairs",
+    "settle_pairings",
+    "mirror_symmetric",
+    "swapped",
+    "beneficial_swaps",
+]

@@ -16,6 +16,7 @@ an error is the spectrum's shape.  ``align`` therefore first finds, per configur
 the factor s that lays s f_j best over the peaks (a scan of the matching cost over s),
 and matches there.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -59,8 +60,14 @@ def _sigma(peaks_hz: np.ndarray, std_hz: np.ndarray | None) -> np.ndarray:
     return std_hz if std_hz is not None else ASSUMED_SCATTER_REL * peaks_hz
 
 
-def match(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray, tolerance: float,
-          allowed: np.ndarray | None = None, gate: np.ndarray | None = None) -> Match:
+def match(
+    peaks_hz: np.ndarray,
+    std_hz: np.ndarray | None,
+    model_hz: np.ndarray,
+    tolerance: float,
+    allowed: np.ndarray | None = None,
+    gate: np.ndarray | None = None,
+) -> Match:
     """The cheapest assignment of peaks to model modes with leave-out options.
 
     tolerance: relative error the model may still have; allowed: (peaks, modes) bool, the
@@ -86,8 +93,13 @@ def _gates(n: int, gate: np.ndarray | None) -> np.ndarray:
     return np.full(n, GATE) if gate is None else np.asarray(gate, dtype=float)
 
 
-def _relaxed_costs(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
-                   allowed: np.ndarray | None, gate: np.ndarray | None) -> np.ndarray:
+def _relaxed_costs(
+    peaks_hz: np.ndarray,
+    std_hz: np.ndarray | None,
+    model_hz: np.ndarray,
+    allowed: np.ndarray | None,
+    gate: np.ndarray | None,
+) -> np.ndarray:
     """A lower bound of ``match``'s cost at every scale of ``SCALES``: each peak takes its
     cheapest mode or its leave-out, as if two peaks could share a mode."""
     scaled = SCALES[:, None] * model_hz[None, :]  # (scales, modes)
@@ -98,8 +110,13 @@ def _relaxed_costs(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np
     return np.minimum(cost.min(axis=2, initial=FORBIDDEN), _gates(len(peaks_hz), gate) ** 2).sum(axis=1)
 
 
-def align(peaks_hz: np.ndarray, std_hz: np.ndarray | None, model_hz: np.ndarray,
-          allowed: np.ndarray | None = None, gate: np.ndarray | None = None) -> Match:
+def align(
+    peaks_hz: np.ndarray,
+    std_hz: np.ndarray | None,
+    model_hz: np.ndarray,
+    allowed: np.ndarray | None = None,
+    gate: np.ndarray | None = None,
+) -> Match:
     """The match of the peaks to the model's frequencies scaled by the factor that fits
     them best (``SCALES``), at ``START_TOLERANCE``; ties go to the factor nearest 1.
 

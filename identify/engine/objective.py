@@ -5,6 +5,7 @@ All configurations are evaluated together (paper eqs. 12-14): the paired model
 frequencies of every configuration are stacked in measurement-row order, with their
 exact derivatives, so the global sensitivity matrix is one array.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -39,7 +40,7 @@ class Evaluation:
     """The model at one set of parameter values, paired with the measurements."""
 
     values: np.ndarray
-    model_hz: np.ndarray            # paired model frequencies, measurement row order
+    model_hz: np.ndarray  # paired model frequencies, measurement row order
     derivatives: np.ndarray | None  # d f / d p of the paired modes (rows x parameters); None: not computed
     pairings: dict[str, ModePairing]
     model: SpecimenModel
@@ -72,8 +73,13 @@ class Objective:
     def parameters(self) -> tuple[Parameter, ...]:
         return self.space.parameters
 
-    def evaluate(self, values: np.ndarray, pairings: dict[str, ModePairing] | None, track: bool = True,
-                 differentiate: bool = True) -> Evaluation:
+    def evaluate(
+        self,
+        values: np.ndarray,
+        pairings: dict[str, ModePairing] | None,
+        track: bool = True,
+        differentiate: bool = True,
+    ) -> Evaluation:
         """The model at ``values``; modes paired afresh (``pairings`` None: by rank or
         label), followed from the previous pairings by their shapes, or (``track``
         False) paired with the same model modes as ``pairings`` say.  Without
@@ -91,8 +97,13 @@ class Objective:
             previous = None if pairings is None else pairings[name].shapes
             if previous is None or (track and previous.shape[0] != solution.modes.shapes.shape[0]):
                 # Afresh; also when the pairing to follow is of another model (another plate theory).
-                pairing = ModePairing.initial(name, solution, group["mode"].to_numpy(), group["label"].tolist(),
-                                              self.measurements.shapes_of(group))
+                pairing = ModePairing.initial(
+                    name,
+                    solution,
+                    group["mode"].to_numpy(),
+                    group["label"].tolist(),
+                    self.measurements.shapes_of(group),
+                )
             elif not track:
                 indices = pairings[name].indices
                 pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])
@@ -118,7 +129,9 @@ class Objective:
         derivatives = np.empty((len(self.measured_hz), len(e.values)))
         for name in self.configurations:
             solution = self.solution(e.model.specimen, name)
-            derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[e.pairings[name].indices]
+            derivatives[self.rows[name]] = ties.derivatives(solution, self.space.parameters)[
+                e.pairings[name].indices
+            ]
         return replace(e, derivatives=derivatives)
 
     def residual(self, e: Evaluation) -> np.ndarray:
@@ -180,11 +193,15 @@ class ShapeObjective(Objective):
     def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
         super().__init__(model, measurements, parameters, extra_modes)
         table = measurements.table
-        self.shaped = [(row, shape) for row, shape in enumerate(measurements.shapes_of(table)) if shape is not None]
+        self.shaped = [
+            (row, shape) for row, shape in enumerate(measurements.shapes_of(table)) if shape is not None
+        ]
         self.used: list[tuple[int, object]] | None = None
-        self.scatter: np.ndarray | None = None  # per shape used: of a point's amplitude, relative to its largest
+        # per shape used: of a point's amplitude, relative to its largest
+        self.scatter: np.ndarray | None = None
         self._measured: list[np.ndarray] = []  # per shape used: the measured shape, real and at unit length
-        self._operators: dict[int, tuple[object, object]] = {}  # row -> (unit matrices, deflection at its points)
+        # row -> (unit matrices, deflection at its points)
+        self._operators: dict[int, tuple[object, object]] = {}
         self._jacobian: tuple[Evaluation, np.ndarray] | None = None  # the last one asked for
 
     def _local(self, row: int) -> tuple[str, int]:
@@ -197,7 +214,10 @@ class ShapeObjective(Objective):
             self.used = []
             for row, shape in self.shaped:
                 name, local = self._local(row)
-                if len(close_modes(self.solution(e.model.specimen, name), e.pairings[name].indices[local])) == 1:
+                if (
+                    len(close_modes(self.solution(e.model.specimen, name), e.pairings[name].indices[local]))
+                    == 1
+                ):
                     self.used.append((row, shape))
             self.scatter = np.full(len(self.used), SHAPE_SCATTER)
             self._measured = [_real_unit(shape.amplitude) for _, shape in self.used]
@@ -239,8 +259,10 @@ class ShapeObjective(Objective):
         for row, _ in used:
             name, local = self._local(row)
             modes.setdefault(name, []).append(int(e.pairings[name].indices[local]))
-        derivatives = {name: (js, self.solution(e.model.specimen, name).shape_derivatives(list(self.parameters), js))
-                       for name, js in modes.items()}  # one K, M and dK, dM per configuration
+        derivatives = {
+            name: (js, self.solution(e.model.specimen, name).shape_derivatives(list(self.parameters), js))
+            for name, js in modes.items()
+        }  # one K, M and dK, dM per configuration
         rows = []
         for k, (row, shape) in enumerate(used):
             x, at, _, j = self._model_shape(e, row, shape)
@@ -251,7 +273,11 @@ class ShapeObjective(Objective):
             dx = at @ d_phi[:, js.index(j), :]  # (points, parameters)
             d_unit = sign * (dx - np.outer(unit, unit @ dx)) / norm
             rows.append(d_unit / (self.scatter[k] * np.abs(measured).max()))
-        shapes = np.vstack(rows) * self.space.dvalue_dz(e.values)[None, :] if rows else np.zeros((0, len(e.values)))
+        shapes = (
+            np.vstack(rows) * self.space.dvalue_dz(e.values)[None, :]
+            if rows
+            else np.zeros((0, len(e.values)))
+        )
         out = np.vstack([super().jacobian(e), shapes])
         self._jacobian = (e, out)
         return out
@@ -283,9 +309,12 @@ class RitzObjective(Objective):
     def __init__(self, objective: Objective, at: Evaluation, also: Evaluation):
         self.__dict__.update(objective.__dict__)
         solved = objective.solved.with_specimen(at.model.specimen)
-        self.reanalyses = {name: Reanalysis.of(solved, name, objective.solution(also.model.specimen, name).modes.shapes,
-                                               assembled=True)
-                           for name in self.configurations}
+        self.reanalyses = {
+            name: Reanalysis.of(
+                solved, name, objective.solution(also.model.specimen, name).modes.shapes, assembled=True
+            )
+            for name in self.configurations
+        }
 
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
         return self.reanalyses[configuration].solve(specimen)
@@ -334,5 +363,12 @@ def relative_sensitivity(e: Evaluation) -> np.ndarray:
     return e.derivatives * e.values[None, :] / e.model_hz[:, None]
 
 
-__all__ = ["Evaluation", "Objective", "RitzObjective", "ShapeObjective", "TrialScreen", "relative_sensitivity",
-           "solving_model"]
+__all__ = [
+    "Evaluation",
+    "Objective",
+    "RitzObjective",
+    "ShapeObjective",
+    "TrialScreen",
+    "relative_sensitivity",
+    "solving_model",
+]

@@ -12,6 +12,7 @@ more surely: the model modes it permits are those it resembles at the measured p
 holds it (a measured mode mixes close model modes in proportions that small changes
 swing: a sensor's mass, a misaligned ply).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -100,7 +101,11 @@ def permits(solution, labels, shapes) -> tuple[np.ndarray | None, np.ndarray | N
     if not any(labels) and not any(s is not None for s in shapes):
         return None, None, []
     n_model = len(solution.labels)
-    allowed, affinity, notes = np.ones((len(labels), n_model), dtype=bool), np.zeros((len(labels), n_model)), []
+    allowed, affinity, notes = (
+        np.ones((len(labels), n_model), dtype=bool),
+        np.zeros((len(labels), n_model)),
+        [],
+    )
     for i, (label, shape) in enumerate(zip(labels, shapes)):
         if label:
             affinity[i] = label_shares(solution.shape_coefficients, solution.labels, label)
@@ -111,9 +116,11 @@ def permits(solution, labels, shapes) -> tuple[np.ndarray | None, np.ndarray | N
                 allowed[i] &= by_shape
                 affinity[i] = mac
             else:
-                notes.append(f"{shape.configuration}: the shape measured at {shape.frequency_hz:.6g} Hz resembles no "
-                             f"model mode (best MAC {mac.max():.2f}, model mode {int(np.argmax(mac)) + 1}); "
-                             "paired by frequency")
+                notes.append(
+                    f"{shape.configuration}: the shape measured at {shape.frequency_hz:.6g} Hz resembles no "
+                    f"model mode (best MAC {mac.max():.2f}, model mode {int(np.argmax(mac)) + 1}); "
+                    "paired by frequency"
+                )
     return allowed, affinity, notes
 
 
@@ -138,7 +145,7 @@ class ShapeCorrelation:
     model_hz: np.ndarray
     mac: np.ndarray
     paired: np.ndarray
-    xy: np.ndarray          # the points measured, union over the shapes [m]
+    xy: np.ndarray  # the points measured, union over the shapes [m]
     comac: np.ndarray
     residual: np.ndarray
 
@@ -163,8 +170,12 @@ class ShapeCorrelation:
         return self.xy[int(np.nanargmax(self.residual))]
 
     def to_dict(self) -> dict:
-        return {"measured_hz": self.measured_hz.tolist(), "model_mode": list(range(1, len(self.model_hz) + 1)),
-                "model_hz": self.model_hz.tolist(), "mac": self.mac.tolist()}
+        return {
+            "measured_hz": self.measured_hz.tolist(),
+            "model_mode": list(range(1, len(self.model_hz) + 1)),
+            "model_hz": self.model_hz.tolist(),
+            "mac": self.mac.tolist(),
+        }
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -192,8 +203,16 @@ def shape_correlation(solution, shapes: list[ModeShape], paired: np.ndarray) -> 
     with np.errstate(invalid="ignore", divide="ignore"):
         comac = np.where(measured2 > 0, product**2 / (measured2 * model2), np.nan)
         residual = np.where(measured2 > 0, np.sqrt(left2 / measured2), np.nan)
-    return ShapeCorrelation(shapes[0].configuration, tuple(shapes), solution.frequencies_hz.copy(), mac,
-                            np.asarray(paired, dtype=int), xy, comac, residual)
+    return ShapeCorrelation(
+        shapes[0].configuration,
+        tuple(shapes),
+        solution.frequencies_hz.copy(),
+        mac,
+        np.asarray(paired, dtype=int),
+        xy,
+        comac,
+        residual,
+    )
 
 
 def monotone_assignment(targets: np.ndarray, slots: np.ndarray) -> np.ndarray:
@@ -240,17 +259,23 @@ class ModePairing:
         n_model = len(modes.eigenvalues)
         ranks = np.asarray(measured_modes, dtype=int) - 1
         if np.any(ranks >= n_model):
-            raise MeasurementError(f"configuration {configuration!r}: mode {ranks.max() + 1} is beyond the "
-                                   f"{n_model} model modes computed")
+            raise MeasurementError(
+                f"configuration {configuration!r}: mode {ranks.max() + 1} is beyond the "
+                f"{n_model} model modes computed"
+            )
         shapes = [None] * len(ranks) if shapes is None else shapes
         allowed, affinity, notes = permits(solution, labels, shapes)
         indices = np.full(len(ranks), -1)
-        pinned = [k for k in range(len(ranks)) if labels[k] or (shapes[k] is not None and not allowed[k].all())]
+        pinned = [
+            k for k in range(len(ranks)) if labels[k] or (shapes[k] is not None and not allowed[k].all())
+        ]
         unmatched = []
         if pinned:
             nearness = np.abs(np.arange(n_model)[None, :] - ranks[pinned][:, None]) / n_model
             permitted = allowed[pinned]
-            rows, cols = linear_sum_assignment(np.where(permitted, nearness - LABEL_TIE * affinity[pinned], n_model))
+            rows, cols = linear_sum_assignment(
+                np.where(permitted, nearness - LABEL_TIE * affinity[pinned], n_model)
+            )
             for r, c in zip(rows, cols):
                 if permitted[r, c]:
                     indices[pinned[r]] = c
@@ -262,8 +287,10 @@ class ModePairing:
         free = [i for i in range(n_model) if i not in used]
         indices[unpaired] = monotone_assignment(ranks[unpaired], np.array(free))
         if unmatched:
-            notes.append(f"{configuration}: no start-model mode shows the pattern of {', '.join(unmatched)}; "
-                         "paired by rank")
+            notes.append(
+                f"{configuration}: no start-model mode shows the pattern of {', '.join(unmatched)}; "
+                "paired by rank"
+            )
         return cls(configuration, indices, modes.shapes[:, indices], note="; ".join(notes))
 
     def track(self, modes: Modes, weight: sp.spmatrix) -> ModePairing:
@@ -271,7 +298,9 @@ class ModePairing:
         mac = mac_matrix(self.shapes, modes.shapes, weight)
         rows, cols = linear_sum_assignment(-mac)
         indices = cols[np.argsort(rows)]
-        return ModePairing(self.configuration, indices, modes.shapes[:, indices], float(mac[rows, cols].min()))
+        return ModePairing(
+            self.configuration, indices, modes.shapes[:, indices], float(mac[rows, cols].min())
+        )
 
     @property
     def lost(self) -> bool:

@@ -5,6 +5,7 @@ step is a relative change (the paper's Delta P / P) and can never make them nega
 Poisson ratios and angles are updated linearly.  Material properties stay within their
 bounds (``Material.bound``: the spec's ``bounds`` or physical defaults, nu12 in 0..0.5).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -16,10 +17,21 @@ from fem.specimen import Parameter, Specimen
 
 LOG_KINDS = frozenset({"E1", "E2", "G12", "G13", "G23", "density", "thickness", "mass", "stiffness"})
 #: Display units per kind: (unit name, factor from SI).
-UNITS = {"E1": ("GPa", 1e-9), "E2": ("GPa", 1e-9), "G12": ("GPa", 1e-9), "G13": ("GPa", 1e-9),
-         "G23": ("GPa", 1e-9), "nu12": ("", 1.0),
-         "density": ("kg/m^3", 1.0), "thickness": ("mm", 1e3), "angle": ("deg", 180 / np.pi),
-         "mass": ("g", 1e3), "x": ("mm", 1e3), "y": ("mm", 1e3), "stiffness": ("N/m", 1.0)}
+UNITS = {
+    "E1": ("GPa", 1e-9),
+    "E2": ("GPa", 1e-9),
+    "G12": ("GPa", 1e-9),
+    "G13": ("GPa", 1e-9),
+    "G23": ("GPa", 1e-9),
+    "nu12": ("", 1.0),
+    "density": ("kg/m^3", 1.0),
+    "thickness": ("mm", 1e3),
+    "angle": ("deg", 180 / np.pi),
+    "mass": ("g", 1e3),
+    "x": ("mm", 1e3),
+    "y": ("mm", 1e3),
+    "stiffness": ("N/m", 1.0),
+}
 
 
 def display(parameter: Parameter, value: float) -> float:
@@ -48,10 +60,16 @@ class ParameterSpace:
     def of(cls, parameters, specimen: Specimen) -> ParameterSpace:
         scale = {"x": specimen.length, "y": specimen.width}
         materials = specimen.materials
-        bounds = [materials[p.target].bound(p.kind) if p.target in materials else (-np.inf, np.inf)
-                  for p in parameters]
-        return cls(tuple(parameters), tuple(scale.get(p.kind, 1.0) for p in parameters),
-                   tuple(b[0] for b in bounds), tuple(b[1] for b in bounds))
+        bounds = [
+            materials[p.target].bound(p.kind) if p.target in materials else (-np.inf, np.inf)
+            for p in parameters
+        ]
+        return cls(
+            tuple(parameters),
+            tuple(scale.get(p.kind, 1.0) for p in parameters),
+            tuple(b[0] for b in bounds),
+            tuple(b[1] for b in bounds),
+        )
 
     @property
     def is_log(self) -> np.ndarray:
@@ -75,8 +93,10 @@ class ParameterSpace:
         """The bounds in z (log bounds of log parameters; a zero lower bound is -inf)."""
         low, high = np.array(self.lower, dtype=float), np.array(self.upper, dtype=float)
         with np.errstate(divide="ignore"):
-            return (np.where(self.is_log, np.log(np.maximum(low, 0.0)), low / self._scale),
-                    np.where(self.is_log, np.log(np.maximum(high, 0.0)), high / self._scale))
+            return (
+                np.where(self.is_log, np.log(np.maximum(low, 0.0)), low / self._scale),
+                np.where(self.is_log, np.log(np.maximum(high, 0.0)), high / self._scale),
+            )
 
     def clip(self, values: np.ndarray) -> np.ndarray:
         """Values moved into their bounds."""

@@ -1,4 +1,5 @@
 """What became of every peak of a peak list fitted: the model mode it matched, or left out."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -38,12 +39,18 @@ class PeakAssignment:
         if left.size:
             listed = "; ".join(
                 f"{table['configuration'].iloc[i]} {table['frequency_hz'].iloc[i]:.2f} Hz (nearest mode "
-                f"{self.nearest[i]} at {self.model_hz[i]:.2f} Hz, {100 * (table['frequency_hz'].iloc[i] / self.model_hz[i] - 1):+.2f} %)"
-                for i in left)
+                f"{self.nearest[i]} at {self.model_hz[i]:.2f} Hz, "
+                f"{100 * (table['frequency_hz'].iloc[i] / self.model_hz[i] - 1):+.2f} %)"
+                for i in left
+            )
             out.append(f"left out {left.size} peak(s) that match no model mode (spurious?): {listed}")
-        unseen = "; ".join(f"{name} mode(s) {', '.join(map(str, modes))}" for name, modes in self.unseen.items() if modes)
+        unseen = "; ".join(
+            f"{name} mode(s) {', '.join(map(str, modes))}" for name, modes in self.unseen.items() if modes
+        )
         if unseen:
-            out.append(f"model modes inside the measured band with no peak (a node near the sensor?): {unseen}")
+            out.append(
+                f"model modes inside the measured band with no peak (a node near the sensor?): {unseen}"
+            )
         return out
 
 
@@ -58,17 +65,28 @@ def peak_table(assignment: PeakAssignment) -> pd.DataFrame:
     nearest_error = assignment.model_hz / measured - 1
 
     def where_matched(values):
-        return pd.Series([v.item() if m else None for v, m in zip(values, matched, strict=True)], dtype=object)
+        return pd.Series(
+            [v.item() if m else None for v, m in zip(values, matched, strict=True)], dtype=object
+        )
 
-    return pd.DataFrame({
-        "configuration": table["configuration"].to_numpy(),
-        "mode": where_matched(assignment.modes),
-        "measured_hz": measured, "model_hz": where_matched(assignment.model_hz),
-        "rel_error": where_matched(nearest_error),
-        "matched": matched,
-        "note": ["" if m else f"left out: matches no model mode (nearest: mode {n} at {f:.2f} Hz, {100 * e:+.2f} %)"
-                 for m, n, f, e in zip(matched, assignment.nearest, assignment.model_hz, nearest_error, strict=True)],
-    })
+    return pd.DataFrame(
+        {
+            "configuration": table["configuration"].to_numpy(),
+            "mode": where_matched(assignment.modes),
+            "measured_hz": measured,
+            "model_hz": where_matched(assignment.model_hz),
+            "rel_error": where_matched(nearest_error),
+            "matched": matched,
+            "note": [
+                ""
+                if m
+                else f"left out: matches no model mode (nearest: mode {n} at {f:.2f} Hz, {100 * e:+.2f} %)"
+                for m, n, f, e in zip(
+                    matched, assignment.nearest, assignment.model_hz, nearest_error, strict=True
+                )
+            ],
+        }
+    )
 
 
 __all__ = ["PeakAssignment", "peak_table"]

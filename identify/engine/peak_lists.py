@@ -14,6 +14,7 @@
 Every peak left out, and every model mode in the band no peak was matched to, is
 reported.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -68,8 +69,9 @@ def _options(options: FitOptions, peaks: Measurements, ranked: Measurements) -> 
     return replace(options, extra_modes=max(options.extra_modes, most + EXTRA_MODES - highest))
 
 
-def _solver(model: SpecimenModel, peaks: Measurements, options: FitOptions,
-            ranked: Measurements | None = None) -> SpecimenModel:
+def _solver(
+    model: SpecimenModel, peaks: Measurements, options: FitOptions, ranked: Measurements | None = None
+) -> SpecimenModel:
     """The model as the fit of ``ranked`` (the peaks as matched; None: by rank) solves it."""
     ranked = _by_rank(peaks) if ranked is None else ranked
     return solving_model(model, ranked, _options(options, peaks, ranked).extra_modes)
@@ -88,8 +90,11 @@ def _match_all(solver: SpecimenModel, peaks: Measurements, tolerance: float | No
         shaped = [s is not None and not allowed[i].all() for i, s in enumerate(shapes)]
         gate = np.where(shaped, SHAPE_GATE, GATE)
         f = rows["frequency_hz"].to_numpy()
-        out[name] = (align(f, std, solution.frequencies_hz, allowed, gate) if tolerance is None
-                     else match(f, std, solution.frequencies_hz, tolerance, allowed, gate))
+        out[name] = (
+            align(f, std, solution.frequencies_hz, allowed, gate)
+            if tolerance is None
+            else match(f, std, solution.frequencies_hz, tolerance, allowed, gate)
+        )
     return out
 
 
@@ -108,7 +113,10 @@ def _ranked(peaks: Measurements, matches: dict[str, Match]) -> Measurements:
 def _signature(matches: dict[str, Match]) -> dict:
     """Which peaks and which modes are matched (not who with whom: that is the pairing's
     business, settled by ``ambiguity``)."""
-    return {name: (tuple(np.flatnonzero(m.matched)), tuple(sorted(m.modes[m.matched]))) for name, m in matches.items()}
+    return {
+        name: (tuple(np.flatnonzero(m.matched)), tuple(sorted(m.modes[m.matched])))
+        for name, m in matches.items()
+    }
 
 
 def _rescaled_start(model: SpecimenModel, scale: float, parameters) -> tuple[SpecimenModel, str]:
@@ -120,32 +128,57 @@ def _rescaled_start(model: SpecimenModel, scale: float, parameters) -> tuple[Spe
     if not moduli:
         return model, ""
     values = {p: model.value(p) * scale**2 for p in moduli}
-    return model.with_values(values), (f"start moduli x {scale**2:.3g}: the start model's spectrum of "
-                                       f"'{model.specimen.configurations[0].name}' lies {scale:.3g} x over the "
-                                       "peaks (frequencies go as the square root of stiffness)")
+    return model.with_values(values), (
+        f"start moduli x {scale**2:.3g}: the start model's spectrum of "
+        f"'{model.specimen.configurations[0].name}' lies {scale:.3g} x over the "
+        "peaks (frequencies go as the square root of stiffness)"
+    )
 
 
-def _screened_start(handbook: SpecimenModel, scaled: SpecimenModel, matches: dict[str, Match], peaks: Measurements,
-                    parameters, options: FitOptions) -> tuple[SpecimenModel, dict[str, Match], str]:
+def _screened_start(
+    handbook: SpecimenModel,
+    scaled: SpecimenModel,
+    matches: dict[str, Match],
+    peaks: Measurements,
+    parameters,
+    options: FitOptions,
+) -> tuple[SpecimenModel, dict[str, Match], str]:
     """The screen's start and matching (``peak_screen``) in place of the scaled start's,
     where the screen runs."""
     screened = screen(_solver(handbook, peaks, options), peaks, parameters, scaled)
     if screened is None:
         return scaled, matches, ""
-    moved = ", ".join(f"{p.name} {display(p, scaled.value(p)):.4g} -> {display(p, v):.4g}"
-                      for p, v in screened.values.items() if not np.isclose(v, scaled.value(p), rtol=1e-6))
+    moved = ", ".join(
+        f"{p.name} {display(p, scaled.value(p)):.4g} -> {display(p, v):.4g}"
+        for p, v in screened.values.items()
+        if not np.isclose(v, scaled.value(p), rtol=1e-6)
+    )
     count = sum(int(m.matched.sum()) for m in screened.matches.values())
-    scaled_cost = (f"{screened.scaled_cost:.3g}" if np.isfinite(screened.scaled_cost)
-                   else "inadmissible")  # polished onto an inadmissible material
-    return scaled.with_values(screened.values), screened.matches, (
-        f"start screened over {screened.scored} points of the moduli on a reduced model: {moved}; on a full solve "
-        f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} (matching cost {screened.cost:.3g}; "
-        f"the scaled start polished: {scaled_cost})")
+    scaled_cost = (
+        f"{screened.scaled_cost:.3g}" if np.isfinite(screened.scaled_cost) else "inadmissible"
+    )  # polished onto an inadmissible material
+    return (
+        scaled.with_values(screened.values),
+        screened.matches,
+        (
+            f"start screened over {screened.scored} points of the moduli on a reduced model: {moved}; on a "
+            "full solve "
+            f"it matches {count} of {len(peaks)} peaks within {SCREEN_TOLERANCE:.0%} (matching cost "
+            f"{screened.cost:.3g}; "
+            f"the scaled start polished: {scaled_cost})"
+        ),
+    )
 
 
-def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Parameter] | None = None,
-                  options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
-                  effect_of: dict | None = None, start_matches: dict[str, Match] | None = None) -> FitResult:
+def fit_peak_list(
+    model: SpecimenModel,
+    peaks: Measurements,
+    parameters: list[Parameter] | None = None,
+    options: FitOptions = FitOptions(),
+    progress: Callable[[Iteration], None] | None = None,
+    effect_of: dict | None = None,
+    start_matches: dict[str, Match] | None = None,
+) -> FitResult:
     """Identify ``parameters`` from a peak list (no mode numbers): match, fit, match again
     at the solution until settled; the result's ``peaks`` says what became of each peak.
     ``start_matches`` skips the alignment (e.g. a baseline fit's final matching)."""
@@ -170,8 +203,9 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
         ranked = _ranked(peaks, matches)
         if result is None:  # a round whose matching is the last fit's would refit the same problem
             # Rounds while the matching moves skip the pairing checks; the settled one does them.
-            result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of,
-                            settle=False)
+            result = update(
+                model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of, settle=False
+            )
             history += _renumbered(result.history, history)
             model = result.model  # the last fit's solution: where the next round and the final fit start
         tightening = round_ < len(narrowing)
@@ -185,9 +219,12 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
             seen.append(_signature(again))
             matches, result = again, (result if unchanged else None)
             continue
-        if _signature(again) in seen and _signature(again) in revisited:  # it cycles: keep the last fit, say so
-            notes.append("the peak matching did not settle (it cycles between alternatives): check the "
-                         "left-out peaks and unseen modes below")
+        # it cycles: keep the last fit, say so
+        if _signature(again) in seen and _signature(again) in revisited:
+            notes.append(
+                "the peak matching did not settle (it cycles between alternatives): check the "
+                "left-out peaks and unseen modes below"
+            )
             break
         if _signature(again) in seen:
             # Back to a matching fitted before, now from another solution: a fit from a far
@@ -205,8 +242,12 @@ def fit_peak_list(model: SpecimenModel, peaks: Measurements, parameters: list[Pa
     result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
     history += _renumbered(result.history, history)
     assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
-    return replace(_without_redundancy(result), warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings,
-                   peaks=assignment, history=tuple(history))
+    return replace(
+        _without_redundancy(result),
+        warnings=tuple(notes) + tuple(assignment.notes()) + result.warnings,
+        peaks=assignment,
+        history=tuple(history),
+    )
 
 
 def _without_redundancy(result: FitResult) -> FitResult:
@@ -218,10 +259,17 @@ def _without_redundancy(result: FitResult) -> FitResult:
     st = result.statistics
     if result.status is not FitStatus.CONVERGED or st.dof > 0:
         return result
-    return replace(result, status=FitStatus.NOT_IDENTIFIABLE, message=(
-        f"not identifiable: {st.n} matched peaks for {st.k} unknowns, so the peaks' pairing with the model's modes "
-        "is chosen by the fit and nothing is left to test it; measure more modes, give the mode numbers (a 'mode' "
-        "column), or identify fewer parameters"))
+    return replace(
+        result,
+        status=FitStatus.NOT_IDENTIFIABLE,
+        message=(
+            f"not identifiable: {st.n} matched peaks for {st.k} unknowns, so the peaks' pairing with the "
+            "model's modes "
+            "is chosen by the fit and nothing is left to test it; measure more modes, give the mode numbers "
+            "(a 'mode' "
+            "column), or identify fewer parameters"
+        ),
+    )
 
 
 def matching_cost(result: FitResult, peaks: Measurements, tolerance: float) -> float:
@@ -254,8 +302,13 @@ def matched_at(model: SpecimenModel, peaks: Measurements) -> Measurements:
     return _ranked(peaks, _match_all(_solver(model, peaks, FitOptions()), peaks, None))
 
 
-def _assignment(model: SpecimenModel, peaks: Measurements, matches: dict[str, Match], options: FitOptions,
-                ranked: Measurements) -> PeakAssignment:
+def _assignment(
+    model: SpecimenModel,
+    peaks: Measurements,
+    matches: dict[str, Match],
+    options: FitOptions,
+    ranked: Measurements,
+) -> PeakAssignment:
     solver = _solver(model, peaks, options, ranked)
     table = peaks.table
     modes = np.zeros(len(table), dtype=int)

@@ -21,6 +21,7 @@ solves; 0.01-0.04 % from the full solve over that range, a millisecond an evalua
    from a scaled start that already paired every peak rightly, the fit's narrowing
    re-matches (1 %, then 0.3 %) dropped true peaks while the model was still 1-2 % off.
 """
+
 from __future__ import annotations
 
 import math
@@ -95,8 +96,11 @@ class _Search:
         self.z_start = self.space.to_z(self.start)[self.moved]
         basis = ritz_basis(solver)
         # Single-layer theories only (a layerwise peak list keeps the scaled start).
-        self.reduced = ({name: Reanalysis.of(basis, name) for name in peaks.configurations}
-                        if basis.options.theory != "layerwise" else None)
+        self.reduced = (
+            {name: Reanalysis.of(basis, name) for name in peaks.configurations}
+            if basis.options.theory != "layerwise"
+            else None
+        )
         self.n_modes = solver.options.modes
         self.rows = {name: peaks.of(name) for name in peaks.configurations}
 
@@ -124,7 +128,9 @@ class _Search:
             return None
         return {name: red.frequencies_hz(specimen)[: self.n_modes] for name, red in self.reduced.items()}
 
-    def matches(self, spectra: dict[str, np.ndarray], tolerance: float = SCREEN_TOLERANCE) -> dict[str, Match]:
+    def matches(
+        self, spectra: dict[str, np.ndarray], tolerance: float = SCREEN_TOLERANCE
+    ) -> dict[str, Match]:
         out = {}
         for name, rows in self.rows.items():
             std = rows["std_hz"].to_numpy() if self.peaks.has_std else None
@@ -155,19 +161,26 @@ class _Search:
                 spectra = self.spectra(trial)
                 if spectra is None:
                     return np.full(len(trial) + sum(int(m.matched.sum()) for m in pairs.values()), 1e3)
-                out = [(trial - self.z_start) / half]  # the start as a prior: a direction no peak sets stays there
+                # the start as a prior: a direction no peak sets stays there
+                out = [(trial - self.z_start) / half]
                 for name, m in pairs.items():
                     f = self.rows[name]["frequency_hz"].to_numpy()[m.matched]
                     out.append(np.log(spectra[name][m.modes[m.matched]] / f) / SCREEN_TOLERANCE)
                 return np.concatenate(out)
 
-            z = least_squares(residuals, np.clip(z, low, high), bounds=(low, high), diff_step=1e-4,
-                              max_nfev=20 * (len(z) + 1)).x
+            z = least_squares(
+                residuals,
+                np.clip(z, low, high),
+                bounds=(low, high),
+                diff_step=1e-4,
+                max_nfev=20 * (len(z) + 1),
+            ).x
         return z
 
 
-def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Parameter],
-           scaled: SpecimenModel) -> Screened | None:
+def screen(
+    solver: SpecimenModel, peaks: Measurements, parameters: list[Parameter], scaled: SpecimenModel
+) -> Screened | None:
     """The start of a peak-list fit by the screen (module docstring), from the ``solver``
     model (the fit's mesh and modes) with the ``scaled`` start polished as one more
     candidate; None where the screen does not run (no stiffness parameter, more than
@@ -192,7 +205,9 @@ def screen(solver: SpecimenModel, peaks: Measurements, parameters: list[Paramete
     values = dict(zip(parameters, search.values(final)))
     model = solver.with_values(values)
     matches = search.matches({name: model.solve(name).frequencies_hz for name in peaks.configurations})
-    return Screened(values, matches, sum(m.cost for m in matches.values()), search.cost(reference), len(points))
+    return Screened(
+        values, matches, sum(m.cost for m in matches.values()), search.cost(reference), len(points)
+    )
 
 
 __all__ = ["BASIS_PER_MODE", "SCREEN_TOLERANCE", "Screened", "ritz_basis", "screen"]

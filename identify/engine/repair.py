@@ -8,6 +8,7 @@ adjacent unlabelled modes with equal and opposite residuals are evaluated at the
 parameter values (cached solves, no iteration); the best one that lowers the misfit is
 refitted from, and the check repeated.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -23,19 +24,29 @@ ROUNDS = 3
 REFIT_ITERATIONS = 30
 
 
-def quick_repair(objective: Objective, current: Evaluation, history: list,
-                 refit: Callable[[Evaluation, list, int], tuple[Evaluation, object]]) -> tuple[Evaluation, str, list]:
+def quick_repair(
+    objective: Objective,
+    current: Evaluation,
+    history: list,
+    refit: Callable[[Evaluation, list, int], tuple[Evaluation, object]],
+) -> tuple[Evaluation, str, list]:
     """(state, what was re-paired or '', notes): ``current`` re-paired where that lowers
     the misfit at once, refitted from there (``refit`` as in ``settle_pairings``)."""
     done = []
     for _ in range(ROUNDS):
         options = []
         fresh = objective.evaluate(current.values, None, differentiate=False)
-        if any(np.any(fresh.pairings[c].indices != current.pairings[c].indices) for c in objective.configurations):
+        if any(
+            np.any(fresh.pairings[c].indices != current.pairings[c].indices) for c in objective.configurations
+        ):
             options.append((fresh, "the pairing made afresh at the solution (by rank and label)"))
-        options += [(swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])} (equal and "
-                                                        "opposite residuals)")
-                    for rows in beneficial_swaps(objective, current)]
+        options += [
+            (
+                swapped(objective, current, rows),
+                f"modes {describe_pairs(objective, [rows])} (equal and opposite residuals)",
+            )
+            for rows in beneficial_swaps(objective, current)
+        ]
         better = [o for o in options if objective.cost(o[0]) < objective.cost(current) * (1 - 1e-9)]
         if not better:
             break
@@ -46,7 +57,11 @@ def quick_repair(objective: Objective, current: Evaluation, history: list,
             break
         current, history[:] = state, branch
         done.append(what)
-    notes = [f"re-paired {'; '.join(done)}: lower misfit than the pairing followed from the start"] if done else []
+    notes = (
+        [f"re-paired {'; '.join(done)}: lower misfit than the pairing followed from the start"]
+        if done
+        else []
+    )
     return current, "; ".join(done), notes
 
 

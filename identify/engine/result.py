@@ -1,6 +1,7 @@
 """The outcome of an identification: status, parameters with uncertainties, statistics,
 history and residuals.  SI inside; ``report()`` and ``to_dict()`` give the spec's units
 (GPa, mm, g)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -28,10 +29,10 @@ class FitStatus(str, Enum):  # noqa: UP042 (StrEnum would change str() of a memb
     """How an identification ended.  Only ``CONVERGED`` means the result may be used as
     it stands (exit status 0)."""
 
-    CONVERGED = "converged"                  # the misfit is at the level of the stated scatter
-    POOR_FIT = "poor_fit"                    # converged, on a misfit the scatter cannot explain
-    NOT_CONVERGED = "not_converged"          # the iterations stopped before a solution
-    NOT_IDENTIFIABLE = "not_identifiable"    # the frequencies fit, the parameters are not determined
+    CONVERGED = "converged"  # the misfit is at the level of the stated scatter
+    POOR_FIT = "poor_fit"  # converged, on a misfit the scatter cannot explain
+    NOT_CONVERGED = "not_converged"  # the iterations stopped before a solution
+    NOT_IDENTIFIABLE = "not_identifiable"  # the frequencies fit, the parameters are not determined
 
 
 @dataclass(frozen=True)

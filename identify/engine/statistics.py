@@ -9,6 +9,7 @@ Whether a fit may be called converged is a chi^2 test: the misfit must be consis
 with the stated scatter (std_hz), or, without one, with ``ASSUMED_SCATTER_REL`` of every
 measured frequency, at the level ``CHI2_TEST_LEVEL``.
 """
+
 from __future__ import annotations
 
 import math
@@ -91,11 +92,16 @@ class FitStatistics:
 
     def describe(self) -> str:
         """One line: the misfit against the scatter, and whether they are consistent."""
-        against = "the stated std_hz" if self.scatter_known else \
-            f"an assumed {100 * ASSUMED_SCATTER_REL:g} % scatter (no std_hz given)"
+        against = (
+            "the stated std_hz"
+            if self.scatter_known
+            else f"an assumed {100 * ASSUMED_SCATTER_REL:g} % scatter (no std_hz given)"
+        )
         verdict = "consistent" if self.consistent else f"not consistent (chi^2 test, p = {self.p_value:.2g})"
-        return (f"misfit {self.misfit_over_scatter:.3g}x {against}, RMS {100 * self.rms_rel_error:.4g} %: "
-                f"{verdict}")
+        return (
+            f"misfit {self.misfit_over_scatter:.3g}x {against}, RMS {100 * self.rms_rel_error:.4g} %: "
+            f"{verdict}"
+        )
 
     @property
     def chi2_unit(self) -> float:
@@ -122,8 +128,11 @@ class FitStatistics:
     @property
     def noise_source(self) -> str:
         if self.scatter_known:
-            return (f"measured std_hz inflated by the misfit (reduced chi^2 {self.reduced_chi2:.1f})" if self.inflated
-                    else "measured std_hz")
+            return (
+                f"measured std_hz inflated by the misfit (reduced chi^2 {self.reduced_chi2:.1f})"
+                if self.inflated
+                else "measured std_hz"
+            )
         if self.dof > 0:
             return f"estimated from the residual ({self.dof} degrees of freedom)"
         return "none: as many unknowns as frequencies and no std_hz"
@@ -139,13 +148,21 @@ class FitStatistics:
         return fit + self.k * math.log(self.n)
 
     def to_dict(self) -> dict:
-        return {"n": self.n, "k": self.k, "dof": self.dof, "chi2": finite_or_none(self.chi2),
-                "reduced_chi2": finite_or_none(self.reduced_chi2) if self.scatter_known else None,
-                "chi2_against_scatter": finite_or_none(self.chi2_against_scatter),
-                "scatter_assumed_rel": None if self.scatter_known else ASSUMED_SCATTER_REL,
-                "p_value": self.p_value, "consistent": self.consistent,
-                "noise_scale": finite_or_none(self.noise_scale), "rms_rel_error": self.rms_rel_error,
-                "bic": finite_or_none(self.bic), "scatter": self.noise_source}
+        return {
+            "n": self.n,
+            "k": self.k,
+            "dof": self.dof,
+            "chi2": finite_or_none(self.chi2),
+            "reduced_chi2": finite_or_none(self.reduced_chi2) if self.scatter_known else None,
+            "chi2_against_scatter": finite_or_none(self.chi2_against_scatter),
+            "scatter_assumed_rel": None if self.scatter_known else ASSUMED_SCATTER_REL,
+            "p_value": self.p_value,
+            "consistent": self.consistent,
+            "noise_scale": finite_or_none(self.noise_scale),
+            "rms_rel_error": self.rms_rel_error,
+            "bic": finite_or_none(self.bic),
+            "scatter": self.noise_source,
+        }
 
 
 def weighted_residuals(model_hz: np.ndarray, measurements: Measurements) -> np.ndarray:

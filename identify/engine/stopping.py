@@ -1,6 +1,7 @@
 """When the updating stops, and why: the update loop's constants, named in one place,
 and the stop reason kept on every fit result (``FitResult.stop``, ``"stop_reason"`` in
 the fit JSON)."""
+
 from __future__ import annotations
 
 from enum import Enum
@@ -61,5 +62,18 @@ class Stop(Enum):
         return self.name.lower()
 
 
-__all__ = ["Stop", "STALLED", "STEP_PER_STD", "STALL_ITERATIONS", "BOUND_TOLERANCE", "TINY_STEP",
-           "ADMISSIBLE_HALVINGS", "FIRST_DAMPING", "DAMPING_FACTOR", "UNDAMPED", "EXACT_RMS", "FLAT_STEP", "UNDETERMINED_Z"]
+__all__ = [
+    "Stop",
+    "STALLED",
+    "STEP_PER_STD",
+    "STALL_ITERATIONS",
+    "BOUND_TOLERANCE",
+    "TINY_STEP",
+    "ADMISSIBLE_HALVINGS",
+    "FIRST_DAMPING",
+    "DAMPING_FACTOR",
+    "UNDAMPED",
+    "EXACT_RMS",
+    "FLAT_STEP",
+    "UNDETERMINED_Z",
+]

@@ -6,6 +6,7 @@ the tied parameter is the leader (e.g. ``G13``), and each follower keeps its rat
 (``G23 = r G13`` with r from the start values).  Its frequency derivative is the chain
 rule, df/dG13 + r df/dG23, from the same exact sensitivities.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -60,7 +61,9 @@ def derivatives(solution, parameters) -> np.ndarray:
         return solution.derivatives(parameters)
     plain, columns = [], []
     for p in parameters:
-        members = [(Parameter(p.kind, p.target), 1.0)] + list(p.followers) if isinstance(p, Tied) else [(p, 1.0)]
+        members = (
+            [(Parameter(p.kind, p.target), 1.0)] + list(p.followers) if isinstance(p, Tied) else [(p, 1.0)]
+        )
         column = []
         for member, ratio in members:
             if member not in plain:

@@ -6,6 +6,7 @@ weighted residuals.  The scatter comes from the measurements' ``std_hz`` when gi
 estimated from the residual.  A singular design gives no error bars at all: they would
 be numbers without meaning.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -76,13 +77,26 @@ class Uncertainty:
         covariance = self.covariance + spread
         std = np.sqrt(np.diag(covariance))
         widened = np.sqrt(np.diag(spread)) > 0.5 * self.std
-        flags = tuple(f + (("pairing ambiguity (twin solutions) included in std",) if w else ())
-                      for f, w in zip(self.flags, widened))
-        warnings = self.warnings + ((f"std of {', '.join(p.name for p, w in zip(parameters, widened) if w)} "
-                                     "widened by twin solutions: label the close modes to narrow them",)
-                                    if widened.any() else ())
-        return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std),
-                       flags=flags, warnings=warnings)
+        flags = tuple(
+            f + (("pairing ambiguity (twin solutions) included in std",) if w else ())
+            for f, w in zip(self.flags, widened)
+        )
+        warnings = self.warnings + (
+            (
+                f"std of {', '.join(p.name for p, w in zip(parameters, widened) if w)} "
+                "widened by twin solutions: label the close modes to narrow them",
+            )
+            if widened.any()
+            else ()
+        )
+        return replace(
+            self,
+            std=std,
+            covariance=covariance,
+            correlation=covariance / np.outer(std, std),
+            flags=flags,
+            warnings=warnings,
+        )
 
     def with_merged_peaks(self, objective, evaluation, lone) -> tuple[Uncertainty, list[str]]:
         """The uncertainty widened for measured peaks that may be two modes merged: each
@@ -104,11 +118,13 @@ class Uncertainty:
             spacing = abs(other_hz - mine_hz)
             # In weighted-residual units; a peak with a free close mode on each side: the wider.
             extra[row] = max(extra[row], spacing**2 / 12 / objective.sigma[row] ** 2)
-            notes.append(f"{name} {table['frequency_hz'].iloc[row]:.2f} Hz: one peak where model modes {mine + 1} and "
-                         f"{other + 1} lie {100 * spacing / mine_hz:.2g} % apart (two modes merged, or one at a "
-                         f"node): it may lie anywhere between them, a further scatter of {spacing / 12**0.5:.3g} Hz "
-                         "(spacing / sqrt 12) is in the parameters' std; a label or a second sensor position would "
-                         "tell")
+            notes.append(
+                f"{name} {table['frequency_hz'].iloc[row]:.2f} Hz: one peak where model modes {mine + 1} and "
+                f"{other + 1} lie {100 * spacing / mine_hz:.2g} % apart (two modes merged, or one at a "
+                f"node): it may lie anywhere between them, a further scatter of {spacing / 12**0.5:.3g} Hz "
+                "(spacing / sqrt 12) is in the parameters' std; a label or a second sensor position would "
+                "tell"
+            )
         u, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
         gain = (vt.T / s) @ u.T  # dz = -gain dr
         dvdz = objective.space.dvalue_dz(evaluation.values)
@@ -116,10 +132,13 @@ class Uncertainty:
         covariance = self.covariance + spread
         std = np.sqrt(np.diag(covariance))
         widened = np.sqrt(np.diag(spread)) > 0.5 * self.std
-        flags = tuple(f + (("merged peak (two close modes, one peak) included in std",) if w else ())
-                      for f, w in zip(self.flags, widened))
-        return replace(self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std),
-                       flags=flags), notes
+        flags = tuple(
+            f + (("merged peak (two close modes, one peak) included in std",) if w else ())
+            for f, w in zip(self.flags, widened)
+        )
+        return replace(
+            self, std=std, covariance=covariance, correlation=covariance / np.outer(std, std), flags=flags
+        ), notes
 
     @classmethod
     def at(cls, objective, evaluation, statistics: FitStatistics) -> Uncertainty:
@@ -133,8 +152,10 @@ class Uncertainty:
         p = len(values)
         warnings = []
         if statistics.inflated:
-            warnings.append(f"the misfit is {np.sqrt(statistics.reduced_chi2):.1f}x the stated scatter: the model misses "
-                            "something (run 'identify-layers diagnose'); std inflated accordingly")
+            warnings.append(
+                f"the misfit is {np.sqrt(statistics.reduced_chi2):.1f}x the stated scatter: the model misses "
+                "something (run 'identify-layers diagnose'); std inflated accordingly"
+            )
         if not statistics.scatter_known and statistics.dof <= 0:
             warnings.append("no redundancy to estimate the scatter: give std_hz or measure more modes")
         scale = statistics.noise_scale
@@ -145,7 +166,8 @@ class Uncertainty:
         s_rel = s_rel / s_rel[0] if s_rel[0] > 0 else np.zeros_like(s_rel)
         weak = tuple(
             f"{describe_combination(vt_rel[k], names)} (singular value {s_rel[k]:.1e} of the largest)"
-            for k in range(len(s_rel)) if s_rel[k] < 1 / GOOD_BELOW
+            for k in range(len(s_rel))
+            if s_rel[k] < 1 / GOOD_BELOW
         )
         _, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
         dvdz = space.dvalue_dz(values)
@@ -161,10 +183,16 @@ class Uncertainty:
             correlation = covariance / np.outer(std, std)
         on_bound = space.at_bound(values)
         specimen = evaluation.model.specimen
-        flags = tuple(parameter_flags(parameter, value, sd, specimen, space.bound_of(i, values) if on_bound[i] else None)
-                      for i, (parameter, value, sd) in enumerate(zip(space.parameters, values, std)))
-        bounded = tuple(bool(on_bound[i]) or at_limit(parameter, value, specimen)
-                        for i, (parameter, value) in enumerate(zip(space.parameters, values)))
+        flags = tuple(
+            parameter_flags(
+                parameter, value, sd, specimen, space.bound_of(i, values) if on_bound[i] else None
+            )
+            for i, (parameter, value, sd) in enumerate(zip(space.parameters, values, std))
+        )
+        bounded = tuple(
+            bool(on_bound[i]) or at_limit(parameter, value, specimen)
+            for i, (parameter, value) in enumerate(zip(space.parameters, values))
+        )
         return cls(std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings), bounded)
 
 
@@ -177,14 +205,18 @@ def at_limit(parameter, value: float, specimen) -> bool:
     return value**2 > 0.98 * material.E1 / material.E2
 
 
-def parameter_flags(parameter, value: float, std: float, specimen, bound: float | None = None) -> tuple[str, ...]:
+def parameter_flags(
+    parameter, value: float, std: float, specimen, bound: float | None = None
+) -> tuple[str, ...]:
     """Flags of one estimate: on its bound (``bound``: the bound it sits on, limited by it
     rather than by the data), at the positive-definiteness limit, weakly identifiable (std
     above ``WEAK_REL_STD`` of the value; for nu12 of 0.3, its typical size), not
     identifiable."""
     flags = []
     if bound is not None:
-        flags.append(f"at bound ({parameter.kind} = {display(parameter, bound):.4g}; set bounds in the spec to widen)")
+        flags.append(
+            f"at bound ({parameter.kind} = {display(parameter, bound):.4g}; set bounds in the spec to widen)"
+        )
     if at_limit(parameter, value, specimen):
         flags.append("at bound (nu12^2 -> E1/E2)")
     if parameter.kind == "nu12":

@@ -6,6 +6,7 @@ and a Gauss-Newton step is taken with its pseudo-inverse (eq. 15).  Unlike the p
 the step is damped (Levenberg-Marquardt) when it does not lower the misfit, limited in
 size, and kept inside the physical bounds (positive moduli, nu12^2 < E1/E2).
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -58,11 +59,11 @@ class FitOptions:
     """Iteration control.  Steps and tolerances are in z: relative for log parameters."""
 
     max_iterations: int = 30
-    parameter_tolerance: float = 1e-7   # stop when no parameter changes by more (relative)
-    cost_tolerance: float = 1e-10       # ... or the misfit falls by less than this fraction
-    max_log_step: float = 0.7           # largest relative change per step: a factor e^0.7 ~ 2
-    max_linear_step: float = 0.1        # largest change of nu12 (or an angle in rad) per step
-    extra_modes: int = 3                # model modes computed beyond the highest measured one
+    parameter_tolerance: float = 1e-7  # stop when no parameter changes by more (relative)
+    cost_tolerance: float = 1e-10  # ... or the misfit falls by less than this fraction
+    max_log_step: float = 0.7  # largest relative change per step: a factor e^0.7 ~ 2
+    max_linear_step: float = 0.1  # largest change of nu12 (or an angle in rad) per step
+    extra_modes: int = 3  # model modes computed beyond the highest measured one
     max_damping_tries: int = 12
     # > 0: also stop once each of the last STALL_ITERATIONS steps lowered chi^2 by less than
     # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
@@ -78,9 +79,20 @@ class FitOptions:
 
     def __post_init__(self):
         where = "FitOptions"
-        validation.whole(self.max_iterations, f"{where}.max_iterations", 0, 100_000, "of iterations ", OptionsError)
-        validation.whole(self.extra_modes, f"{where}.extra_modes", 0, MAX_SOLVED_MODES - MAX_MODES, "of modes ", OptionsError)
-        validation.whole(self.max_damping_tries, f"{where}.max_damping_tries", 1, 1000, "of tries ", OptionsError)
+        validation.whole(
+            self.max_iterations, f"{where}.max_iterations", 0, 100_000, "of iterations ", OptionsError
+        )
+        validation.whole(
+            self.extra_modes,
+            f"{where}.extra_modes",
+            0,
+            MAX_SOLVED_MODES - MAX_MODES,
+            "of modes ",
+            OptionsError,
+        )
+        validation.whole(
+            self.max_damping_tries, f"{where}.max_damping_tries", 1, 1000, "of tries ", OptionsError
+        )
         fields = vars(self)
         for key in ("parameter_tolerance", "cost_tolerance", "stall_chi2"):
             validation.number(fields, key, where, low=0.0, low_inclusive=True, error=OptionsError)
@@ -88,8 +100,13 @@ class FitOptions:
             validation.number(fields, key, where, low=0.0, error=OptionsError)
 
 
-def iterate(objective: Objective, current: Evaluation, history: list, options: FitOptions,
-            progress: Callable[[Iteration], None] | None = None) -> tuple[Evaluation, Stop, list[str]]:
+def iterate(
+    objective: Objective,
+    current: Evaluation,
+    history: list,
+    options: FitOptions,
+    progress: Callable[[Iteration], None] | None = None,
+) -> tuple[Evaluation, Stop, list[str]]:
     """Damped Gauss-Newton iterations from ``current``; appends to ``history``.  Returns
     the last state, why it stopped and warnings about mode tracking."""
     space = objective.space
@@ -103,7 +120,9 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         z = space.to_z(current.values)
         # Parameters on a bound that the misfit pushes outward are held there (active set).
         gradient = jacobian.T @ r
-        held = ((z <= z_low + BOUND_TOLERANCE) & (gradient > 0)) | ((z >= z_high - BOUND_TOLERANCE) & (gradient < 0))
+        held = ((z <= z_low + BOUND_TOLERANCE) & (gradient > 0)) | (
+            (z >= z_high - BOUND_TOLERANCE) & (gradient < 0)
+        )
         if held.all():
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
         u, s, vt = np.linalg.svd(jacobian[:, ~held], full_matrices=False)
@@ -112,8 +131,10 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         # Converged already?  Judge by the Gauss-Newton prediction before paying for solves.
         reducible = 0.5 * float(np.sum(ur[keep] ** 2))  # misfit a Gauss-Newton step could remove
         gauss_newton = vt.T @ np.where(keep, ur / np.where(keep, s, 1.0), 0.0)
-        if reducible <= options.cost_tolerance * objective.cost(current) or \
-                float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance:
+        if (
+            reducible <= options.cost_tolerance * objective.cost(current)
+            or float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance
+        ):
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
         accepted, screen = None, None
         for _ in range(options.max_damping_tries):
@@ -123,20 +144,24 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             dz *= min(1.0, float(np.min(limit / np.maximum(np.abs(dz), TINY_STEP))))
             dz = np.clip(z + dz, z_low, z_high) - z  # projected onto the bounds
             trial_values = space.to_values(z + dz)
-            for _ in range(ADMISSIBLE_HALVINGS):  # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
+            # keep inside the physical bounds (nu12^2 < E1/E2, on the plate)
+            for _ in range(ADMISSIBLE_HALVINGS):
                 if space.admissible(objective.model.specimen, trial_values):
                     break
                 dz *= 0.5
                 trial_values = space.to_values(z + dz)
             else:
-                damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)  # the step leaves the bounds: damp it
+                # the step leaves the bounds: damp it
+                damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
                 continue
             if screen is None or screen.descends(trial_values):
                 # Sensitivities only for an accepted step: a rejected trial needs none.
                 trial = objective.evaluate(trial_values, current.pairings, differentiate=False)
                 if objective.cost(trial) <= objective.cost(current):
-                    accepted = (objective.differentiated(trial), dz, damping)  # the damping this step was taken with
-                    damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0  # back to Gauss-Newton
+                    # the damping this step was taken with
+                    accepted = (objective.differentiated(trial), dz, damping)
+                    # back to Gauss-Newton
+                    damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0
                     break
                 if options.reanalysis and screen is None:
                     screen = TrialScreen.of(objective, current, trial)
@@ -148,14 +173,25 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
         current, dz, used = accepted
         r = objective.residual(current)
         step = float(np.max(np.abs(dz)))
-        history.append(Iteration(number, current.values, current.model_hz, objective.rms(current),
-                                 objective.cost(current), step, damping))
+        history.append(
+            Iteration(
+                number,
+                current.values,
+                current.model_hz,
+                objective.rms(current),
+                objective.cost(current),
+                step,
+                damping,
+            )
+        )
         if progress:
             progress(history[-1])
         lost = [p.configuration for p in current.pairings.values() if p.lost]
         if lost:
-            warnings.append(f"iteration {number}: mode tracking uncertain in {', '.join(lost)} "
-                            "(a mode shape changed strongly; check the pairing in the residual table)")
+            warnings.append(
+                f"iteration {number}: mode tracking uncertain in {', '.join(lost)} "
+                "(a mode shape changed strongly; check the pairing in the residual table)"
+            )
         if step < options.parameter_tolerance:
             return current, Stop.STEP_SMALL, warnings
         stalled = previous_cost - objective.cost(current) <= STALLED * previous_cost
@@ -164,19 +200,33 @@ def iterate(objective: Objective, current: Evaluation, history: list, options: F
             return current, Stop.WITHIN_STD, warnings
         if objective.rms(current) < EXACT_RMS:
             return current, Stop.EXACT, warnings
-        if previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost and step < FLAT_STEP:
+        if (
+            previous_cost - objective.cost(current) <= options.cost_tolerance * previous_cost
+            and step < FLAT_STEP
+        ):
             return current, Stop.MISFIT_FLAT, warnings
-        if options.stall_chi2 > 0 and len(history) > STALL_ITERATIONS and all(
+        if (
+            options.stall_chi2 > 0
+            and len(history) > STALL_ITERATIONS
+            and all(
                 2 * (a.cost - b.cost) < options.stall_chi2 * objective.statistics(current).chi2_unit
-                for a, b in zip(history[-STALL_ITERATIONS - 1:-1], history[-STALL_ITERATIONS:])):
+                for a, b in zip(history[-STALL_ITERATIONS - 1 : -1], history[-STALL_ITERATIONS:])
+            )
+        ):
             return current, Stop.MISFIT_STALLED, warnings
     return current, Stop.MAX_ITERATIONS, warnings
 
 
-def update(model: SpecimenModel, measurements: Measurements, parameters: list[Parameter] | None = None,
-           options: FitOptions = FitOptions(), progress: Callable[[Iteration], None] | None = None,
-           effect_of: dict[Parameter, str] | None = None, settle: bool | str = True,
-           pairings: dict | None = None) -> FitResult:
+def update(
+    model: SpecimenModel,
+    measurements: Measurements,
+    parameters: list[Parameter] | None = None,
+    options: FitOptions = FitOptions(),
+    progress: Callable[[Iteration], None] | None = None,
+    effect_of: dict[Parameter, str] | None = None,
+    settle: bool | str = True,
+    pairings: dict | None = None,
+) -> FitResult:
     """Identify ``parameters`` (default: the properties every identified material's
     ``identify`` names) from measured frequencies of all configurations at once, then
     settle the pairings frequencies cannot rule out (``settle``; an intermediate fit may
@@ -192,16 +242,23 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
             "measure at least as many modes as unknowns (the paper uses 5 per configuration)"
         )
     shaped = options.use_shapes and measurements.shapes is not None
-    objective = (ShapeObjective if shaped else Objective)(model, measurements, parameters, options.extra_modes)
+    objective = (ShapeObjective if shaped else Objective)(
+        model, measurements, parameters, options.extra_modes
+    )
     given = np.array([model.value(p) for p in parameters], dtype=float)
     values = objective.space.clip(given)
-    warnings = [f"start {p.name} = {display(p, v):.4g} is outside its bounds "
-                f"{display(p, lo):.4g}..{display(p, hi):.4g}: started at {display(p, c):.4g} (set bounds in the spec "
-                "to widen them)" for p, v, c, lo, hi in zip(parameters, given, values, objective.space.lower,
-                                                           objective.space.upper) if v != c]
+    warnings = [
+        f"start {p.name} = {display(p, v):.4g} is outside its bounds "
+        f"{display(p, lo):.4g}..{display(p, hi):.4g}: started at {display(p, c):.4g} (set bounds in the spec "
+        "to widen them)"
+        for p, v, c, lo, hi in zip(parameters, given, values, objective.space.lower, objective.space.upper)
+        if v != c
+    ]
     current = objective.evaluate(values, pairings)
     warnings += [p.note for p in current.pairings.values() if p.note]
-    history = [Iteration(0, values, current.model_hz, objective.rms(current), objective.cost(current), 0.0, 0.0)]
+    history = [
+        Iteration(0, values, current.model_hz, objective.rms(current), objective.cost(current), 0.0, 0.0)
+    ]
     if progress:
         progress(history[-1])
     current, stop, tracking = iterate(objective, current, history, options, progress)
@@ -215,8 +272,11 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
         warnings += tracking
     twins, repaired = [], ""
     if stop.converged and settle:
+
         def refit(state, branch, max_iterations):
-            state, again, _ = iterate(objective, state, branch, replace(options, max_iterations=max_iterations))
+            state, again, _ = iterate(
+                objective, state, branch, replace(options, max_iterations=max_iterations)
+            )
             return state, again
 
         if settle == "quick":  # a candidate's refit in a diagnosis: only re-pairings that pay at once
@@ -229,32 +289,55 @@ def update(model: SpecimenModel, measurements: Measurements, parameters: list[Pa
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
     if settle:
-        uncertainty, merged = uncertainty.with_merged_peaks(objective, current, lone_close_modes(objective, current))
+        uncertainty, merged = uncertainty.with_merged_peaks(
+            objective, current, lone_close_modes(objective, current)
+        )
         warnings += merged
     vague = undetermined(objective.space, current.values, uncertainty.std)
     status, message = _status(stop, uncertainty, statistics, options, vague.all())
     status, message = _bounded(status, message, objective.space, current.values, model.specimen)
     if vague.any() and not vague.all():
-        warnings.append(f"not determined by the stated scatter (std above {UNDETERMINED_Z:g} x the parameter's own "
-                        f"scale): {_listed(parameters, current.values, uncertainty.std, vague)}; fix them or "
-                        "measure more modes or configurations")
+        warnings.append(
+            f"not determined by the stated scatter (std above {UNDETERMINED_Z:g} x the parameter's own "
+            f"scale): {_listed(parameters, current.values, uncertainty.std, vague)}; fix them or "
+            "measure more modes or configurations"
+        )
     elif vague.all() and status is FitStatus.NOT_IDENTIFIABLE:
         message += f": {_listed(parameters, current.values, uncertainty.std, vague)}"
     warnings += _overstated(statistics)
     if shaped:
         used = objective.shapes_used(current)
-        warnings.append(f"{len(used)} of {len(objective.shaped)} measured shapes in the objective "
-                        f"({sum(len(shape.xy) for _, shape in used)} residuals; each point's scatter "
-                        f"{100 * objective.scatter.min():.2g}-{100 * objective.scatter.max():.2g} % of its shape's "
-                        "largest amplitude, from each shape's residuals)"
-                        + (f"; the others, of modes within {CLOSE_MODES:.0%} of another, pin their pairing only"
-                           if len(used) < len(objective.shaped) else ""))
+        warnings.append(
+            f"{len(used)} of {len(objective.shaped)} measured shapes in the objective "
+            f"({sum(len(shape.xy) for _, shape in used)} residuals; each point's scatter "
+            f"{100 * objective.scatter.min():.2g}-{100 * objective.scatter.max():.2g} % of its shape's "
+            "largest amplitude, from each shape's residuals)"
+            + (
+                f"; the others, of modes within {CLOSE_MODES:.0%} of another, pin their pairing only"
+                if len(used) < len(objective.shaped)
+                else ""
+            )
+        )
     if repaired:
         message += f"; re-paired {repaired}"
-    return FitResult(status, message, tuple(parameters), current.values, uncertainty, statistics, tuple(history),
-                     measurements, current.model_hz, current.model, tuple(warnings) + uncertainty.warnings,
-                     tuple(values for values, _ in twins), current.pairings, objective.frequency_jacobian(current),
-                     dict(effect_of or {}), stop=stop)
+    return FitResult(
+        status,
+        message,
+        tuple(parameters),
+        current.values,
+        uncertainty,
+        statistics,
+        tuple(history),
+        measurements,
+        current.model_hz,
+        current.model,
+        tuple(warnings) + uncertainty.warnings,
+        tuple(values for values, _ in twins),
+        current.pairings,
+        objective.frequency_jacobian(current),
+        dict(effect_of or {}),
+        stop=stop,
+    )
 
 
 def _bounded(status: FitStatus, message: str, space, values: np.ndarray, specimen) -> tuple[FitStatus, str]:
@@ -267,12 +350,17 @@ def _bounded(status: FitStatus, message: str, space, values: np.ndarray, specime
     on_bound = space.at_bound(values) & np.array([p.target in specimen.materials for p in space.parameters])
     if not on_bound.any():
         return status, message
-    named = ", ".join(f"{p.name} = {display(p, space.bound_of(i, values)):.4g}"
-                      for i, p in enumerate(space.parameters) if on_bound[i])
+    named = ", ".join(
+        f"{p.name} = {display(p, space.bound_of(i, values)):.4g}"
+        for i, p in enumerate(space.parameters)
+        if on_bound[i]
+    )
     return FitStatus.POOR_FIT, (
         f"poor fit: {named} ended on its bound, so the data's optimum lies outside what the material or the "
-        "spec's bounds allow; likely causes: a peak paired with the wrong mode (see the left-out peaks and unseen "
-        "modes), a missing effect (run 'identify-layers diagnose'), or bounds set too tight")
+        "spec's bounds allow; likely causes: a peak paired with the wrong mode (see the left-out peaks and "
+        "unseen "
+        "modes), a missing effect (run 'identify-layers diagnose'), or bounds set too tight"
+    )
 
 
 def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:
@@ -291,40 +379,61 @@ def _overstated(statistics: FitStatistics) -> list[str]:
     p_low = float(chi2_distribution.cdf(statistics.chi2, statistics.dof))
     if p_low >= CHI2_TEST_LEVEL:
         return []
-    return [f"the misfit is far below the stated scatter (reduced chi^2 {statistics.reduced_chi2:.2g}; an honest "
-            f"std_hz gives one this small with chance {p_low:.1g}): is std_hz overstated? The std above scale with it"]
+    return [
+        f"the misfit is far below the stated scatter (reduced chi^2 {statistics.reduced_chi2:.2g}; an honest "
+        f"std_hz gives one this small with chance {p_low:.1g}): is std_hz overstated? The std above scale "
+        "with it"
+    ]
 
 
 def _listed(parameters, values, std, mask) -> str:
-    shown = [(f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip() if np.isfinite(s)
-              else f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]} (undetermined)".replace("  ", " "))
-             for p, v, s, m in zip(parameters, values, std, mask) if m]
+    shown = [
+        (
+            f"{p.name} = {display(p, v):.4g} +- {display(p, s):.3g} {UNITS[p.kind][0]}".rstrip()
+            if np.isfinite(s)
+            else f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]} (undetermined)".replace("  ", " ")
+        )
+        for p, v, s, m in zip(parameters, values, std, mask)
+        if m
+    ]
     return ", ".join(shown[:4]) + (f" and {len(shown) - 4} more" if len(shown) > 4 else "")
 
 
-def _status(stop: Stop, uncertainty: Uncertainty, statistics: FitStatistics,
-            options: FitOptions, all_undetermined: bool = False) -> tuple[FitStatus, str]:
+def _status(
+    stop: Stop,
+    uncertainty: Uncertainty,
+    statistics: FitStatistics,
+    options: FitOptions,
+    all_undetermined: bool = False,
+) -> tuple[FitStatus, str]:
     """The status of a finished fit and its message: converged only when the misfit is
     consistent with the scatter (``FitStatistics.consistent``) and the scatter determines
     at least one parameter."""
     if not stop.converged:
         if stop is Stop.MAX_ITERATIONS:
             return FitStatus.NOT_CONVERGED, f"not converged in {options.max_iterations} iterations"
-        return FitStatus.NOT_CONVERGED, (f"stopped: no step lowered the misfit after {options.max_damping_tries} "
-                                         "damping increases")
+        return FitStatus.NOT_CONVERGED, (
+            f"stopped: no step lowered the misfit after {options.max_damping_tries} damping increases"
+        )
     singular = uncertainty.verdict == Verdict.SINGULAR
     if not statistics.consistent:
-        also = (f"; the sensitivity matrix is singular too (condition number {uncertainty.condition_number:.3g})"
-                if singular else "")
+        also = (
+            f"; the sensitivity matrix is singular too (condition number {uncertainty.condition_number:.3g})"
+            if singular
+            else ""
+        )
         return FitStatus.POOR_FIT, f"poor fit: {statistics.describe()}{also}"
     if singular:
         return FitStatus.NOT_IDENTIFIABLE, (
             f"not identifiable: the frequencies fit but the sensitivity matrix is singular (condition number "
-            f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data")
+            f"{uncertainty.condition_number:.3g} > 1e7); the parameters are not determined by these data"
+        )
     if all_undetermined:
-        return FitStatus.NOT_IDENTIFIABLE, ("not identifiable: the frequencies fit, but the stated scatter determines "
-                                            f"none of the parameters (each std at least {UNDETERMINED_Z:g} x its own "
-                                            "scale; is std_hz in Hz?)")
+        return FitStatus.NOT_IDENTIFIABLE, (
+            "not identifiable: the frequencies fit, but the stated scatter determines "
+            f"none of the parameters (each std at least {UNDETERMINED_Z:g} x its own "
+            "scale; is std_hz in Hz?)"
+        )
     return FitStatus.CONVERGED, f"converged: {stop.value}; {statistics.describe()}"
 
 

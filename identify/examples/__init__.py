@@ -1,5 +1,6 @@
 """Bundled examples: the paper's coated plate spec, its measurements and their shapes, and the one
 fallback both command-line tools use when no spec is given."""
+
 import sys
 from pathlib import Path
 

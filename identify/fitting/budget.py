@@ -19,6 +19,7 @@ f(-u)) / 2 and d2 = (f(+u) + f(-u) - 2 f(0)) / 2, df = f' theta + f'' theta^2 / 
 mean square (G d1)^2 + 3 (G d2)^2 in each property (E theta^4 = 3 u^4), entered as two
 inputs: the angle (column d1 / u) and its second order (column sqrt(3) d2 / u).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -69,15 +70,21 @@ class Budget:
         from each input, and the total (and the unit)."""
         rows = []
         for i, p in enumerate(self.parameters):
-            row = {"parameter": p.name, "unit": UNITS[p.kind][0], "measurement": display(p, self.measurement_std[i])}
+            row = {
+                "parameter": p.name,
+                "unit": UNITS[p.kind][0],
+                "measurement": display(p, self.measurement_std[i]),
+            }
             row.update({f"{u.name}": display(p, c) for u, c in zip(self.inputs, self.contributions[i])})
             row["total"] = display(p, self.total_std[i])
             rows.append(row)
         return pd.DataFrame(rows)
 
     def to_dict(self) -> dict:
-        return {"inputs": [{"input": u.name, "std_si": u.std} for u in self.inputs],
-                "table": self.table().to_dict(orient="records")}
+        return {
+            "inputs": [{"input": u.name, "std_si": u.std} for u in self.inputs],
+            "table": self.table().to_dict(orient="records"),
+        }
 
 
 def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
@@ -94,20 +101,33 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
             if u.kind in (ANGLE, ANGLE_SECOND_ORDER):
                 if u.target not in turned:
                     p = Parameter(ANGLE, u.target)
-                    turned[u.target] = [model.with_values({p: model.value(p) + s * u.std}).solve(name)
-                                        .frequencies_hz[indices] for s in (1, -1)]
+                    turned[u.target] = [
+                        model.with_values({p: model.value(p) + s * u.std}).solve(name).frequencies_hz[indices]
+                        for s in (1, -1)
+                    ]
                 plus, minus = turned[u.target]
-                out[rows, j] = ((plus - minus) / 2 if u.kind == ANGLE else
-                                np.sqrt(3) * (plus + minus - 2 * solution.frequencies_hz[indices]) / 2) / u.std
+                out[rows, j] = (
+                    (plus - minus) / 2
+                    if u.kind == ANGLE
+                    else np.sqrt(3) * (plus + minus - 2 * solution.frequencies_hz[indices]) / 2
+                ) / u.std
             elif u.kind in GEOMETRY:
                 size = getattr(specimen, u.kind)
-                f = [model.with_specimen(replace(specimen, **{u.kind: size * (1 + s * GEOMETRY_STEP)})).solve(name)
-                     .frequencies_hz[indices] for s in (1, -1)]
+                f = [
+                    model.with_specimen(replace(specimen, **{u.kind: size * (1 + s * GEOMETRY_STEP)}))
+                    .solve(name)
+                    .frequencies_hz[indices]
+                    for s in (1, -1)
+                ]
                 out[rows, j] = (f[0] - f[1]) / (2 * GEOMETRY_STEP * size)
             elif u.kind == MASS:
                 # Every specimen layer's density scales with the weighed mass: d rho_k / d m = rho_k / m.
                 own = {layer.material.name: layer.material.density for layer in specimen.layers}
-                mass = specimen.laminate(specimen.configurations[0].name).inertia[0] * specimen.length * specimen.width
+                mass = (
+                    specimen.laminate(specimen.configurations[0].name).inertia[0]
+                    * specimen.length
+                    * specimen.width
+                )
                 d = solution.derivatives([Parameter("density", m) for m in own])[indices]
                 out[rows, j] = d @ (np.array(list(own.values())) / mass)
             else:
@@ -131,8 +151,11 @@ def uncertainty_budget(result, consider: tuple[InputStd, ...] = ()) -> Budget | 
     property held at a handbook value); None when there are none.  An input the fit
     identifies (a thickness or an angle an effect freed) is not an input."""
     identified = {(p.kind, p.target) for p in result.parameters}
-    inputs = _with_second_orders(tuple(u for u in tuple(result.model.input_std) + tuple(consider)
-                                       if (u.kind, u.target) not in identified))
+    inputs = _with_second_orders(
+        tuple(
+            u for u in tuple(result.model.input_std) + tuple(consider) if (u.kind, u.target) not in identified
+        )
+    )
     if not inputs or not result.finished or not np.all(np.isfinite(result.uncertainty.std)):
         return None
     objective = Objective(result.model, result.measurements, result.parameters)

@@ -16,6 +16,7 @@ show which:
 
 Each is scored by the share of the misfit it accounts for (0..1).
 """
+
 from __future__ import annotations
 
 import itertools
@@ -30,9 +31,13 @@ from ..engine.statistics import weighted_residuals
 from .patterns import PATTERN_SHARE, residual_patterns
 
 #: Known factors between a frequency in Hz and a slip of unit: what each would mean.
-UNIT_SLIPS = {1000.0: "kHz read as Hz, or a length in mm typed as m", 1e-3: "Hz read as kHz, or metres typed as mm",
-              2 * math.pi: "angular frequency (rad/s) given as Hz", 1 / (2 * math.pi): "Hz given where rad/s were meant",
-              60.0: "cycles per minute given as Hz"}
+UNIT_SLIPS = {
+    1000.0: "kHz read as Hz, or a length in mm typed as m",
+    1e-3: "Hz read as kHz, or metres typed as mm",
+    2 * math.pi: "angular frequency (rad/s) given as Hz",
+    1 / (2 * math.pi): "Hz given where rad/s were meant",
+    60.0: "cycles per minute given as Hz",
+}
 #: A cause is named when it accounts for at least this share of the misfit.
 NAMED = 0.5
 #: Relative RMS misfit above which frequencies unlike the specimen's are suspected.
@@ -62,9 +67,12 @@ def _units(result: FitResult) -> Cause | None:
     hint = f": {UNIT_SLIPS[slip]}?" if abs(math.log(factor / slip)) < math.log(1.3) else ""
     bounded = [p.name for p, at in zip(result.parameters, result.uncertainty.bounded) if at]
     pinned = f"; {', '.join(bounded)} ran to their bounds trying" if bounded else ""
-    return Cause("units", 1 - spread / abs(mean),
-                 f"every measured frequency is about {factor:.4g}x the model's{hint} Check the units of the "
-                 f"measurements and of the spec's lengths, moduli and densities{pinned}")
+    return Cause(
+        "units",
+        1 - spread / abs(mean),
+        f"every measured frequency is about {factor:.4g}x the model's{hint} Check the units of the "
+        f"measurements and of the spec's lengths, moduli and densities{pinned}",
+    )
 
 
 def _configurations(result: FitResult) -> Cause | None:
@@ -86,21 +94,29 @@ def _configurations(result: FitResult) -> Cause | None:
         if ranks_a.max() >= len(fb) or ranks_b.max() >= len(fa):
             continue
         now = float(np.sum(r[rows_a] ** 2) + np.sum(r[rows_b] ** 2))
-        crossed = float(np.sum(((fb[ranks_a] - measured[rows_a]) / sigma[rows_a]) ** 2)
-                        + np.sum(((fa[ranks_b] - measured[rows_b]) / sigma[rows_b]) ** 2))
+        crossed = float(
+            np.sum(((fb[ranks_a] - measured[rows_a]) / sigma[rows_a]) ** 2)
+            + np.sum(((fa[ranks_b] - measured[rows_b]) / sigma[rows_b]) ** 2)
+        )
         if crossed < 0.5 * now and (best is None or now - crossed > best[0]):
             best = (now - crossed, a, b)
     if best is not None:
         gain, a, b = best
-        return Cause("configurations", min(gain / total, 1.0),
-                     f"the data of '{a}' and '{b}' fit each other's model better: are the configurations mixed up "
-                     "in the measurement file?")
+        return Cause(
+            "configurations",
+            min(gain / total, 1.0),
+            f"the data of '{a}' and '{b}' fit each other's model better: are the configurations mixed up "
+            "in the measurement file?",
+        )
     shares = {name: float(np.sum(r[configs == name] ** 2)) / total for name in names}
     worst = max(shares, key=shares.get)
     if shares[worst] > 0.7 and np.mean(configs == worst) < 0.5:
-        return Cause("configurations", shares[worst],
-                     f"configuration '{worst}' carries {100 * shares[worst]:.0f} % of the misfit: check its added "
-                     "layers (materials, thicknesses, the adhesive) and that its data are its own")
+        return Cause(
+            "configurations",
+            shares[worst],
+            f"configuration '{worst}' carries {100 * shares[worst]:.0f} % of the misfit: check its added "
+            "layers (materials, thicknesses, the adhesive) and that its data are its own",
+        )
     return None
 
 
@@ -120,22 +136,37 @@ def _pairing(result: FitResult) -> Cause | None:
     share = float(np.sum(r[alternating] ** 2)) / total
     if share < 0.3:
         return None
-    peaks = (" or a peak list matched off by a mode (see the left-out peaks and unseen modes)"
-             if result.peaks is not None else "")
-    return Cause("pairing", share, "residuals alternate in sign from mode to mode: modes paired with the wrong "
-                                   f"partners{peaks}, or a start far from the solution; label the close modes "
-                                   "(a 'label' column) or start nearer")
+    peaks = (
+        " or a peak list matched off by a mode (see the left-out peaks and unseen modes)"
+        if result.peaks is not None
+        else ""
+    )
+    return Cause(
+        "pairing",
+        share,
+        "residuals alternate in sign from mode to mode: modes paired with the wrong "
+        f"partners{peaks}, or a start far from the solution; label the close modes "
+        "(a 'label' column) or start nearer",
+    )
 
 
 def _missing_physics(result: FitResult) -> Cause | None:
-    patterns, *_ = residual_patterns(solving_model(result.model, result.measurements), result.measurements,
-                                     result.model_hz, result.pairings, result.jacobian)
+    patterns, *_ = residual_patterns(
+        solving_model(result.model, result.measurements),
+        result.measurements,
+        result.model_hz,
+        result.pairings,
+        result.jacobian,
+    )
     best = max(patterns, key=lambda p: p.share)
     if best.share < PATTERN_SHARE:
         return None
-    return Cause("missing_physics", best.share,
-                 f"a smooth pattern over the modes ('{best.name}', {100 * best.share:.0f} % of the misfit) points at "
-                 f"missing physics ({', '.join(best.suggests)}): run 'identify-layers diagnose'")
+    return Cause(
+        "missing_physics",
+        best.share,
+        f"a smooth pattern over the modes ('{best.name}', {100 * best.share:.0f} % of the misfit) points at "
+        f"missing physics ({', '.join(best.suggests)}): run 'identify-layers diagnose'",
+    )
 
 
 def with_causes(result: FitResult) -> FitResult:
@@ -157,12 +188,20 @@ def likely_causes(result: FitResult) -> tuple[Cause, ...]:
     if found and found[0].score >= NAMED:
         return tuple(found)
     if result.statistics.rms_rel_error > UNLIKE:
-        data = Cause("data", 1.0, f"the misfit ({100 * result.statistics.rms_rel_error:.3g} % RMS) follows no "
-                                  "pattern: do the measurements belong to this specimen and spec (layers, "
-                                  "thicknesses, densities, size)?")
+        data = Cause(
+            "data",
+            1.0,
+            f"the misfit ({100 * result.statistics.rms_rel_error:.3g} % RMS) follows no "
+            "pattern: do the measurements belong to this specimen and spec (layers, "
+            "thicknesses, densities, size)?",
+        )
     else:
-        data = Cause("unexplained", 1.0, "no single cause explains the misfit: look at the residuals per mode "
-                                         "('identify-layers compare') and at the stated scatter")
+        data = Cause(
+            "unexplained",
+            1.0,
+            "no single cause explains the misfit: look at the residuals per mode "
+            "('identify-layers compare') and at the stated scatter",
+        )
     return (data,) + tuple(found)
 
 

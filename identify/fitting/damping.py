@@ -26,6 +26,7 @@ Close modes (``fem.solver.damping.close_groups``) are mixed by damping: only the
 lambda-weighted sum follows the layers' loss factors, so such a group
 enters as one row; a group with a mode not measured is left out (and said so).
 """
+
 from __future__ import annotations
 
 import math
@@ -40,7 +41,14 @@ from fem.laminates.material import MAX_LOSS_FACTOR
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.complex_modes import complex_loss_factors
-from fem.solver.damping import close_groups, known_targets, loss_columns, loss_from_ratio, loss_slope, ratio_from_loss
+from fem.solver.damping import (
+    close_groups,
+    known_targets,
+    loss_columns,
+    loss_from_ratio,
+    loss_slope,
+    ratio_from_loss,
+)
 from fem.solver.sensitivity import Verdict, condition_verdict
 
 from ..engine.statistics import CHI2_TEST_LEVEL
@@ -68,9 +76,10 @@ class DampingResult:
     and ``std`` [-] (NaN when not identifiable); ``status`` one of ``STATUSES`` and a
     ``message``; ``condition_number`` of the loss-factor columns and its ``verdict``;
     ``residuals``: one row per measured mode used (configuration, mode, measured and model
-    damping ratio, the measured one's std, its group of close modes and lambda share in it:
-    within a group only the weighted mean is modelled, mode by mode damping mixes them); chi^2 against the scatter with
-    ``dof`` and ``p_value``; ``method``: "first_order" or "complex"; ``notes``."""
+    damping ratio, the measured one's std, its group of close modes and lambda share in
+    it: within a group only the weighted mean is modelled, mode by mode damping mixes
+    them); chi^2 against the scatter with ``dof`` and ``p_value``; ``method``:
+    "first_order" or "complex"; ``notes``."""
 
     status: str
     message: str
@@ -101,7 +110,9 @@ class DampingResult:
         # close modes are one group (their lambda-weighted mean is what the model predicts)
         weighted = r[["measured_damping_ratio", "model_damping_ratio"]].mul(r["weight"], axis=0)
         groups = weighted.groupby(r["group"]).sum()
-        return float(np.sqrt(np.mean((groups["model_damping_ratio"] / groups["measured_damping_ratio"] - 1) ** 2)))
+        return float(
+            np.sqrt(np.mean((groups["model_damping_ratio"] / groups["measured_damping_ratio"] - 1) ** 2))
+        )
 
     def value(self, material: str, kind: str) -> float:
         return float(self.values[self.targets.index((material, kind))])
@@ -112,22 +123,49 @@ class DampingResult:
     @property
     def scatter(self) -> str:
         """Where the damping scatter came from."""
-        return ("damping_std" if self.scatter_stated else
-                f"assumed {100 * ASSUMED_DAMPING_STD_REL:g} % of each damping ratio (no damping_std given)")
+        return (
+            "damping_std"
+            if self.scatter_stated
+            else f"assumed {100 * ASSUMED_DAMPING_STD_REL:g} % of each damping ratio (no damping_std given)"
+        )
 
     def to_dict(self) -> dict:
         """The fit JSON's ``"damping"`` block (no NaN: null where a value does not exist)."""
-        rows = [{"configuration": r.configuration, "mode": int(r.mode), "measured_damping_ratio": float(r.measured),
-                 "damping_std": float(r.std), "model_damping_ratio": finite_or_none(r.model), "group": int(r.group)}
-                for r in self.residuals.rename(columns={"measured_damping_ratio": "measured", "damping_std": "std",
-                                                        "model_damping_ratio": "model"}).itertuples()]
-        return {"status": self.status, "message": self.message, "method": self.method,
-                "condition_number": finite_or_none(self.condition_number), "verdict": self.verdict,
-                "rms_rel_error": finite_or_none(self.rms_rel_error), "chi2": finite_or_none(self.chi2), "dof": self.dof,
-                "p_value": finite_or_none(self.p_value), "scatter": self.scatter,
-                "parameters": [{"material": m, "parameter": k, "value": finite_or_none(v), "std": finite_or_none(s)}
-                               for (m, k), v, s in zip(self.targets, self.values, self.std)],
-                "notes": list(self.notes), "residuals": rows}
+        rows = [
+            {
+                "configuration": r.configuration,
+                "mode": int(r.mode),
+                "measured_damping_ratio": float(r.measured),
+                "damping_std": float(r.std),
+                "model_damping_ratio": finite_or_none(r.model),
+                "group": int(r.group),
+            }
+            for r in self.residuals.rename(
+                columns={
+                    "measured_damping_ratio": "measured",
+                    "damping_std": "std",
+                    "model_damping_ratio": "model",
+                }
+            ).itertuples()
+        ]
+        return {
+            "status": self.status,
+            "message": self.message,
+            "method": self.method,
+            "condition_number": finite_or_none(self.condition_number),
+            "verdict": self.verdict,
+            "rms_rel_error": finite_or_none(self.rms_rel_error),
+            "chi2": finite_or_none(self.chi2),
+            "dof": self.dof,
+            "p_value": finite_or_none(self.p_value),
+            "scatter": self.scatter,
+            "parameters": [
+                {"material": m, "parameter": k, "value": finite_or_none(v), "std": finite_or_none(s)}
+                for (m, k), v, s in zip(self.targets, self.values, self.std)
+            ],
+            "notes": list(self.notes),
+            "residuals": rows,
+        }
 
 
 def damping_targets(model: SpecimenModel) -> list[tuple[str, str]]:
@@ -140,7 +178,7 @@ class _Rows:
     """The measured modes used, grouped: ``group`` per row; per group (in order) the
     weights (lambda share) of its rows."""
 
-    table: pd.DataFrame       # configuration, mode, model index, lambda, eta, eta_std, group
+    table: pd.DataFrame  # configuration, mode, model index, lambda, eta, eta_std, group
     n_groups: int
 
     @property
@@ -169,7 +207,7 @@ def _rows(model: SpecimenModel, measurements: Measurements, pairings: dict) -> t
         if frame.empty or (pairings is not None and c.name not in pairings):
             continue
         lam = model.solve(c.name).modes.eigenvalues
-        index = (frame["mode"].to_numpy() - 1 if pairings is None else np.asarray(pairings[c.name].indices))
+        index = frame["mode"].to_numpy() - 1 if pairings is None else np.asarray(pairings[c.name].indices)
         zeta = frame["damping_ratio"].to_numpy()
         eta = loss_from_ratio(zeta)
         given = frame["damping_std"].to_numpy()
@@ -184,26 +222,58 @@ def _rows(model: SpecimenModel, measurements: Measurements, pairings: dict) -> t
                 continue
             if not all(i in measured for i in members):
                 ranks = ", ".join(str(int(frame["mode"].iloc[measured[i]])) for i in members if i in measured)
-                notes.append(f"{c.name}: mode(s) {ranks} left out of the damping fit: damping mixes them with a close "
-                             "mode that has no measured damping ratio")
+                notes.append(
+                    f"{c.name}: mode(s) {ranks} left out of the damping fit: damping mixes them with a close "
+                    "mode that has no measured damping ratio"
+                )
                 continue
             for i in members:
                 k = measured[i]
-                records.append({"configuration": c.name, "mode": int(frame["mode"].iloc[k]), "model_index": i,
-                                "lambda": lam[i], "eta": eta[k], "eta_std": std[k], "zeta": zeta[k],
-                                "zeta_std": std[k] / slope[k], "group": group,
-                                "row": list(model.specimen.configurations).index(c) * model.options.modes + i})
+                records.append(
+                    {
+                        "configuration": c.name,
+                        "mode": int(frame["mode"].iloc[k]),
+                        "model_index": i,
+                        "lambda": lam[i],
+                        "eta": eta[k],
+                        "eta_std": std[k],
+                        "zeta": zeta[k],
+                        "zeta_std": std[k] / slope[k],
+                        "group": group,
+                        "row": list(model.specimen.configurations).index(c) * model.options.modes + i,
+                    }
+                )
             if len(members) > 1:
-                notes.append(f"{c.name}: modes {', '.join(str(int(frame['mode'].iloc[measured[i]])) for i in members)} "
-                             "are close: damping mixes them, their lambda-weighted mean loss factor is fitted")
+                notes.append(
+                    f"{c.name}: modes "
+                    f"{', '.join(str(int(frame['mode'].iloc[measured[i]])) for i in members)} "
+                    "are close: damping mixes them, their lambda-weighted mean loss factor is fitted"
+                )
             group += 1
-    table = pd.DataFrame.from_records(records, columns=["configuration", "mode", "model_index", "lambda", "eta",
-                                                        "eta_std", "zeta", "zeta_std", "group", "row"])
+    table = pd.DataFrame.from_records(
+        records,
+        columns=[
+            "configuration",
+            "mode",
+            "model_index",
+            "lambda",
+            "eta",
+            "eta_std",
+            "zeta",
+            "zeta_std",
+            "group",
+            "row",
+        ],
+    )
     return _Rows(table, group), notes
 
 
-def identify_damping(model: SpecimenModel, measurements: Measurements, pairings: dict | None = None,
-                     targets: list[tuple[str, str]] | None = None) -> DampingResult | None:
+def identify_damping(
+    model: SpecimenModel,
+    measurements: Measurements,
+    pairings: dict | None = None,
+    targets: list[tuple[str, str]] | None = None,
+) -> DampingResult | None:
     """The loss factors ``targets`` (default: the spec's ``identify_damping``) of a fitted
     ``model`` from the measured damping ratios of the modes ``pairings`` pairs (a
     ``FitResult``'s; None: ranked measurements, mode k with model mode k).  None when
@@ -213,12 +283,29 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
         return None
     nothing = np.full(len(targets), math.nan)
     rows, notes = _rows(model, measurements, pairings)
-    empty = pd.DataFrame(columns=["configuration", "mode", "measured_damping_ratio", "damping_std",
-                                  "model_damping_ratio", "group", "weight"])
+    empty = pd.DataFrame(
+        columns=[
+            "configuration",
+            "mode",
+            "measured_damping_ratio",
+            "damping_std",
+            "model_damping_ratio",
+            "group",
+            "weight",
+        ]
+    )
     if rows.table.empty:
-        return DampingResult("not_identifiable", "no measured damping ratios (a damping_ratio column): the "
-                             "loss factors cannot be identified", tuple(targets), nothing, nothing, math.nan,
-                             Verdict.SINGULAR, empty, notes=tuple(notes))
+        return DampingResult(
+            "not_identifiable",
+            "no measured damping ratios (a damping_ratio column): the loss factors cannot be identified",
+            tuple(targets),
+            nothing,
+            nothing,
+            math.nan,
+            Verdict.SINGULAR,
+            empty,
+            notes=tuple(notes),
+        )
     index = rows.table["row"].to_numpy()
     columns = loss_columns(model, targets)[index]
     known = known_targets(model)
@@ -236,12 +323,24 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     verdict = condition_verdict(condition)
     scatter_stated = bool(measurements.table["damping_std"].notna().any())
     if len(a) < len(targets) or verdict == Verdict.SINGULAR:
-        why = (f"{len(a)} independent damped modes for {len(targets)} loss factors" if len(a) < len(targets) else
-               f"the loss-factor columns are singular (condition number {condition:.3g})")
-        return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: {why}; add "
-                             "configurations that change the layers' share of the strain energy (plan-tests check)",
-                             tuple(targets), nothing, nothing, condition, verdict,
-                             _residual_table(rows, None), notes=tuple(notes), scatter_stated=scatter_stated)
+        why = (
+            f"{len(a)} independent damped modes for {len(targets)} loss factors"
+            if len(a) < len(targets)
+            else f"the loss-factor columns are singular (condition number {condition:.3g})"
+        )
+        return DampingResult(
+            "not_identifiable",
+            f"the layers' loss factors are not identifiable: {why}; add "
+            "configurations that change the layers' share of the strain energy (plan-tests check)",
+            tuple(targets),
+            nothing,
+            nothing,
+            condition,
+            verdict,
+            _residual_table(rows, None),
+            notes=tuple(notes),
+            scatter_stated=scatter_stated,
+        )
     weighted = a / sigma[:, None]
     solution = lsq_linear(weighted, b / sigma, bounds=(0.0, MAX_LOSS_FACTOR), method="bvls")
     x, method = solution.x, "first_order"
@@ -254,8 +353,10 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
         if np.max(np.abs(rows.combine(exact - model_eta)) / sigma) > REFINE_SHARE:
             x, model_eta = _complex_refit(model, rows, targets, x, weighted, sigma)
             method = "complex"
-            notes.append(f"a loss factor above {LARGE_LOSS:g} made first order err by over {REFINE_SHARE:g} std: "
-                         "refined on the complex eigenproblem")
+            notes.append(
+                f"a loss factor above {LARGE_LOSS:g} made first order err by over {REFINE_SHARE:g} std: "
+                "refined on the complex eigenproblem"
+            )
     r = (rows.combine(model_eta) - rows.combine(rows.table["eta"].to_numpy())) / sigma
     chi2 = float(r @ r)
     dof = len(r) - len(targets)
@@ -266,30 +367,64 @@ def identify_damping(model: SpecimenModel, measurements: Measurements, pairings:
     std = np.sqrt(np.clip(np.diag(covariance), 0, None))
     if not scatter_stated and dof > 0 and chi2 > dof:
         std *= math.sqrt(chi2 / dof)
-        notes.append(f"no damping_std given: the std are scaled by the misfit (reduced chi^2 {chi2 / dof:.3g} "
-                     f"against the assumed {100 * ASSUMED_DAMPING_STD_REL:g} %)")
+        notes.append(
+            f"no damping_std given: the std are scaled by the misfit (reduced chi^2 {chi2 / dof:.3g} "
+            f"against the assumed {100 * ASSUMED_DAMPING_STD_REL:g} %)"
+        )
     vague = [f"{m}.{k}" for (m, k), sd in zip(targets, std) if not sd <= UNDETERMINED_STD]
     if vague:
-        return DampingResult("not_identifiable", f"the layers' loss factors are not identifiable: the std of "
-                             f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number "
-                             f"{condition:.3g}); "
-                             "add configurations that change the layers' share of the strain energy (plan-tests "
-                             "check)", tuple(targets), nothing, nothing, condition, verdict,
-                             _residual_table(rows, None), notes=tuple(notes), scatter_stated=scatter_stated)
+        return DampingResult(
+            "not_identifiable",
+            f"the layers' loss factors are not identifiable: the std of "
+            f"{', '.join(vague)} would exceed {UNDETERMINED_STD:g} (condition number "
+            f"{condition:.3g}); "
+            "add configurations that change the layers' share of the strain energy (plan-tests "
+            "check)",
+            tuple(targets),
+            nothing,
+            nothing,
+            condition,
+            verdict,
+            _residual_table(rows, None),
+            notes=tuple(notes),
+            scatter_stated=scatter_stated,
+        )
     at_bound = tuple(bool(v <= 1e-12 or v >= MAX_LOSS_FACTOR - 1e-12) for v in x)
     if p_value < CHI2_TEST_LEVEL:
         status = "poor_fit"
-        message = (f"the layers' loss factors do not explain the measured damping: chi^2 {chi2:.3g} for {dof} degrees "
-                   f"of freedom (p = {p_value:.2g}); an extra damping (suspension, sensor cable, air) or a wrong "
-                   "scatter?")
+        message = (
+            f"the layers' loss factors do not explain the measured damping: chi^2 {chi2:.3g} for {dof} "
+            "degrees "
+            f"of freedom (p = {p_value:.2g}); an extra damping (suspension, sensor cable, air) or a wrong "
+            "scatter?"
+        )
     else:
         status = "converged"
-        message = f"the measured damping is consistent with the scatter (chi^2 {chi2:.3g} for {dof} degrees of freedom)"
+        message = (
+            f"the measured damping is consistent with the scatter "
+            f"(chi^2 {chi2:.3g} for {dof} degrees of freedom)"
+        )
     if verdict == Verdict.ILL_CONDITIONED:
-        notes.append(f"the loss-factor columns are ill-conditioned (condition number {condition:.3g}): large std")
-    return DampingResult(status, message, tuple(targets), x, std, condition, verdict,
-                         _residual_table(rows, model_eta), chi2, dof, p_value, scatter_stated, method, at_bound,
-                         tuple(notes))
+        notes.append(
+            f"the loss-factor columns are ill-conditioned (condition number {condition:.3g}): large std"
+        )
+    return DampingResult(
+        status,
+        message,
+        tuple(targets),
+        x,
+        std,
+        condition,
+        verdict,
+        _residual_table(rows, model_eta),
+        chi2,
+        dof,
+        p_value,
+        scatter_stated,
+        method,
+        at_bound,
+        tuple(notes),
+    )
 
 
 def _with_losses(model: SpecimenModel, targets, x) -> SpecimenModel:
@@ -330,6 +465,14 @@ def _residual_table(rows: _Rows, model_eta: np.ndarray | None) -> pd.DataFrame:
     t = rows.table
     model = ratio_from_loss(model_eta) if model_eta is not None else np.full(len(t), np.nan)
     weight = t["lambda"] / t.groupby("group")["lambda"].transform("sum")
-    return pd.DataFrame({"configuration": t["configuration"], "mode": t["mode"], "measured_damping_ratio": t["zeta"],
-                         "damping_std": t["zeta_std"], "model_damping_ratio": model, "group": t["group"],
-                         "weight": weight})
+    return pd.DataFrame(
+        {
+            "configuration": t["configuration"],
+            "mode": t["mode"],
+            "measured_damping_ratio": t["zeta"],
+            "damping_std": t["zeta_std"],
+            "model_damping_ratio": model,
+            "group": t["group"],
+            "weight": weight,
+        }
+    )

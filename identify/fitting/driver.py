@@ -1,5 +1,6 @@
 """``fit``: identify the layers of a specimen, optionally with physical effects whose
 parameters are estimated together with the layer properties."""
+
 from __future__ import annotations
 
 import concurrent.futures as cf
@@ -122,9 +123,16 @@ HANDBOOK_STD_REL = 0.2
 DISTORTED = 3.0
 
 
-def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str] = (), *,
-        parameters=None, options: FitOptions | None = None,
-        progress: Callable[[Iteration | str], None] | None = None, workers: int | None = 1) -> FitResult:
+def fit(
+    model: SpecimenModel,
+    measurements: Measurements,
+    effects: Sequence[str] = (),
+    *,
+    parameters=None,
+    options: FitOptions | None = None,
+    progress: Callable[[Iteration | str], None] | None = None,
+    workers: int | None = 1,
+) -> FitResult:
     """Identify E1, E2, G12, nu12 of every identified material of ``model`` (or the given
     ``parameters``) from the measured frequencies of all configurations at once.
 
@@ -145,15 +153,30 @@ def fit(model: SpecimenModel, measurements: Measurements, effects: Sequence[str]
     if isinstance(effects, str):
         raise LayerIdError(f"effects = {effects!r}: give a list of effect kinds, e.g. [{effects!r}]")
     if options is not None and not isinstance(options, FitOptions):
-        raise LayerIdError(f"options = {options!r}: need a FitOptions (identify.FitOptions(max_iterations=...))")
+        raise LayerIdError(
+            f"options = {options!r}: need a FitOptions (identify.FitOptions(max_iterations=...))"
+        )
     if effects:
         for kind in effects:
             effect(kind)  # unknown kinds fail before any work
             if options is not None and options.use_shapes:
                 _shapes_fit(model, kind)
-        return with_damping(with_budget(fit_with_effects(model, measurements, list(effects), progress=progress,
-                                                         parameters=parameters, options=options, workers=workers)))
-    return with_damping(with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress)))
+        return with_damping(
+            with_budget(
+                fit_with_effects(
+                    model,
+                    measurements,
+                    list(effects),
+                    progress=progress,
+                    parameters=parameters,
+                    options=options,
+                    workers=workers,
+                )
+            )
+        )
+    return with_damping(
+        with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress))
+    )
 
 
 def _shapes_fit(model: SpecimenModel, kind: str) -> None:
@@ -162,10 +185,12 @@ def _shapes_fit(model: SpecimenModel, kind: str) -> None:
     (``LaminateSolution.shape_derivatives``), not an attachment's or the layerwise theory."""
     for on in effect(kind).free(model):
         if on.model.options.theory == "layerwise" or any(p.kind in ATTACHMENT_PARAMETERS for p in on.free):
-            raise LayerIdError(f"effect {kind!r} with use_shapes: the measured shapes cannot enter its refit yet "
-                               "(shape sensitivities cover a single-layer plate's laminate parameters, not an "
-                               "attachment's or the layerwise theory); fit it without --use-shapes (the shapes still "
-                               "pin the pairing)")
+            raise LayerIdError(
+                f"effect {kind!r} with use_shapes: the measured shapes cannot enter its refit yet "
+                "(shape sensitivities cover a single-layer plate's laminate parameters, not an "
+                "attachment's or the layerwise theory); fit it without --use-shapes (the shapes still "
+                "pin the pairing)"
+            )
 
 
 def with_damping(result: FitResult) -> FitResult:
@@ -175,10 +200,18 @@ def with_damping(result: FitResult) -> FitResult:
     return result if damping is None else replace(result, damping=damping)
 
 
-def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions | None = None,
-               progress: Callable[[Iteration], None] | None = None, effect_of: dict | None = None,
-               like: FitResult | None = None, explain: bool = True, settle: bool | str = True,
-               pairings: dict | None = None) -> FitResult:
+def fit_layers(
+    model: SpecimenModel,
+    measurements: Measurements,
+    parameters=None,
+    options: FitOptions | None = None,
+    progress: Callable[[Iteration], None] | None = None,
+    effect_of: dict | None = None,
+    like: FitResult | None = None,
+    explain: bool = True,
+    settle: bool | str = True,
+    pairings: dict | None = None,
+) -> FitResult:
     """The multi-model updating of ranked measurements, or of a peak list (matched to the
     model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
     starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
@@ -194,15 +227,29 @@ def fit_layers(model: SpecimenModel, measurements: Measurements, parameters=None
     return with_causes(result) if explain else result
 
 
-def continued(fit: FitResult, measurements: Measurements, options: FitOptions, settle: bool | str = "quick",
-              effect_of: dict | None = None, like: FitResult | None = None) -> FitResult:
+def continued(
+    fit: FitResult,
+    measurements: Measurements,
+    options: FitOptions,
+    settle: bool | str = "quick",
+    effect_of: dict | None = None,
+    like: FitResult | None = None,
+) -> FitResult:
     """``fit`` iterated on from where it stopped: its model, parameters, effects and
     pairing (``effect_of`` default its own); causes of a poor fit are left to the caller.
     ``like``: the fit whose peak matching a peak list starts from (default ``fit``; a fit
     made on ``matched_peaks`` has none: the fit whose matching it was made on)."""
-    return fit_layers(fit.model, measurements, list(fit.parameters), options,
-                      effect_of=fit.effect_of if effect_of is None else effect_of, like=like or fit, explain=False,
-                      settle=settle, pairings=fit.pairings)
+    return fit_layers(
+        fit.model,
+        measurements,
+        list(fit.parameters),
+        options,
+        effect_of=fit.effect_of if effect_of is None else effect_of,
+        like=like or fit,
+        explain=False,
+        settle=settle,
+        pairings=fit.pairings,
+    )
 
 
 def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
@@ -216,8 +263,13 @@ def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
     return measurements if measurements.ranked else fit.measurements
 
 
-def rematched(fit: FitResult, measurements: Measurements, like: FitResult, options: FitOptions,
-              pool: Executor | None = None) -> FitResult:
+def rematched(
+    fit: FitResult,
+    measurements: Measurements,
+    like: FitResult,
+    options: FitOptions,
+    pool: Executor | None = None,
+) -> FitResult:
     """A fit made on ``matched_peaks(like, measurements)`` refitted on the peak list
     ``measurements`` itself, the peaks matched again; ranked measurements: ``fit`` as it
     is.  Two ways, the one that matches every peak at less cost kept (``matching_cost``
@@ -233,16 +285,21 @@ def rematched(fit: FitResult, measurements: Measurements, like: FitResult, optio
     time on two cores)."""
     if measurements.ranked:
         return fit
-    jobs = [dict(fit=fit, measurements=measurements, options=options, like=like),
-            dict(fit=fit, measurements=measurements, options=options, like=None)]
+    jobs = [
+        dict(fit=fit, measurements=measurements, options=options, like=like),
+        dict(fit=fit, measurements=measurements, options=options, like=None),
+    ]
     again, fresh = pool.map(_matched_again, jobs) if pool is not None else map(_matched_again, jobs)
     tolerance = min(model_error(again), model_error(fresh))
     costs = [matching_cost(f, measurements, tolerance) for f in (again, fresh)]
     if not costs[1] < costs[0]:
         return again
-    note = (f"the peaks matched afresh with {', '.join(sorted(set(fit.effect_of.values())))} on (the spectrum laid "
-            f"over them again): matching cost {costs[1]:.4g} against {costs[0]:.4g} from the matching of the fit "
-            f"without it, at {100 * tolerance:.2g} %")
+    note = (
+        f"the peaks matched afresh with {', '.join(sorted(set(fit.effect_of.values())))} on (the spectrum "
+        "laid "
+        f"over them again): matching cost {costs[1]:.4g} against {costs[0]:.4g} from the matching of the fit "
+        f"without it, at {100 * tolerance:.2g} %"
+    )
     return replace(fresh, warnings=fresh.warnings + (note,))
 
 
@@ -251,13 +308,24 @@ def _matched_again(job: dict) -> FitResult:
     matching with the pairing checked in full, or (``like`` None) matched afresh."""
     fit, measurements, options, like = job["fit"], job["measurements"], job["options"], job["like"]
     if like is not None:
-        return continued(fit, measurements, options, like=like)  # a peak list's final fit checks the pairing in full
-    return fit_layers(fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of, explain=False)
+        # a peak list's final fit checks the pairing in full
+        return continued(fit, measurements, options, like=like)
+    return fit_layers(
+        fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of, explain=False
+    )
 
 
-def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], comparison=None,
-                     progress: Callable[[str], None] | None = None, *, parameters=None,
-                     options: FitOptions | None = None, workers: int | None = 1) -> FitResult:
+def fit_with_effects(
+    model: SpecimenModel,
+    measurements: Measurements,
+    kinds: list[str],
+    comparison=None,
+    progress: Callable[[str], None] | None = None,
+    *,
+    parameters=None,
+    options: FitOptions | None = None,
+    workers: int | None = 1,
+) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
     baseline fit's layer properties (``comparison.fitted`` of a ``compare``, fitted here
     when not given), one
@@ -275,18 +343,22 @@ def fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: li
     list's two matchings; ``independent_refits``).
     """
     if comparison is not None and parameters is not None:
-        raise LayerIdError("fit_with_effects: give either parameters (the baseline is fitted with them) or a "
-                           "comparison (its fit is the baseline), not both")
+        raise LayerIdError(
+            "fit_with_effects: give either parameters (the baseline is fitted with them) or a "
+            "comparison (its fit is the baseline), not both"
+        )
     started = time.perf_counter()
     if comparison is None:
         baseline = fit_holding_bounds(model, measurements, parameters, options)
         hints = point_mass_hints(baseline)
     else:
         baseline = comparison.fitted
-        hints = point_mass_starts(baseline.model, comparison.point_mass_hints, comparison.point_map,
-                                  comparison.node_xy)
+        hints = point_mass_starts(
+            baseline.model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy
+        )
     worth_it = (any(effect(k).independent_starts for k in kinds) or not measurements.ranked) and (
-        comparison is not None or time.perf_counter() - started >= PARALLEL_FROM_S)
+        comparison is not None or time.perf_counter() - started >= PARALLEL_FROM_S
+    )
     with independent_refits(workers, worth_it) as pool:
         return _fit_with_effects(model, measurements, kinds, baseline, hints, progress, options, pool)
 
@@ -315,34 +387,78 @@ def worker_pool(n: int) -> cf.ProcessPoolExecutor:
     return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
 
 
-def _fit_with_effects(model: SpecimenModel, measurements: Measurements, kinds: list[str], baseline: FitResult,
-                      hints, progress, options, pool) -> FitResult:
+def _fit_with_effects(
+    model: SpecimenModel,
+    measurements: Measurements,
+    kinds: list[str],
+    baseline: FitResult,
+    hints,
+    progress,
+    options,
+    pool,
+) -> FitResult:
     respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
     state, notes = baseline, []
     for number, kind in enumerate(kinds):
         data = matched_peaks(state, measurements)
         settle = True if number == len(kinds) - 1 and data is measurements else "quick"
         hints = hints if state is baseline else point_mass_hints(state)
-        added = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
-                           options=options, pool=pool)
+        added = add_effect(
+            state,
+            kind,
+            data,
+            model.specimen,
+            hints,
+            settle=settle,
+            progress=progress,
+            options=options,
+            pool=pool,
+        )
         if restarted_from_spec([kind], state, baseline, respec):
-            again = add_effect(state, kind, data, model.specimen, hints, settle=settle, progress=progress,
-                               options=options, prepared=prepare_effect(state, kind, hints, respec), pool=pool)
+            again = add_effect(
+                state,
+                kind,
+                data,
+                model.specimen,
+                hints,
+                settle=settle,
+                progress=progress,
+                options=options,
+                prepared=prepare_effect(state, kind, hints, respec),
+                pool=pool,
+            )
             added = better_start(added, again)
         if added.result is None:
-            advice = ("; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
-                      "as measured) or leave the effect out" if added.precheck is not None
-                      and added.precheck.singular else "")
+            advice = (
+                "; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
+                "as measured) or leave the effect out"
+                if added.precheck is not None and added.precheck.singular
+                else ""
+            )
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
-        state = rematched(added.result, measurements, state, options or FitOptions(max_iterations=EFFECT_ITERATIONS),
-                          pool)
-    result, reconsidered_notes = with_determined_shear(state, measurements, model.specimen, options, settle=True)
+        state = rematched(
+            added.result, measurements, state, options or FitOptions(max_iterations=EFFECT_ITERATIONS), pool
+        )
+    result, reconsidered_notes = with_determined_shear(
+        state, measurements, model.specimen, options, settle=True
+    )
     notes += [(kinds[-1], text) for text in reconsidered_notes]
-    result = with_causes(released(result, measurements, baseline, model.specimen,
-                                  options or FitOptions(max_iterations=EFFECT_ITERATIONS)))
-    return replace(result, warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
-                   effect_notes=tuple(notes), baseline=baseline)
+    result = with_causes(
+        released(
+            result,
+            measurements,
+            baseline,
+            model.specimen,
+            options or FitOptions(max_iterations=EFFECT_ITERATIONS),
+        )
+    )
+    return replace(
+        result,
+        warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
+        effect_notes=tuple(notes),
+        baseline=baseline,
+    )
 
 
 def at_bounds(result: FitResult) -> list[Parameter]:
@@ -360,8 +476,9 @@ def _off_by(value: float, start: float, factor: float) -> bool:
     return start > 0 and value > 0 and not 1 / factor <= value / start <= factor
 
 
-def fit_holding_bounds(model: SpecimenModel, measurements: Measurements, parameters=None,
-                       options: FitOptions | None = None) -> FitResult:
+def fit_holding_bounds(
+    model: SpecimenModel, measurements: Measurements, parameters=None, options: FitOptions | None = None
+) -> FitResult:
     """``fit_layers`` repeated while layer properties end at a bound or ``RUN_OFF`` times
     off the spec's values, those held at the spec's values (``HOLD_ROUNDS``); the result's
     warnings name each one held.  Only material properties are held, never all of them."""
@@ -369,19 +486,28 @@ def fit_holding_bounds(model: SpecimenModel, measurements: Measurements, paramet
     result = fit_layers(model, measurements, parameters, options, explain=False)
     held: list[Parameter] = []
     for _ in range(HOLD_ROUNDS):
-        bounded = set(at_bounds(result)) | {p for p in result.parameters if _ran_off(result.value(p), model.value(p))}
-        hold = [p for p in result.parameters if p in bounded and isinstance(p, Parameter)
-                and p.kind in MATERIAL_PARAMETERS]
+        bounded = set(at_bounds(result)) | {
+            p for p in result.parameters if _ran_off(result.value(p), model.value(p))
+        }
+        hold = [
+            p
+            for p in result.parameters
+            if p in bounded and isinstance(p, Parameter) and p.kind in MATERIAL_PARAMETERS
+        ]
         if not hold or len(hold) >= len(result.parameters):
             break
         held += hold
-        result = fit_layers(model, measurements, [p for p in result.parameters if p not in hold], options,
-                            explain=False)
+        result = fit_layers(
+            model, measurements, [p for p in result.parameters if p not in hold], options, explain=False
+        )
     if not held:
         return result
-    notes = tuple(f"{p.name} held at the spec's {display(p, model.value(p)):.4g} {UNITS[p.kind][0]}".rstrip()
-                  + ": it ran to its bound or by an order of magnitude in the thin-plate fit (with physics "
-                  "missing, a weakly determined property takes up the misfit)" for p in held)
+    notes = tuple(
+        f"{p.name} held at the spec's {display(p, model.value(p)):.4g} {UNITS[p.kind][0]}".rstrip()
+        + ": it ran to its bound or by an order of magnitude in the thin-plate fit (with physics "
+        "missing, a weakly determined property takes up the misfit)"
+        for p in held
+    )
     return replace(result, warnings=notes + result.warnings)
 
 
@@ -391,35 +517,55 @@ def spec_start(model: SpecimenModel, measurements: Measurements, baseline: FitRe
     one ``DISTORTED`` times off the spec's value.  An effect that explains the misfit then
     starts better from the user's values than from what the thin plate did to them
     (``Effect.restarts_from_spec``); None otherwise."""
-    distorted = [p for p in baseline.parameters if p.kind in MATERIAL_PARAMETERS
-                 and _off_by(baseline.value(p), model.value(p), DISTORTED)]
+    distorted = [
+        p
+        for p in baseline.parameters
+        if p.kind in MATERIAL_PARAMETERS and _off_by(baseline.value(p), model.value(p), DISTORTED)
+    ]
     if baseline.status is not FitStatus.NOT_CONVERGED and not at_bounds(baseline) and not distorted:
         return None
-    return fit_layers(model, measurements, list(baseline.parameters), FitOptions(max_iterations=0), explain=False,
-                      settle=False)
+    return fit_layers(
+        model,
+        measurements,
+        list(baseline.parameters),
+        FitOptions(max_iterations=0),
+        explain=False,
+        settle=False,
+    )
 
 
 def restarted_from_spec(kinds, state: FitResult, baseline: FitResult, respec: FitResult | None) -> list[str]:
     """Of ``kinds`` added to ``state``, those refitted from the spec's values too
     (``respec``, from ``spec_start``): those that ``restarts_from_spec``, added to the
     thin-plate fit ``baseline`` itself when it was degenerate."""
-    return [k for k in kinds if effect(k).restarts_from_spec] if state is baseline and respec is not None else []
+    return (
+        [k for k in kinds if effect(k).restarts_from_spec] if state is baseline and respec is not None else []
+    )
 
 
 def better_start(first: AddedEffect, second: AddedEffect) -> AddedEffect:
     """Of an effect refitted from two starts (``second`` from the spec's values), the one
     with the lower misfit, the other's start named in its notes."""
+
     def misfit(a: AddedEffect) -> float:
         return a.result.statistics.sum_squares if a.result is not None and a.result.finished else float("inf")
 
     seconds = first.seconds + second.seconds
     if misfit(second) < misfit(first):
-        note = ("the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values too, "
-                f"which left the lower misfit ({100 * second.result.rms_rel_error:.3g} % against "
-                f"{100 * first.result.rms_rel_error:.3g} %)" if first.result is not None else
-                "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values")
-        return replace(second, notes=second.notes + (note,), seconds=seconds,
-                       result=replace(second.result, warnings=second.result.warnings + (note,)))
+        note = (
+            "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values "
+            "too, "
+            f"which left the lower misfit ({100 * second.result.rms_rel_error:.3g} % against "
+            f"{100 * first.result.rms_rel_error:.3g} %)"
+            if first.result is not None
+            else "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values"
+        )
+        return replace(
+            second,
+            notes=second.notes + (note,),
+            seconds=seconds,
+            result=replace(second.result, warnings=second.result.warnings + (note,)),
+        )
     return replace(first, seconds=seconds)
 
 
@@ -439,7 +585,7 @@ class AddedEffect:
     implausible: tuple[str, ...] = ()
     error: str = ""
     seconds: float = 0.0
-    pruned: bool = False     # not refitted: another effect explained clearly more (``prune_below``)
+    pruned: bool = False  # not refitted: another effect explained clearly more (``prune_below``)
     held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
 
@@ -460,12 +606,17 @@ class Prepared:
     notes: tuple[str, ...]
     bound: float
     seconds: float = 0.0
-    pairings: dict | None = None   # followed from the start of the refit
-    others: tuple = ()             # other start models, most promising first (``Effect.other_starts``)
+    pairings: dict | None = None  # followed from the start of the refit
+    others: tuple = ()  # other start models, most promising first (``Effect.other_starts``)
 
 
-def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | None = None,
-                   free_again: Sequence[Parameter] = ()) -> Prepared | AddedEffect:
+def prepare_effect(
+    state: FitResult,
+    kind: str,
+    hints=(),
+    start: FitResult | None = None,
+    free_again: Sequence[Parameter] = (),
+) -> Prepared | AddedEffect:
     """One evaluation of ``state``'s model with effect ``kind`` switched on, at the start
     of its refit (``precheck``): the shear moduli to free, the conditioning, the bound.
     ``start``: a fit of the same data whose layer and shear values (and pairing) the
@@ -489,30 +640,48 @@ def prepare_effect(state: FitResult, kind: str, hints=(), start: FitResult | Non
     held = [] if shear_moduli_in(new) else [p for p in free_again if p not in covered]
     if held:
         new += held
-        notes.append(f"G13, G23 of {', '.join(sorted({p.target for p in held}))} held in the fit it adds to: free "
-                     f"again with {kind} (they ran out while it was missing)")
+        notes.append(
+            f"G13, G23 of {', '.join(sorted({p.target for p in held}))} held in the fit it adds to: free "
+            f"again with {kind} (they ran out while it was missing)"
+        )
     try:
         model, sensitivities, started_at, others = _best_start(on, origin, base + new)
         notes += [started_at] if started_at else []
         shear = shear_moduli_in(new)
         if shear:
-            choice = choose_shear_moduli(sensitivities, base + [p for p in new if p not in shear], shear,
-                                         model.specimen)
+            choice = choose_shear_moduli(
+                sensitivities, base + [p for p in new if p not in shear], shear, model.specimen
+            )
             new = [p for p in new if p not in shear] + list(choice.parameters)
             notes.append(choice.describe(model.specimen))
             for material in choice.kept:  # not freed: back to the given or default values
-                model = model.with_specimen(with_shear_moduli(model.specimen, on.model.specimen.materials[material]))
+                model = model.with_specimen(
+                    with_shear_moduli(model.specimen, on.model.specimen.materials[material])
+                )
         check = precheck(sensitivities, base, new)
         now = state.statistics.sum_squares
-        bound = max(0.0, now - sensitivities.predicted_sum_squares(base + new))  # linearised: may undershoot 0
+        # linearised: may undershoot 0
+        bound = max(0.0, now - sensitivities.predicted_sum_squares(base + new))
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), error=str(exc))
     if effect(kind).hinted:
         bound = max([bound] + [h.get("share", 0.0) * now for h in hints])
     if start is not None:
-        notes.append(f"started from the {' + '.join(sorted(set(start.effect_of.values()))) or 'spec'}'s values")
-    return Prepared(kind, model, tuple(base), tuple(new), check, tuple(notes), float(bound),
-                    time.perf_counter() - started, origin.pairings, others)
+        notes.append(
+            f"started from the {' + '.join(sorted(set(start.effect_of.values()))) or 'spec'}'s values"
+        )
+    return Prepared(
+        kind,
+        model,
+        tuple(base),
+        tuple(new),
+        check,
+        tuple(notes),
+        float(bound),
+        time.perf_counter() - started,
+        origin.pairings,
+        others,
+    )
 
 
 def _best_start(on, state: FitResult, parameters) -> tuple[SpecimenModel, Sensitivities, str, tuple]:
@@ -524,28 +693,45 @@ def _best_start(on, state: FitResult, parameters) -> tuple[SpecimenModel, Sensit
     order = np.argsort([s.predicted_sum_squares(parameters) for _, s, _ in tried], kind="stable")
     model, sensitivities, note = tried[order[0]]
     if order[0]:
-        note = "; ".join(filter(None, [note, f"the refit started at {_described(on.free, model)} (of {len(tried)} "
-                                             "starts, the lowest misfit after one linearised step)"]))
+        note = "; ".join(
+            filter(
+                None,
+                [
+                    note,
+                    f"the refit started at {_described(on.free, model)} (of {len(tried)} "
+                    "starts, the lowest misfit after one linearised step)",
+                ],
+            )
+        )
     return model, sensitivities, note, tuple(tried[i][0] for i in order[1:])
 
 
 def _described(parameters, model: SpecimenModel) -> str:
-    return ", ".join(f"{p.name} = {display(p, model.value(p)):.3g} {UNITS[p.kind][0]}".rstrip() for p in parameters)
+    return ", ".join(
+        f"{p.name} = {display(p, model.value(p)):.3g} {UNITS[p.kind][0]}".rstrip() for p in parameters
+    )
 
 
-def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[SpecimenModel, Sensitivities, str]:
+def _shear_start(
+    model: SpecimenModel, state: FitResult, parameters
+) -> tuple[SpecimenModel, Sensitivities, str]:
     """Where the refit of freed transverse shear moduli that only default to G12 starts:
     each of ``SHEAR_STARTS`` evaluated once (all such materials at once), the one whose
     linearised refit (one Gauss-Newton step, every parameter free) leaves the least misfit
     kept.  Returns (the model there, its sensitivities, a note when it is not G12)."""
     specimen = model.specimen
-    defaulted = [p for p in parameters if p.kind in SHEAR_MODULI
-                 and p.kind in specimen.materials[p.target].defaulted_shear_moduli]
+    defaulted = [
+        p
+        for p in parameters
+        if p.kind in SHEAR_MODULI and p.kind in specimen.materials[p.target].defaulted_shear_moduli
+    ]
     starts = _shear_starts(specimen, defaulted) if defaulted else [(1.0, 1.0)]
     best = None
     for start in starts:
         try:
-            trial = model.with_values(_shear_values(specimen, defaulted, start)) if start != (1.0, 1.0) else model
+            trial = (
+                model.with_values(_shear_values(specimen, defaulted, start)) if start != (1.0, 1.0) else model
+            )
             sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
         except LayerIdError:
             continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
@@ -553,15 +739,27 @@ def _shear_start(model: SpecimenModel, state: FitResult, parameters) -> tuple[Sp
         if best is None or left < best[0]:
             best = (left, trial, sensitivities, start)
     if best is None:
-        raise LayerIdError("no transverse-shear start is a valid material: " + ", ".join(
-            f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted))
+        raise LayerIdError(
+            "no transverse-shear start is a valid material: "
+            + ", ".join(
+                f"{p.target} G12 = {specimen.materials[p.target].G12 / 1e9:.3g} GPa" for p in defaulted
+            )
+        )
     _, trial, sensitivities, start = best
     alike = sorted({p.target for p in defaulted if not _unidirectional(specimen.materials[p.target])})
-    note = "" if start == (1.0, 1.0) else (
-        f"the refit started at {_describe_start(start)} for {', '.join(sorted({p.target for p in defaulted}))} "
-        + (f"(G23 = G13 for {', '.join(alike)}, no unidirectional ply) "
-           if alike and start != TRANSVERSELY_ISOTROPIC and start[0] != start[1] else "")
-        + f"(of {len(starts)} starts, the lowest misfit after one linearised step; G13 = G23 = G12 is only the default)")
+    if start == (1.0, 1.0):
+        return trial, sensitivities, ""
+    materials = ", ".join(sorted({p.target for p in defaulted}))
+    alike_note = (
+        f"(G23 = G13 for {', '.join(alike)}, no unidirectional ply) "
+        if alike and start != TRANSVERSELY_ISOTROPIC and start[0] != start[1]
+        else ""
+    )
+    note = (
+        f"the refit started at {_describe_start(start)} for {materials} {alike_note}"
+        f"(of {len(starts)} starts, the lowest misfit after one linearised step; "
+        "G13 = G23 = G12 is only the default)"
+    )
     return trial, sensitivities, note
 
 
@@ -585,7 +783,9 @@ def frees_any(prepared: Prepared, parameters) -> bool:
 
 def _covered(parameters) -> set[Parameter]:
     """The plain parameters ``parameters`` move (a tied scale's lead and followers)."""
-    return {plain(p) for p in parameters} | {f for p in parameters if isinstance(p, Tied) for f, _ in p.followers}
+    return {plain(p) for p in parameters} | {
+        f for p in parameters if isinstance(p, Tied) for f, _ in p.followers
+    }
 
 
 def _unidirectional(material) -> bool:
@@ -603,8 +803,10 @@ def _shear_starts(specimen: Specimen, shear) -> list:
 
 def _describe_start(start) -> str:
     if start == TRANSVERSELY_ISOTROPIC:
-        return (f"the ply class's relations (a unidirectional ply's G13 = G12, G23 = E2 / 2(1 + {UD_NU23:g}); "
-                "G13 = G23 = G12 for others)")
+        return (
+            f"the ply class's relations (a unidirectional ply's G13 = G12, G23 = E2 / 2(1 + {UD_NU23:g}); "
+            "G13 = G23 = G12 for others)"
+        )
     f13, f23 = start
     return f"G13 = {f13:.3g} G12, G23 = {f23:.3g} G12"
 
@@ -629,19 +831,38 @@ class Refit:
     def job(self, model: SpecimenModel, parameters, pairings: dict) -> dict:
         """The arguments of one refit of ``model`` with ``parameters`` free, its modes
         followed from ``pairings`` (``_fitted``: it may run in a worker process)."""
-        return dict(model=model, measurements=self.measurements, parameters=list(parameters), options=self.options,
-                    effect_of=self.effect_of, like=self.state, explain=False, settle=self.settle, pairings=pairings)
+        return dict(
+            model=model,
+            measurements=self.measurements,
+            parameters=list(parameters),
+            options=self.options,
+            effect_of=self.effect_of,
+            like=self.state,
+            explain=False,
+            settle=self.settle,
+            pairings=pairings,
+        )
 
     def fit(self, model: SpecimenModel, parameters, pairings: dict) -> FitResult:
         """One refit (``job``), here."""
         return _fitted(self.job(model, parameters, pairings))
 
 
-def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal: Specimen, hints=(), *,
-               settle: bool | str = "quick", progress: Callable[[str], None] | None = None,
-               skip_singular: bool = True, options: FitOptions | None = None,
-               prune_below: float | None = None, prepared: Prepared | None = None,
-               pool: Executor | None = None) -> AddedEffect:
+def add_effect(
+    state: FitResult,
+    kind: str,
+    measurements: Measurements,
+    nominal: Specimen,
+    hints=(),
+    *,
+    settle: bool | str = "quick",
+    progress: Callable[[str], None] | None = None,
+    skip_singular: bool = True,
+    options: FitOptions | None = None,
+    prune_below: float | None = None,
+    prepared: Prepared | None = None,
+    pool: Executor | None = None,
+) -> AddedEffect:
     """``state`` (a finished fit, its effects on) refitted with effect ``kind`` switched on
     and its parameters free too.  First one evaluation with the effect (``prepare_effect``,
     unless ``prepared`` is given): it decides which transverse shear moduli to free and,
@@ -665,16 +886,33 @@ def add_effect(state: FitResult, kind: str, measurements: Measurements, nominal:
 
 def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, prune_below) -> AddedEffect:
     """``add_effect``'s refit of the prepared effect, unless it is singular or pruned."""
-    state, kind, new, check, notes = refit.state, ready.kind, list(ready.added), ready.precheck, list(ready.notes)
+    state, kind, new, check, notes = (
+        refit.state,
+        ready.kind,
+        list(ready.added),
+        ready.precheck,
+        list(ready.notes),
+    )
     if check.singular and skip_singular:
-        return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}")
+        return AddedEffect(
+            kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
+        )
     if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
-        return AddedEffect(kind, None, tuple(new), check, tuple(notes), pruned=True,
-                           error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
-                                 f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
-                                 f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round")
+        return AddedEffect(
+            kind,
+            None,
+            tuple(new),
+            check,
+            tuple(notes),
+            pruned=True,
+            error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
+            f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
+            f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round",
+        )
     base = list(ready.base)
-    refit = replace(refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}})
+    refit = replace(
+        refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
+    )
     if progress:
         progress(f"fitting with {kind}")
     try:
@@ -695,8 +933,15 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, 
     first_hz = float(state.measurements.table["frequency_hz"].min())
     reasons = implausible(new, result.specimen, refit.nominal, first_hz, state.model.input_std)
     notes += [f"{kind}: implausible estimate: {r}" for r in reasons]
-    return AddedEffect(kind, replace(result, warnings=result.warnings + tuple(notes)), tuple(new), check,
-                       tuple(notes), reasons, held=ran_out)
+    return AddedEffect(
+        kind,
+        replace(result, warnings=result.warnings + tuple(notes)),
+        tuple(new),
+        check,
+        tuple(notes),
+        reasons,
+        held=ran_out,
+    )
 
 
 def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
@@ -708,7 +953,7 @@ def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
     shear, and the final refit kept that ratio, G23 = 0.84 GPa against G13 = 13 GPa)."""
     values = {}
     for p in shear:
-        for q in ([p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]):
+        for q in [p] + [f for f, _ in p.followers] if isinstance(p, Tied) else [p]:
             m = specimen.materials[q.target]
             if start == TRANSVERSELY_ISOTROPIC:
                 value = (_class_g23(m) or m.G12) if q.kind == "G23" else m.G12
@@ -747,19 +992,28 @@ def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> t
         for start in _shear_starts(specimen, shear):
             yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
         model, factor = vanishing_shear_start(state, ready.model, shear, measurements, parameters, effect_of)
-        model, reached = shear_continuation(state, model, shear, factor, measurements, parameters, effect_of,
-                                            refit.options)
-        yield model, (f"the thin-plate limit (G13 = G23 = {factor:.3g} G12), the shear moduli lowered step by step "
-                      f"while the misfit fell (to {reached:.3g} G12)")
+        model, reached = shear_continuation(
+            state, model, shear, factor, measurements, parameters, effect_of, refit.options
+        )
+        yield (
+            model,
+            (
+                f"the thin-plate limit (G13 = G23 = {factor:.3g} G12), the shear moduli lowered step by step "
+                f"while the misfit fell (to {reached:.3g} G12)"
+            ),
+        )
 
     best, where, count = _first_not_worse(refit, ready, result, starts(), parameters)
-    note = (f"the refit from the screened start ended worse than without the effect (a failed start); "
-            f"restarted {count} time(s), kept {where or 'the screened start'}")
+    note = (
+        f"the refit from the screened start ended worse than without the effect (a failed start); "
+        f"restarted {count} time(s), kept {where or 'the screened start'}"
+    )
     return best, new, [note]
 
 
-def vanishing_shear_start(state: FitResult, model: SpecimenModel, shear, measurements: Measurements, parameters,
-                          effect_of: dict) -> tuple[SpecimenModel, float]:
+def vanishing_shear_start(
+    state: FitResult, model: SpecimenModel, shear, measurements: Measurements, parameters, effect_of: dict
+) -> tuple[SpecimenModel, float]:
     """``model`` (``state``'s with a shear theory on) with the ``shear`` moduli at F x G12,
     F so large that its paired frequencies lie within ``VANISHING_SHEAR`` of each
     measurement's scatter of ``state``'s (thin-plate) ones: the shear correction falls as
@@ -771,23 +1025,45 @@ def vanishing_shear_start(state: FitResult, model: SpecimenModel, shear, measure
 
     def paired_hz(factor: float) -> np.ndarray:
         trial = model.with_values(_shear_values(specimen, shear, (factor, factor)))
-        return fit_layers(trial, measurements, parameters, FitOptions(max_iterations=0), effect_of=effect_of,
-                          like=state, explain=False, settle=False, pairings=state.pairings).model_hz
+        return fit_layers(
+            trial,
+            measurements,
+            parameters,
+            FitOptions(max_iterations=0),
+            effect_of=effect_of,
+            like=state,
+            explain=False,
+            settle=False,
+            pairings=state.pairings,
+        ).model_hz
 
     low, high = SHEAR_PROBES
     c = (paired_hz(low) - paired_hz(high)) / (1 / low - 1 / high)
     table = measurements.table
-    scatter = (table["std_hz"].to_numpy() if measurements.has_std
-               else ASSUMED_SCATTER_REL * table["frequency_hz"].to_numpy())
+    scatter = (
+        table["std_hz"].to_numpy()
+        if measurements.has_std
+        else ASSUMED_SCATTER_REL * table["frequency_hz"].to_numpy()
+    )
     factor = max(high, float(np.max(np.abs(c) / (VANISHING_SHEAR * scatter))))
-    ceiling = min(SHEAR_BOUND_MARGIN * specimen.materials[p.target].bound(p.kind)[1]
-                  / specimen.materials[p.target].G12 for p in shear)
+    ceiling = min(
+        SHEAR_BOUND_MARGIN * specimen.materials[p.target].bound(p.kind)[1] / specimen.materials[p.target].G12
+        for p in shear
+    )
     factor = min(factor, ceiling)
     return model.with_values(_shear_values(specimen, shear, (factor, factor))), factor
 
 
-def shear_continuation(state: FitResult, model: SpecimenModel, shear, factor: float, measurements: Measurements,
-                       parameters, effect_of: dict, options: FitOptions) -> tuple[SpecimenModel, float]:
+def shear_continuation(
+    state: FitResult,
+    model: SpecimenModel,
+    shear,
+    factor: float,
+    measurements: Measurements,
+    parameters,
+    effect_of: dict,
+    options: FitOptions,
+) -> tuple[SpecimenModel, float]:
     """From the thin-plate limit (``model``, its ``shear`` moduli at ``factor`` x G12), the
     shear moduli lowered by ``CONTINUATION_STEP`` at a time, the other parameters refitted
     at each, as long as the misfit falls: the model where a refit with the shear moduli
@@ -798,8 +1074,17 @@ def shear_continuation(state: FitResult, model: SpecimenModel, shear, factor: fl
     steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=options.stall_chi2)
 
     def refit(start: SpecimenModel) -> FitResult:
-        return fit_layers(start, measurements, others, steps, effect_of=effect_of, like=state, explain=False,
-                          settle=False, pairings=state.pairings)
+        return fit_layers(
+            start,
+            measurements,
+            others,
+            steps,
+            effect_of=effect_of,
+            like=state,
+            explain=False,
+            settle=False,
+            pairings=state.pairings,
+        )
 
     current = refit(model)
     while factor > 1.0:
@@ -837,12 +1122,16 @@ def _other_starts(refit: Refit, ready: Prepared, result: FitResult, parameters) 
     best, where, count = _first_not_worse(refit, ready, result, starts, parameters)
     if not where:
         return result, [f"the refit ended worse than without {ready.kind}; from {count} other start(s) too"]
-    return best, [f"the refit from the screened start ended worse than without {ready.kind} (RMS "
-                  f"{100 * result.statistics.rms_rel_error:.3g} %): refitted from {where}, "
-                  f"RMS {100 * best.statistics.rms_rel_error:.3g} %"]
+    return best, [
+        f"the refit from the screened start ended worse than without {ready.kind} (RMS "
+        f"{100 * result.statistics.rms_rel_error:.3g} %): refitted from {where}, "
+        f"RMS {100 * best.statistics.rms_rel_error:.3g} %"
+    ]
 
 
-def _held_shear(refit: Refit, ready: Prepared, result: FitResult, new, base) -> tuple[FitResult, list, list, tuple]:
+def _held_shear(
+    refit: Refit, ready: Prepared, result: FitResult, new, base
+) -> tuple[FitResult, list, list, tuple]:
     """Freed shear moduli that ended implausible (at a bound, or beyond
     ``plausibility.MAX_SHEAR_RATIO`` x G12) are ones the data do not see (a thin skin's
     G13/G23 in a sandwich): they are held at the spec's values or, where it gives none, at
@@ -875,20 +1164,32 @@ def _held_shear(refit: Refit, ready: Prepared, result: FitResult, new, base) -> 
         new = [p for p in new if p not in out]
         specimen = result.model.specimen
         for material in wandered:
-            specimen = specimen.with_materials([_class_shear(specimen.materials[material], nominal.materials[material])])
+            specimen = specimen.with_materials(
+                [_class_shear(specimen.materials[material], nominal.materials[material])]
+            )
         result = refit.fit(result.model.with_specimen(specimen), base + new, result.pairings)
     if not held:
         return result, new, [], ()
     if ended_worse(result, state) and not ended_worse(free, state):
         # Held, the refit ends above the fit it adds to: the data do see them. The free
         # estimate stays, implausible: a sign of what is missing, never a worse answer.
-        return free, free_new, [f"G13, G23 of {', '.join(held)} ran out of the plausible range; held at the spec's "
-                                "values or the ply class's relation, the refit ended above the fit without the effect "
-                                f"(RMS {100 * result.rms_rel_error:.3g} %), so they stay free "
-                                f"(RMS {100 * free.rms_rel_error:.3g} %)"], ()
-    note = (f"G13, G23 of {', '.join(held)} ran out of the plausible range (the data do not see them): held at "
-            f"the spec's values or the ply class's relation ({_describe_start(TRANSVERSELY_ISOTROPIC)}) and refitted "
-            "without them")
+        return (
+            free,
+            free_new,
+            [
+                f"G13, G23 of {', '.join(held)} ran out of the plausible range; held at the spec's "
+                "values or the ply class's relation, the refit ended above the fit without the effect "
+                f"(RMS {100 * result.rms_rel_error:.3g} %), so they stay free "
+                f"(RMS {100 * free.rms_rel_error:.3g} %)"
+            ],
+            (),
+        )
+    note = (
+        f"G13, G23 of {', '.join(held)} ran out of the plausible range (the data do not see them): held at "
+        f"the spec's values or the ply class's relation ({_describe_start(TRANSVERSELY_ISOTROPIC)}) and "
+        "refitted "
+        "without them"
+    )
     return result, new, [note], tuple(sorted(_covered(removed), key=lambda q: q.name))
 
 
@@ -905,8 +1206,13 @@ def _class_shear(material, given):
     return replace(material, G13=given.G13, G23=given.G23 if given.G23 is not None else _class_g23(material))
 
 
-def with_determined_shear(result: FitResult, measurements: Measurements, nominal: Specimen,
-                          options: FitOptions | None = None, settle: bool | str = "quick") -> tuple[FitResult, list]:
+def with_determined_shear(
+    result: FitResult,
+    measurements: Measurements,
+    nominal: Specimen,
+    options: FitOptions | None = None,
+    settle: bool | str = "quick",
+) -> tuple[FitResult, list]:
     """The fit refitted until every transverse shear modulus an effect freed is still
     determined at the solution (``shear_moduli.reconsidered``); with the notes saying what
     changed."""
@@ -918,14 +1224,28 @@ def with_determined_shear(result: FitResult, measurements: Measurements, nominal
             break
         parameters, model, note = change
         notes.append(note)
-        result = fit_layers(model, measurements, parameters, options or FitOptions(max_iterations=EFFECT_ITERATIONS),
-                            effect_of=result.effect_of, like=result, explain=False, settle=settle,
-                            pairings=result.pairings)
+        result = fit_layers(
+            model,
+            measurements,
+            parameters,
+            options or FitOptions(max_iterations=EFFECT_ITERATIONS),
+            effect_of=result.effect_of,
+            like=result,
+            explain=False,
+            settle=settle,
+            pairings=result.pairings,
+        )
     return result, notes
 
 
-def released(result: FitResult, measurements: Measurements, baseline: FitResult, nominal: Specimen,
-             options: FitOptions, settle: bool | str = True) -> FitResult:
+def released(
+    result: FitResult,
+    measurements: Measurements,
+    baseline: FitResult,
+    nominal: Specimen,
+    options: FitOptions,
+    settle: bool | str = True,
+) -> FitResult:
     """``result`` refitted with the layer properties the thin-plate fit held
     (``fit_holding_bounds``) free again where the data then determine them: all at once,
     else one at a time (blind hybrid: freeing a ply's nu12 and the other's E1 together
@@ -936,19 +1256,36 @@ def released(result: FitResult, measurements: Measurements, baseline: FitResult,
     it costs only its own std.  Those still held carry their handbook scatter into the
     others' std (``with_held_scatter``)."""
     every = baseline.model.specimen.material_parameters()
-    held = [p for p in every if p not in baseline.parameters and p not in result.parameters
-            and p.target in nominal.materials and p.kind in MATERIAL_PARAMETERS]
+    held = [
+        p
+        for p in every
+        if p not in baseline.parameters
+        and p not in result.parameters
+        and p.target in nominal.materials
+        and p.kind in MATERIAL_PARAMETERS
+    ]
     if not held:
         return result
     first_hz = float(result.measurements.table["frequency_hz"].min())
 
     def freeing(fitted: FitResult, free: list[Parameter]) -> FitResult | None:
-        freed = fit_layers(fitted.model, measurements, list(fitted.parameters) + free, options,
-                           effect_of=fitted.effect_of, like=fitted, explain=False, settle=settle,
-                           pairings=fitted.pairings)
-        if (not freed.finished or any(p in free for p in at_bounds(freed))
-                or any(_ran_off(freed.value(p), baseline.model.value(p)) for p in free)
-                or implausible(free, freed.specimen, nominal, first_hz, freed.model.input_std)):
+        freed = fit_layers(
+            fitted.model,
+            measurements,
+            list(fitted.parameters) + free,
+            options,
+            effect_of=fitted.effect_of,
+            like=fitted,
+            explain=False,
+            settle=settle,
+            pairings=fitted.pairings,
+        )
+        if (
+            not freed.finished
+            or any(p in free for p in at_bounds(freed))
+            or any(_ran_off(freed.value(p), baseline.model.value(p)) for p in free)
+            or implausible(free, freed.specimen, nominal, first_hz, freed.model.input_std)
+        ):
             return None
         return freed
 
@@ -976,16 +1313,23 @@ def with_held_scatter(result: FitResult, held: list[Parameter]) -> FitResult:
     widened = with_budget(result, inputs)
     if widened is result:
         return result
-    note = (f"{', '.join(p.name for p in held)} held at the spec's values: their handbook scatter "
-            f"({100 * HANDBOOK_STD_REL:.0f} %, 1 std) is in the other properties' std (the uncertainty budget)")
+    note = (
+        f"{', '.join(p.name for p in held)} held at the spec's values: their handbook scatter "
+        f"({100 * HANDBOOK_STD_REL:.0f} %, 1 std) is in the other properties' std (the uncertainty budget)"
+    )
     return replace(widened, warnings=widened.warnings + (note,))
 
 
 def point_mass_hints(state: FitResult) -> tuple:
     """Point-mass start positions from the residual scan of a fit (``compare``), ranked
     (``point_mass_starts``)."""
-    _, shares, xy, hints, _ = residual_patterns(solving_model(state.model, state.measurements), state.measurements,
-                                             state.model_hz, state.pairings, state.jacobian)
+    _, shares, xy, hints, _ = residual_patterns(
+        solving_model(state.model, state.measurements),
+        state.measurements,
+        state.model_hz,
+        state.pairings,
+        state.jacobian,
+    )
     return point_mass_starts(state.model, hints, shares, xy)
 
 
@@ -995,7 +1339,7 @@ def point_mass_starts(model: SpecimenModel, hints, shares=None, xy=None) -> tupl
     misfit the scan says a mass there explains (``shares`` per node at ``xy``); the best
     ``POINT_MASS_STARTS`` (all of them without a scan)."""
     by_shapes = tuple(h for h in hints[:1] if h.get("from_shapes"))  # measured shapes place it: tried first
-    hints = hints[len(by_shapes):]
+    hints = hints[len(by_shapes) :]
     starts = tuple(hints[:1]) + _quadrant_grid(model, hints[0] if hints else None)
     if shares is None or xy is None or not len(shares):
         return by_shapes + starts
@@ -1023,8 +1367,9 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
     for hint in starts:
         for on in effect(kind).free(state.model, hint):
             try:
-                left = Sensitivities.at_start(on.model, measurements, base + list(on.free),
-                                              state.pairings).predicted_sum_squares(base + list(on.free))
+                left = Sensitivities.at_start(
+                    on.model, measurements, base + list(on.free), state.pairings
+                ).predicted_sum_squares(base + list(on.free))
             except LayerIdError:  # a bare peak list has no mode numbers to linearise with: scan order
                 left = math.inf
             ranked.append((left, on))
@@ -1032,7 +1377,9 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
     # Where measured shapes place the mass (``shape_point_map``), that start is fitted
     # whatever the frequencies' linearised step says: the shapes see the position, the
     # step only a frequency misfit that a wrong position can share.
-    chosen = [on for hint in starts[:1] if hint.get("from_shapes") for on in effect(kind).free(state.model, hint)][:1]
+    chosen = [
+        on for hint in starts[:1] if hint.get("from_shapes") for on in effect(kind).free(state.model, hint)
+    ][:1]
     for _, on in ranked:
         if all(_differs(on.model, other.model, _position(on)) for other in chosen):
             chosen.append(on)
@@ -1044,34 +1391,56 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
     screened = []
     if screen is not None:
         best = screen.best(1)[0]
-        screened = [on for on in effect(kind).free(state.model, best)
-                    if all(_differs(on.model, other.model, _position(on)) and best["left"] < screen.score(
-                        *(other.model.value(p) for p in _position(on) + [_mass(on)])) for other in chosen)]
+        screened = [
+            on
+            for on in effect(kind).free(state.model, best)
+            if all(
+                _differs(on.model, other.model, _position(on))
+                and best["left"] < screen.score(*(other.model.value(p) for p in _position(on) + [_mass(on)]))
+                for other in chosen
+            )
+        ]
     chosen += screened
     if progress:
-        progress(f"{kind}: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
-                 f"{len(chosen)} fitted")
+        progress(
+            f"{kind}: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
+            f"{len(chosen)} fitted"
+        )
 
     def job(on) -> dict:
         return refit.job(on.model, base + list(on.free), state.pairings)
 
     jobs = [job(on) for on in chosen]
-    trials = list(zip(pool.map(_fitted, jobs) if pool is not None else map(_fitted, jobs), chosen, strict=True))
+    trials = list(
+        zip(pool.map(_fitted, jobs) if pool is not None else map(_fitted, jobs), chosen, strict=True)
+    )
     result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
     if ended_worse(result, state):
         # Every start ended above the fit the mass is added to: once more from the mass
         # all but gone at the best one's start, from where the refit can only descend.
-        gone = replace(on, model=on.model.with_values({_mass(on): VANISHING_MASS * plate_mass(state.model.specimen)}))
+        gone = replace(
+            on, model=on.model.with_values({_mass(on): VANISHING_MASS * plate_mass(state.model.specimen)})
+        )
         trials.append((_fitted(job(gone)), gone))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
-    rivals = [t for t, o in trials if t is not result and t.finished
-              and t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * result.statistics.chi2_unit
-              and _differs(t, result, o.free)]
+    rivals = [
+        t
+        for t, o in trials
+        if t is not result
+        and t.finished
+        and t.statistics.sum_squares - result.statistics.sum_squares
+        < RIVAL_CHI2 * result.statistics.chi2_unit
+        and _differs(t, result, o.free)
+    ]
     notes = []
     if rivals:
-        described = "; ".join(", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals)
-        notes.append(f"{kind}: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
-                     "parameters are not unique with these modes; measure more modes to separate them")
+        described = "; ".join(
+            ", ".join(f"{p.kind} {display(p, r.value(p)):.4g}" for p in on.free) for r in rivals
+        )
+        notes.append(
+            f"{kind}: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
+            "parameters are not unique with these modes; measure more modes to separate them"
+        )
     return result, notes
 
 
@@ -1107,7 +1476,9 @@ def _quadrant_grid(model: SpecimenModel, best: dict | None) -> tuple[dict, ...]:
     return tuple(out)
 
 
-def _differs(a: FitResult | SpecimenModel, b: FitResult | SpecimenModel, parameters, tolerance: float = 0.05) -> bool:
+def _differs(
+    a: FitResult | SpecimenModel, b: FitResult | SpecimenModel, parameters, tolerance: float = 0.05
+) -> bool:
     """Effect parameters more than 5 % apart (positions: 5 % of the plate, folded by symmetry)."""
     span = max(a.specimen.length, a.specimen.width)
     for p in parameters:
@@ -1122,5 +1493,17 @@ def _differs(a: FitResult | SpecimenModel, b: FitResult | SpecimenModel, paramet
     return False
 
 
-__all__ = ["fit", "fit_with_effects", "add_effect", "prepare_effect", "AddedEffect", "Prepared",
-           "with_determined_shear", "spec_start", "restarted_from_spec", "better_start", "fit_holding_bounds", "released"]
+__all__ = [
+    "fit",
+    "fit_with_effects",
+    "add_effect",
+    "prepare_effect",
+    "AddedEffect",
+    "Prepared",
+    "with_determined_shear",
+    "spec_start",
+    "restarted_from_spec",
+    "better_start",
+    "fit_holding_bounds",
+    "released",
+]

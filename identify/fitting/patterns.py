@@ -27,6 +27,7 @@ paired model mode and the modes close to it cannot reproduce is scored against t
 pattern at every node; the best node is where the shapes say a mass sits, with an
 estimate of it.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -87,8 +88,12 @@ class ShapePointMap:
     def hint(self) -> dict:
         """The best node as a point-mass start (``from_shapes``: ahead of the frequency scan's)."""
         k = self.best
-        return {"xy": tuple(self.xy[k]), "mass_kg": float(self.mass_kg[k]), "share": float(self.share[k]),
-                "from_shapes": True}
+        return {
+            "xy": tuple(self.xy[k]),
+            "mass_kg": float(self.mass_kg[k]),
+            "share": float(self.share[k]),
+            "from_shapes": True,
+        }
 
 
 def shape_point_map(model: SpecimenModel, measurements: Measurements, pairings) -> ShapePointMap | None:
@@ -117,7 +122,8 @@ def shape_point_map(model: SpecimenModel, measurements: Measurements, pairings) 
             r = a - basis @ (basis.T @ a)
             scale = np.vdot(at_points[:, i], a) / np.vdot(at_points[:, i], at_points[:, i])
             others = np.setdiff1d(np.arange(len(lam)), close)
-            coupling = lam[i] * at_nodes[:, others] * at_nodes[:, [i]] / (lam[others] - lam[i])  # (nodes, others) [1/kg]
+            # (nodes, others) [1/kg]
+            coupling = lam[i] * at_nodes[:, others] * at_nodes[:, [i]] / (lam[others] - lam[i])
             pattern = scale * coupling @ (at_points[:, others] - basis @ (basis.T @ at_points[:, others])).T
             explained = explained + (pattern.conj() @ r).real
             weight = weight + np.sum(np.abs(pattern) ** 2, axis=1)
@@ -163,8 +169,13 @@ class ScoreTest:
         return (float(explained @ explained) / self.total if self.total > 0 else 0.0), coef
 
 
-def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz: np.ndarray,
-                      pairings=None, jacobian: np.ndarray | None = None):
+def residual_patterns(
+    model: SpecimenModel,
+    measurements: Measurements,
+    model_hz: np.ndarray,
+    pairings=None,
+    jacobian: np.ndarray | None = None,
+):
     """Score every signature of the residuals of ``model`` (solved as the fit solved it);
     returns (patterns, per-node share map of the point signature, node coordinates,
     point-mass hints best first, the measured shapes' point-mass map or None)."""
@@ -181,18 +192,35 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
         q[rows] = measured[rows] / measured[rows].min()
     patterns = []
     share, coef = score(q[:, None])
-    patterns.append(Pattern("grows with wavenumber", share if coef[0] > 0 else 0.0,
-                            f"{coef[0]:+.2e} per unit f/f1 (model stiffer for short waves if > 0)",
-                            ("transverse_shear", "rotary_inertia")))
+    patterns.append(
+        Pattern(
+            "grows with wavenumber",
+            share if coef[0] > 0 else 0.0,
+            f"{coef[0]:+.2e} per unit f/f1 (model stiffer for short waves if > 0)",
+            ("transverse_shear", "rotary_inertia"),
+        )
+    )
     share, coef = score((1 / q**2)[:, None])
-    patterns.append(Pattern("largest in the lowest modes", share if coef[0] < 0 else 0.0,
-                            f"{coef[0]:+.2e} x (f1/f)^2 (model too soft at low modes if < 0)", ("suspension",)))
+    patterns.append(
+        Pattern(
+            "largest in the lowest modes",
+            share if coef[0] < 0 else 0.0,
+            f"{coef[0]:+.2e} x (f1/f)^2 (model too soft at low modes if < 0)",
+            ("suspension",),
+        )
+    )
     bonded = np.array([not specimen.configuration(c).is_original for c in configs])
     if bonded.any() and (~bonded).any():
         share, _ = score(bonded[:, None].astype(float))
         ratio = float(np.mean((score.r[bonded]) ** 2) / max(np.mean(score.r[~bonded] ** 2), 1e-300))
-        patterns.append(Pattern("only in bonded configurations", share if ratio > 4 else 0.0,
-                                f"mean squared error bonded / original = {ratio:.3g}", ("adhesive", "thickness")))
+        patterns.append(
+            Pattern(
+                "only in bonded configurations",
+                share if ratio > 4 else 0.0,
+                f"mean squared error bonded / original = {ratio:.3g}",
+                ("adhesive", "thickness"),
+            )
+        )
     # Point-mass signature: e = (m / 2) phi(x, y)^2, scanned over every node.
     phi2 = []
     for name in measurements.configurations:
@@ -200,7 +228,9 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
         group = table[configs == name]
         units = solution.units
         w_index = units.element_type.NODE_DOFS.index("w")
-        shapes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, solution.modes.shapes.shape[1])[:, w_index, :]
+        shapes = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, solution.modes.shapes.shape[1])[
+            :, w_index, :
+        ]
         indices = pairings[name].indices if pairings else group["mode"].to_numpy() - 1
         phi2.append(shapes[:, indices].T ** 2)  # (rows, nodes) [1/kg]
     phi2 = np.vstack(phi2)
@@ -225,18 +255,37 @@ def residual_patterns(model: SpecimenModel, measurements: Measurements, model_hz
         x, y = 1e3 * by_shapes.xy[by_shapes.best]
         rivals = by_shapes.rivals()
         elsewhere = "; ".join(f"({1e3 * p[0]:.0f}, {1e3 * p[1]:.0f}) mm" for p in rivals)
-        patterns.append(Pattern("shapes pulled towards one point", float(by_shapes.share[by_shapes.best]),
-                                f"best at x = {x:.0f} mm, y = {y:.0f} mm, about "
-                                f"{1e3 * by_shapes.mass_kg[by_shapes.best]:.2g} g there (measured shapes)"
-                                + (f"; about as good at {elsewhere}" if rivals else ""), ("point_mass",)))
+        patterns.append(
+            Pattern(
+                "shapes pulled towards one point",
+                float(by_shapes.share[by_shapes.best]),
+                f"best at x = {x:.0f} mm, y = {y:.0f} mm, about "
+                f"{1e3 * by_shapes.mass_kg[by_shapes.best]:.2g} g there (measured shapes)"
+                + (f"; about as good at {elsewhere}" if rivals else ""),
+                ("point_mass",),
+            )
+        )
     best = int(np.argmax(shares))
     equivalent = int(np.sum(shares > shares[best] - 0.01))
-    patterns.append(Pattern("follows one point's mode amplitude", float(shares[best]),
-                            f"best at x = {1e3 * xy[best, 0]:.0f} mm, y = {1e3 * xy[best, 1]:.0f} mm "
-                            f"({equivalent} points about as good), about {1e3 * masses[best]:.2g} g there",
-                            ("point_mass",)))
+    patterns.append(
+        Pattern(
+            "follows one point's mode amplitude",
+            float(shares[best]),
+            f"best at x = {1e3 * xy[best, 0]:.0f} mm, y = {1e3 * xy[best, 1]:.0f} mm "
+            f"({equivalent} points about as good), about {1e3 * masses[best]:.2g} g there",
+            ("point_mass",),
+        )
+    )
     return tuple(patterns), shares, xy, hints, by_shapes
 
 
-__all__ = ["Pattern", "ScoreTest", "ShapePointMap", "residual_patterns", "shape_point_map", "PATTERN_SHARE", "ABSORBED",
-           "POINT_MASS_STARTS"]
+__all__ = [
+    "Pattern",
+    "ScoreTest",
+    "ShapePointMap",
+    "residual_patterns",
+    "shape_point_map",
+    "PATTERN_SHARE",
+    "ABSORBED",
+    "POINT_MASS_STARTS",
+]

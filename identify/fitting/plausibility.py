@@ -34,6 +34,7 @@ limits (each judged on the estimate, not on its std):
   times (end-grain balsa 2-4 x, a honeycomb 10-100 x its in-plane shear modulus, which
   its bending cell walls make tiny).
 """
+
 from __future__ import annotations
 
 import math
@@ -57,12 +58,16 @@ CORE_MAX_SHEAR_RATIO = 100.0
 
 def plate_mass(specimen: Specimen) -> float:
     """Mass of the specimen alone [kg]: the original plate."""
-    return float(sum(layer.material.density * layer.thickness for layer in specimen.layers)
-                 * specimen.length * specimen.width)
+    return float(
+        sum(layer.material.density * layer.thickness for layer in specimen.layers)
+        * specimen.length
+        * specimen.width
+    )
 
 
-def implausible(parameters, fitted: Specimen, nominal: Specimen, first_hz: float | None = None,
-                input_std=()) -> tuple[str, ...]:
+def implausible(
+    parameters, fitted: Specimen, nominal: Specimen, first_hz: float | None = None, input_std=()
+) -> tuple[str, ...]:
     """Why the effect estimates ``parameters`` in the ``fitted`` specimen are physically
     unlikely, judged against the ``nominal`` one (the spec's); empty when plausible.
     ``first_hz``: the lowest measured frequency (for the suspension); ``input_std``: the
@@ -79,32 +84,42 @@ def implausible(parameters, fitted: Specimen, nominal: Specimen, first_hz: float
         if p.kind == "mass":
             mass, plate = fitted.value(p), plate_mass(fitted)
             if mass > max(MAX_MASS_SHARE * plate, SENSOR_MASS_MAX):
-                reasons.append(f"a point mass of {1e3 * mass:.3g} g is {100 * mass / plate:.2g} % of the plate's "
-                               f"{1e3 * plate:.4g} g (more than {100 * MAX_MASS_SHARE:.0f} % and "
-                               f"{1e3 * SENSOR_MASS_MAX:.0f} g: heavier than a sensor or glue blob)")
+                reasons.append(
+                    f"a point mass of {1e3 * mass:.3g} g is {100 * mass / plate:.2g} % of the plate's "
+                    f"{1e3 * plate:.4g} g (more than {100 * MAX_MASS_SHARE:.0f} % and "
+                    f"{1e3 * SENSOR_MASS_MAX:.0f} g: heavier than a sensor or glue blob)"
+                )
         elif p.kind == "stiffness":
             springs = fitted.attachment(p.target)
             if isinstance(springs, Suspension) and first_hz:
                 total = springs.stiffness * len(springs.points)
                 bounce = math.sqrt(total / _total_mass(fitted)) / (2 * math.pi)
                 if bounce > MAX_SUSPENSION_RATIO * first_hz:
-                    reasons.append(f"suspension springs of {springs.stiffness:.3g} N/m hold the plate at "
-                                   f"{bounce:.3g} Hz, {100 * bounce / first_hz:.2g} % of the first mode (more than "
-                                   f"{100 * MAX_SUSPENSION_RATIO:.0f} %: stiffer than a free suspension)")
+                    reasons.append(
+                        f"suspension springs of {springs.stiffness:.3g} N/m hold the plate at "
+                        f"{bounce:.3g} Hz, {100 * bounce / first_hz:.2g} % of the first mode (more than "
+                        f"{100 * MAX_SUSPENSION_RATIO:.0f} %: stiffer than a free suspension)"
+                    )
         elif p.kind == "angle":
             turn = math.degrees(fitted.value(p) - nominal.value(p))
             limit = max(MAX_TURN_DEG, TURN_STDS * math.degrees(tolerance.get(p.target, 0.0)))
             if abs(turn) > limit:
-                reasons.append(f"layer {p.target} turned {turn:+.3g} deg from the spec's angle (more than "
-                               f"{limit:.3g} deg; give angle_deg in the spec if it is meant)")
+                reasons.append(
+                    f"layer {p.target} turned {turn:+.3g} deg from the spec's angle (more than "
+                    f"{limit:.3g} deg; give angle_deg in the spec if it is meant)"
+                )
         elif p.kind == "thickness":
             ratio = fitted.value(p) / nominal.value(p)
             if p.target in layer_labels and abs(ratio - 1) > MAX_THICKNESS_CHANGE:
-                reasons.append(f"layer {p.target} {100 * (ratio - 1):+.3g} % off its nominal thickness (more than "
-                               f"{100 * MAX_THICKNESS_CHANGE:.0f} %)")
+                reasons.append(
+                    f"layer {p.target} {100 * (ratio - 1):+.3g} % off its nominal thickness (more than "
+                    f"{100 * MAX_THICKNESS_CHANGE:.0f} %)"
+                )
             elif p.target not in layer_labels and not BOND_LINE_RANGE[0] <= ratio <= BOND_LINE_RANGE[1]:
-                reasons.append(f"bond line {p.target} at {ratio:.3g} x its nominal thickness (outside "
-                               f"{BOND_LINE_RANGE[0]:.2g}-{BOND_LINE_RANGE[1]:g} x)")
+                reasons.append(
+                    f"bond line {p.target} at {ratio:.3g} x its nominal thickness (outside "
+                    f"{BOND_LINE_RANGE[0]:.2g}-{BOND_LINE_RANGE[1]:g} x)"
+                )
         elif p.kind in ("G13", "G23") and ("shear", p.target) not in done:
             done.add(("shear", p.target))
             material = fitted.materials[p.target]
@@ -113,8 +128,10 @@ def implausible(parameters, fitted: Specimen, nominal: Specimen, first_hz: float
             for kind, value in zip(("G13", "G23"), material.transverse_shear_moduli):
                 ratio = value / material.G12
                 if ratio > highest or ratio < 1 / MIN_SHEAR_FRACTION:
-                    reasons.append(f"{p.target} {kind} = {value / 1e9:.3g} GPa is {ratio:.3g} x its G12 (outside "
-                                   f"1/{MIN_SHEAR_FRACTION:g}-{highest:g} x)")
+                    reasons.append(
+                        f"{p.target} {kind} = {value / 1e9:.3g} GPa is {ratio:.3g} x its G12 (outside "
+                        f"1/{MIN_SHEAR_FRACTION:g}-{highest:g} x)"
+                    )
     return tuple(reasons)
 
 
@@ -128,21 +145,37 @@ def _total_mass(specimen: Specimen) -> float:
     return plate_mass(specimen) + sum(a.mass for a in specimen.attachments if isinstance(a, PointMass))
 
 
-def plausible_first(candidates, chi2_unit: float, margin: float, key=lambda c: c.bic, judged=lambda c: c.plausible,
-                    related=lambda a, b: False):
+def plausible_first(
+    candidates,
+    chi2_unit: float,
+    margin: float,
+    key=lambda c: c.bic,
+    judged=lambda c: c.plausible,
+    related=lambda a, b: False,
+):
     """``candidates`` ordered by criterion (lower first), an implausible one moved behind
     the plausible rivals whose criterion is within ``margin`` x ``chi2_unit`` of it.  A
     rival is another explanation: not one ``related`` to it (e.g. the same physics with or
     without a part, which estimates the same parameters)."""
+
     def penalty(c):
         if judged(c):
             return 0.0
-        rivals = [r for r in candidates if r is not c and judged(r) and not related(r, c)
-                  and abs(key(r) - key(c)) < margin * chi2_unit]
+        rivals = [
+            r
+            for r in candidates
+            if r is not c and judged(r) and not related(r, c) and abs(key(r) - key(c)) < margin * chi2_unit
+        ]
         return margin * chi2_unit if rivals else 0.0
 
     return sorted(candidates, key=lambda c: key(c) + penalty(c))
 
 
-__all__ = ["implausible", "plate_mass", "plausible_first", "through_thickness_core", "MAX_MASS_SHARE",
-           "SENSOR_MASS_MAX"]
+__all__ = [
+    "implausible",
+    "plate_mass",
+    "plausible_first",
+    "through_thickness_core",
+    "MAX_MASS_SHARE",
+    "SENSOR_MASS_MAX",
+]

@@ -12,6 +12,7 @@ a point), and lets the
 layer properties follow to first order (the residual's part outside the span of the
 fit's Jacobian).  A start, not a result: the refit from it is a full solve.
 """
+
 from __future__ import annotations
 
 import math
@@ -76,7 +77,9 @@ class PointMassScreen:
         """Per configuration, V^T V of the basis displacements at (x, y) [m]: the projected
         mass of 1 kg there."""
         unit = (PointMass(1.0, x, y),)
-        return [projected_attachments(units, fields, unit)[1] for _, _, _, _, units, fields in self.configurations]
+        return [
+            projected_attachments(units, fields, unit)[1] for _, _, _, _, units, fields in self.configurations
+        ]
 
     def _left(self, squares, mass: float) -> float:
         model_hz = np.empty(len(self.data))
@@ -106,7 +109,9 @@ class PointMassScreen:
         scored.sort()
         out: list[dict] = []
         for left, x, y, mass in scored:
-            if all(_apart((x, y), start["xy"], length, width, DISTINCT * max(length, width)) for start in out):
+            if all(
+                _apart((x, y), start["xy"], length, width, DISTINCT * max(length, width)) for start in out
+            ):
                 out.append({"xy": (float(x), float(y)), "mass_kg": float(mass), "left": left})
             if len(out) == count:
                 break
@@ -115,8 +120,9 @@ class PointMassScreen:
 
 def _apart(a, b, length: float, width: float, distance: float) -> bool:
     """Positions further apart than ``distance``, folded by the plate's mirror symmetry."""
-    fold = np.array([[abs(a[0] - length / 2), abs(a[1] - width / 2)],
-                     [abs(b[0] - length / 2), abs(b[1] - width / 2)]])
+    fold = np.array(
+        [[abs(a[0] - length / 2), abs(a[1] - width / 2)], [abs(b[0] - length / 2), abs(b[1] - width / 2)]]
+    )
     return float(np.hypot(*(fold[0] - fold[1]))) > distance
 
 

@@ -10,6 +10,7 @@ reported as not identifiable without iterating.  The same evaluation predicts ea
 parameter's std at the stated scatter (or an assumed 0.1 %), which decides how the
 transverse shear moduli are freed (``shear_moduli``).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -43,18 +44,24 @@ class Sensitivities:
     relative: np.ndarray
     jacobian: np.ndarray
     scatter: float
-    residual: np.ndarray | None = None   # weighted residuals at the start
+    residual: np.ndarray | None = None  # weighted residuals at the start
 
     @classmethod
-    def at_start(cls, model: SpecimenModel, measurements: Measurements, parameters,
-                 pairings: dict | None = None) -> Sensitivities:
+    def at_start(
+        cls, model: SpecimenModel, measurements: Measurements, parameters, pairings: dict | None = None
+    ) -> Sensitivities:
         """At the model's values, the modes paired afresh or followed from ``pairings``."""
         objective = Objective(model, measurements, list(parameters))
         values = objective.space.clip(np.array([model.value(p) for p in parameters], dtype=float))
         evaluation = objective.evaluate(values, pairings)
         scatter = 1.0 if measurements.has_std else ASSUMED_SCATTER_REL
-        return cls(tuple(parameters), relative_sensitivity(evaluation), objective.jacobian(evaluation), scatter,
-                   objective.residual(evaluation))
+        return cls(
+            tuple(parameters),
+            relative_sensitivity(evaluation),
+            objective.jacobian(evaluation),
+            scatter,
+            objective.residual(evaluation),
+        )
 
     def predicted_sum_squares(self, parameters) -> float:
         """The weighted sum of squares one full Gauss-Newton step from the start would
@@ -70,8 +77,11 @@ class Sensitivities:
         index = {p: i for i, p in enumerate(self.parameters)}
         rel, jac = [], []
         for p in parameters:
-            members = [p] if p in index or not isinstance(p, Tied) else \
-                [Parameter(p.kind, p.target)] + [f for f, _ in p.followers]
+            members = (
+                [p]
+                if p in index or not isinstance(p, Tied)
+                else [Parameter(p.kind, p.target)] + [f for f, _ in p.followers]
+            )
             rel.append(sum(self.relative[:, index[m]] for m in members))
             jac.append(sum(self.jacobian[:, index[m]] for m in members))
         return np.column_stack(rel), np.column_stack(jac)
@@ -103,11 +113,14 @@ class Precheck:
 
     @property
     def singular(self) -> bool:
-        return bool(not self.condition_number <= SINGULAR_ABOVE
-                    and not self.condition_number <= SINGULAR_GROWTH * self.base_condition_number)
+        return bool(
+            not self.condition_number <= SINGULAR_ABOVE
+            and not self.condition_number <= SINGULAR_GROWTH * self.base_condition_number
+        )
 
     def describe(self) -> str:
-        text = f"condition number {self.condition_number:.3g} with the effect ({self.base_condition_number:.3g} without)"
+        with_it, without = self.condition_number, self.base_condition_number
+        text = f"condition number {with_it:.3g} with the effect ({without:.3g} without)"
         if self.singular:
             text += f": singular, not identifiable (the frequencies do not see {self.weakest})"
         return text
@@ -119,7 +132,7 @@ def precheck(sensitivities: Sensitivities, base, added) -> Precheck:
     rel, _ = sensitivities.columns(parameters)
     _, s, vt = np.linalg.svd(rel, full_matrices=False)
     weakest = describe_combination(vt[-1], [p.name for p in parameters])
-    base_condition = condition_number(rel[:, :len(base)]) if base else 1.0
+    base_condition = condition_number(rel[:, : len(base)]) if base else 1.0
     return Precheck(condition_number(rel), base_condition, weakest)
 
 

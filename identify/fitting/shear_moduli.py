@@ -15,6 +15,7 @@ the std it predicts for each at the stated scatter (or an assumed 0.1 %):
 The outcome is said in words (which are free, which are scaled together, which keep
 their value, and the predicted std that decided).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -39,22 +40,28 @@ class ShearChoice:
     """The parameters to free (plain G13/G23, or ``Tied`` scales) and what was decided."""
 
     parameters: tuple[Parameter, ...]
-    separate: tuple[str, ...]      # materials with G13 and G23 free on their own
-    scaled: tuple[str, ...]        # materials with one scale for both
-    kept: tuple[str, ...]          # materials whose shear moduli stay at their values
-    predicted: dict                # parameter name -> predicted relative std that decided
+    separate: tuple[str, ...]  # materials with G13 and G23 free on their own
+    scaled: tuple[str, ...]  # materials with one scale for both
+    kept: tuple[str, ...]  # materials whose shear moduli stay at their values
+    predicted: dict  # parameter name -> predicted relative std that decided
 
     def describe(self, specimen: Specimen) -> str:
         parts = []
         if self.separate:
             parts.append(f"G13 and G23 free for {', '.join(self.separate)}")
         if self.scaled:
-            parts.append(f"one scale for G13 and G23 of {', '.join(self.scaled)} (the data cannot separate them: "
-                         f"predicted std of one above {100 * SEPARATE_STD:.0f} %; G23 / G13 kept at "
-                         + ", ".join(f"{_ratio(specimen, m):.3g}" for m in self.scaled) + ")")
+            parts.append(
+                f"one scale for G13 and G23 of {', '.join(self.scaled)} (the data cannot separate them: "
+                f"predicted std of one above {100 * SEPARATE_STD:.0f} %; G23 / G13 kept at "
+                + ", ".join(f"{_ratio(specimen, m):.3g}" for m in self.scaled)
+                + ")"
+            )
         if self.kept:
-            parts.append(f"G13, G23 of {', '.join(self.kept)} not freed (the data do not see them: predicted std "
-                         f"above {100 * FREE_STD:.0f} %), kept at " + ", ".join(_values(specimen, m) for m in self.kept))
+            parts.append(
+                f"G13, G23 of {', '.join(self.kept)} not freed (the data do not see them: predicted std "
+                f"above {100 * FREE_STD:.0f} %), kept at "
+                + ", ".join(_values(specimen, m) for m in self.kept)
+            )
         stds = ", ".join(f"{name} {100 * std:.2g} %" for name, std in self.predicted.items())
         return "transverse shear moduli: " + "; ".join(parts) + (f" (predicted std: {stds})" if stds else "")
 
@@ -96,30 +103,37 @@ def choose_shear_moduli(sensitivities: Sensitivities, base, shear, specimen: Spe
         free = chosen()
         if not free:
             break
-        std = sensitivities.predicted_std(list(base) + free)[len(base):]
+        std = sensitivities.predicted_std(list(base) + free)[len(base) :]
         predicted = {p.name: float(s) for p, s in zip(free, std)}
         # The worst parameter that can be acted on: a separate pair to scale, or a scale to keep.
-        actionable = [i for i, p in enumerate(free)
-                      if std[i] > FREE_STD or (std[i] > SEPARATE_STD and mode[p.target] == "separate"
-                                               and len(own[p.target]) > 1)]
+        actionable = [
+            i
+            for i, p in enumerate(free)
+            if std[i] > FREE_STD
+            or (std[i] > SEPARATE_STD and mode[p.target] == "separate" and len(own[p.target]) > 1)
+        ]
         if not actionable:
             break
         material = free[max(actionable, key=lambda i: std[i])].target
         mode[material] = "scaled" if mode[material] == "separate" and len(own[material]) > 1 else "kept"
     free = chosen()
-    return ShearChoice(tuple(free), tuple(m for m in materials if mode[m] == "separate"),
-                       tuple(m for m in materials if mode[m] == "scaled"),
-                       tuple(m for m in materials if mode[m] == "kept"),
-                       {k: v for k, v in predicted.items() if any(p.name == k for p in free)})
-
-
+    return ShearChoice(
+        tuple(free),
+        tuple(m for m in materials if mode[m] == "separate"),
+        tuple(m for m in materials if mode[m] == "scaled"),
+        tuple(m for m in materials if mode[m] == "kept"),
+        {k: v for k, v in predicted.items() if any(p.name == k for p in free)},
+    )
 
 
 def freed_shear_moduli(result, nominal: Specimen) -> list[Parameter]:
     """The transverse shear parameters of a fit that an effect freed (not ones the spec
     identifies): plain G13/G23 or ``Tied`` scales."""
-    return [p for p in result.parameters if p.kind in SHEAR_MODULI
-            and p.kind not in nominal.materials[p.target].identify]
+    return [
+        p
+        for p in result.parameters
+        if p.kind in SHEAR_MODULI and p.kind not in nominal.materials[p.target].identify
+    ]
 
 
 def reconsidered(result, nominal: Specimen, scatter: float):
@@ -152,23 +166,42 @@ def reconsidered(result, nominal: Specimen, scatter: float):
         n13, n23 = nominal.materials[material].transverse_shear_moduli
         ratio = n23 / n13
         lead = float(np.sqrt(g13 * g23 / ratio))
-        reached.append(f"{material}: G23 / G13 = {ratio:.3g}, the spec's (reached: {g23 / g13:.3g}, not determined)")
+        reached.append(
+            f"{material}: G23 / G13 = {ratio:.3g}, the spec's (reached: {g23 / g13:.3g}, not determined)"
+        )
         parameters[k] = Tied(tied.kind, tied.target, tuple((f, ratio) for f, _ in tied.followers))
         renamed[tied.name] = parameters[k].name
-        specimen = specimen.with_values({Parameter("G13", material): lead, Parameter("G23", material): ratio * lead})
+        specimen = specimen.with_values(
+            {Parameter("G13", material): lead, Parameter("G23", material): ratio * lead}
+        )
     parts = [f"one scale for G13 and G23 of {', '.join(changed)} ({'; '.join(reached)})"] if changed else []
     if choice.kept:
-        parts.append("G13, G23 of " + ", ".join(choice.kept) + " no longer free: "
-                     + ", ".join(_values(specimen, m) for m in choice.kept))
+        parts.append(
+            "G13, G23 of "
+            + ", ".join(choice.kept)
+            + " no longer free: "
+            + ", ".join(_values(specimen, m) for m in choice.kept)
+        )
     stds = ", ".join(f"{renamed.get(name, name)} {100 * std:.2g} %" for name, std in choice.predicted.items())
-    note = (f"transverse shear moduli chosen again at the solution (the data no longer determine them as freed): "
-            f"{'; '.join(parts)}" + (f" (std there: {stds})" if stds else ""))
+    note = (
+        f"transverse shear moduli chosen again at the solution (the data no longer determine them as freed): "
+        f"{'; '.join(parts)}" + (f" (std there: {stds})" if stds else "")
+    )
     return others + parameters, result.model.with_specimen(specimen), note
 
 
 def with_shear_moduli(specimen: Specimen, nominal) -> Specimen:
     """The specimen with one material's G13, G23 as ``nominal`` has them (given or default)."""
-    return specimen.with_materials([replace(specimen.materials[nominal.name], G13=nominal.G13, G23=nominal.G23)])
+    return specimen.with_materials(
+        [replace(specimen.materials[nominal.name], G13=nominal.G13, G23=nominal.G23)]
+    )
 
 
-__all__ = ["ShearChoice", "choose_shear_moduli", "reconsidered", "with_shear_moduli", "SEPARATE_STD", "FREE_STD"]
+__all__ = [
+    "ShearChoice",
+    "choose_shear_moduli",
+    "reconsidered",
+    "with_shear_moduli",
+    "SEPARATE_STD",
+    "FREE_STD",
+]

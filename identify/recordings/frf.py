@@ -18,6 +18,7 @@ biases damping by up to 5 %).  Windowing both channels alike makes the
 windowed FRF exactly H(s + r): every pole moves left by r, and
 :func:`correct_for_window` moves it back.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -143,12 +144,17 @@ def _double_hit(f: np.ndarray, start: int, end: int, fs: float) -> str | None:
     if outside.any():
         second = int(np.flatnonzero(outside)[0])
         side = "after" if second > start else "before"
-        return (f"double hit: a second force pulse of {np.abs(f[outside]).max() / peak:.0%} of the first, "
-                f"{abs(second - start) / fs * 1e3:.1f} ms {side} it")
+        return (
+            f"double hit: a second force pulse of {np.abs(f[outside]).max() / peak:.0%} of the first, "
+            f"{abs(second - start) / fs * 1e3:.1f} ms {side} it"
+        )
     maxima = find_peaks(np.abs(f[start:end]), DOUBLE_HIT_LEVEL * peak)[0]
     if len(maxima) > 1:
-        return (f"double hit: the force pulse has {len(maxima)} maxima, {(maxima[1] - maxima[0]) / fs * 1e3:.2f} ms "
-                "apart (a rebound within the pulse)")
+        return (
+            f"double hit: the force pulse has {len(maxima)} maxima, {(maxima[1] - maxima[0]) / fs * 1e3:.2f} "
+            "ms "
+            "apart (a rebound within the pulse)"
+        )
     return None
 
 
@@ -176,9 +182,12 @@ def _clipping(hit: Hit) -> str | None:
     for name, x in (("force", hit.force), ("response", hit.response)):
         run = None if x is None else clipped_run(x)
         if run:
-            return (f"{name} clipped: {run[1]} consecutive samples at its limit {x[run[0]]:g} from "
-                    f"{run[0] / hit.sample_rate * 1e3:.1f} ms (overload: the peak is cut off, H1 would be wrong); "
-                    "repeat the hit softer or raise the input range")
+            return (
+                f"{name} clipped: {run[1]} consecutive samples at its limit {x[run[0]]:g} from "
+                f"{run[0] / hit.sample_rate * 1e3:.1f} ms (overload: the peak is cut off, H1 would be "
+                "wrong); "
+                "repeat the hit softer or raise the input range"
+            )
     return None
 
 
@@ -190,7 +199,7 @@ def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
     over the tail (``HUM_STEADY``: a mode ringing near a harmonic decays), subtracted
     from the whole record.  Returns the hit and a note, or the hit unchanged and None."""
     fs, y = hit.sample_rate, hit.response
-    tail = y[len(y) // 2:] - np.median(y[len(y) // 2:])
+    tail = y[len(y) // 2 :] - np.median(y[len(y) // 2 :])
     n = len(tail)
     spectrum = np.abs(fft.rfft(tail * np.hanning(n)))
     f = fft.rfftfreq(n, 1 / fs)
@@ -211,7 +220,7 @@ def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
         return hit, None
     mains, standing, k = found
     t = np.arange(len(y)) / fs
-    t_tail = t[len(y) // 2:]
+    t_tail = t[len(y) // 2 :]
 
     def fitted(f0, part=slice(None)):
         harmonics = k[standing] * f0
@@ -223,13 +232,21 @@ def remove_hum(hit: Hit) -> tuple[Hit, str | None]:
     drift = np.linspace(mains - MAINS_DRIFT_HZ, mains + MAINS_DRIFT_HZ, 41)
     f0 = drift[int(np.argmin([fitted(x)[0] for x in drift]))]
     _, harmonics, c = fitted(f0)
-    amplitude = [np.hypot(*fitted(f0, part)[2].reshape(2, -1)).sum() for part in (slice(None, n // 2), slice(n // 2, None))]
+    amplitude = [
+        np.hypot(*fitted(f0, part)[2].reshape(2, -1)).sum()
+        for part in (slice(None, n // 2), slice(n // 2, None))
+    ]
     if not HUM_STEADY[0] <= amplitude[1] / amplitude[0] <= HUM_STEADY[1]:
         return hit, None  # decaying over the tail: a mode's ring-down near a harmonic, not hum
-    hum = np.hstack([np.cos(2 * np.pi * t[:, None] * harmonics), np.sin(2 * np.pi * t[:, None] * harmonics)]) @ c
-    return (replace(hit, response=y - hum),
-            f"{hit.source}: mains hum at {f0:.2f} Hz removed ({len(harmonics)} harmonic(s) up to "
-            f"{harmonics.max():.0f} Hz, fitted on the record's last half)")
+    hum = (
+        np.hstack([np.cos(2 * np.pi * t[:, None] * harmonics), np.sin(2 * np.pi * t[:, None] * harmonics)])
+        @ c
+    )
+    return (
+        replace(hit, response=y - hum),
+        f"{hit.source}: mains hum at {f0:.2f} Hz removed ({len(harmonics)} harmonic(s) up to "
+        f"{harmonics.max():.0f} Hz, fitted on the record's last half)",
+    )
 
 
 def _cut(hit: Hit) -> _Cut | Rejection:
@@ -244,38 +261,46 @@ def _cut(hit: Hit) -> _Cut | Rejection:
         onset = int(np.argmax(np.abs(hit.response) >= PULSE_LEVEL * np.abs(hit.response).max()))
         force = None
     else:
-        f = hit.force - np.median(hit.force[len(hit.force) // 2:])
+        f = hit.force - np.median(hit.force[len(hit.force) // 2 :])
         peak = int(np.argmax(np.abs(f)))
-        noise = 1.4826 * np.median(np.abs(f[len(f) // 2:]))
+        noise = 1.4826 * np.median(np.abs(f[len(f) // 2 :]))
         if f[peak] == 0:
             return Rejection(hit.source, "no hit: the force channel is flat (cable unplugged?)")
         if abs(f[peak]) < MIN_HIT_SNR * noise:
-            return Rejection(hit.source, f"no hit: force peak only {abs(f[peak]) / noise:.1f} times the noise "
-                                         f"(need {MIN_HIT_SNR:g})")
+            return Rejection(
+                hit.source,
+                f"no hit: force peak only {abs(f[peak]) / noise:.1f} times the noise (need {MIN_HIT_SNR:g})",
+            )
         above = np.abs(f) >= PULSE_LEVEL * abs(f[peak])
-        onset = peak - int(np.argmin(above[peak::-1])) + 1 if not above[:peak + 1].all() else 0
+        onset = peak - int(np.argmin(above[peak::-1])) + 1 if not above[: peak + 1].all() else 0
         end = peak + int(np.argmin(above[peak:])) if not above[peak:].all() else len(f)
         reason = _double_hit(f, onset, end, fs)
         if reason:
             return Rejection(hit.source, reason)
         window = np.zeros_like(f)
-        window[max(onset - pre, 0):end + (end - onset) + pre] = 1.0  # the pulse, one pulse width and margins
-        force = (f * window)[max(onset - pre, 0):]
+        window[max(onset - pre, 0) : end + (end - onset) + pre] = (
+            1.0  # the pulse, one pulse width and margins
+        )
+        force = (f * window)[max(onset - pre, 0) :]
     first = max(onset - pre, 0)
     response = hit.response[first:] - np.median(hit.response)
     head = _rms(response[:level_n])
     if head == 0:
-        return Rejection(hit.source, "no response: the response channel is flat after the hit (sensor unplugged?)")
+        return Rejection(
+            hit.source, "no response: the response channel is flat after the hit (sensor unplugged?)"
+        )
     return _Cut(hit.source, force, response, _rms(response[-level_n:]) / head)
 
 
-def _notch(force_spectrum: np.ndarray, frequency_hz: np.ndarray, lines: np.ndarray) -> tuple[float, float] | None:
+def _notch(
+    force_spectrum: np.ndarray, frequency_hz: np.ndarray, lines: np.ndarray
+) -> tuple[float, float] | None:
     """Deepest notch (depth [dB], frequency [Hz]) of a force spectrum in the band, if any
     is deeper than NOTCH_DB.  Only lines within FORCE_DROP_DB of the level at the band's
     low edge count: there a single pulse's spectrum is smooth, beyond it the pulse's
     own zeros (at 1.5, 2.5, ... / pulse width) are the hammer's limit, not a double hit."""
     level = 20 * np.log10(np.abs(force_spectrum[lines]) + 1e-300)
-    level = level[:np.argmax(np.append(level < level[0] - FORCE_DROP_DB, True))]
+    level = level[: np.argmax(np.append(level < level[0] - FORCE_DROP_DB, True))]
     if len(level) < 3:
         return None
     dips, depth = find_peaks(-level, NOTCH_DB)
@@ -302,8 +327,10 @@ def default_band(hits: list[Hit]) -> tuple[float, float]:
 
 
 def _all_rejected(rejected: list[Rejection]) -> MeasurementError:
-    return MeasurementError(f"every hit was rejected ({'; '.join(f'{r.source}: {r.reason}' for r in rejected)}); "
-                            "repeat the test with single clean hits")
+    return MeasurementError(
+        f"every hit was rejected ({'; '.join(f'{r.source}: {r.reason}' for r in rejected)}); "
+        "repeat the test with single clean hits"
+    )
 
 
 def average_hits(hits: list[Hit], band_hz: tuple[float, float]) -> AveragedFRF:
@@ -324,33 +351,64 @@ def average_hits(hits: list[Hit], band_hz: tuple[float, float]) -> AveragedFRF:
         if notch is None:
             kept.append(c)
         else:
-            rejected.append(Rejection(c.source, f"double hit: force spectrum has a {notch[0]:.0f} dB notch at "
-                                                f"{notch[1]:.1f} Hz within the band"))
+            rejected.append(
+                Rejection(
+                    c.source,
+                    f"double hit: force spectrum has a {notch[0]:.0f} dB notch at "
+                    f"{notch[1]:.1f} Hz within the band",
+                )
+            )
     if not kept:
         raise _all_rejected(rejected)
     rate = 0.0
     worst = max(kept, key=lambda c: c.decay_ratio)
     if worst.decay_ratio > DECAYED:
         rate = np.log(worst.decay_ratio / WINDOW_TARGET) * fs / len(worst.response)
-        notes.append(f"{worst.source}: response at {worst.decay_ratio:.1%} of its start level at the record's end "
-                     f"(not decayed): exponential window exp(-{rate:.3g} t) on every hit, damping corrected for it")
+        notes.append(
+            f"{worst.source}: response at {worst.decay_ratio:.1%} of its start level at the record's end "
+            f"(not decayed): exponential window exp(-{rate:.3g} t) on every hit, damping corrected for it"
+        )
     window = [np.exp(-rate * np.arange(len(c.response)) / fs) for c in kept]
     y = np.array([fft.rfft(c.response * w, n) for c, w in zip(kept, window, strict=True)])
     sources = tuple(c.source for c in kept)
     if kept[0].force is None:
-        notes.append("no force channel: modes fitted to the response spectrum as if the hammer's force were flat "
-                     "over the band (no FRF and no coherence; damping from the free decay)")
+        notes.append(
+            "no force channel: modes fitted to the response spectrum as if the hammer's force were flat "
+            "over the band (no FRF and no coherence; damping from the free decay)"
+        )
         syy = np.sum(np.abs(y) ** 2, axis=0)
-        return AveragedFRF(frequency, np.mean(y, axis=0), np.full(len(frequency), np.nan), y, np.abs(y) ** 2 / syy,
-                           sources, tuple(rejected), rate, False, hits[0].quantity, tuple(notes))
-    x = np.array([fft.rfft(c.force * w[:len(c.force)], n) for c, w in zip(kept, window, strict=True)])
+        return AveragedFRF(
+            frequency,
+            np.mean(y, axis=0),
+            np.full(len(frequency), np.nan),
+            y,
+            np.abs(y) ** 2 / syy,
+            sources,
+            tuple(rejected),
+            rate,
+            False,
+            hits[0].quantity,
+            tuple(notes),
+        )
+    x = np.array([fft.rfft(c.force * w[: len(c.force)], n) for c, w in zip(kept, window, strict=True)])
     sxx = np.sum(np.abs(x) ** 2, axis=0)
     sxy = np.sum(y * x.conj(), axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
         syy = np.sum(np.abs(y) ** 2, axis=0)
         coherence = np.abs(sxy) ** 2 / (sxx * syy) if len(x) > 1 else np.full(len(frequency), np.nan)
-        return AveragedFRF(frequency, sxy / sxx, coherence, y / x, np.abs(x) ** 2 / sxx, sources, tuple(rejected), rate,
-                           True, hits[0].quantity, tuple(notes))
+        return AveragedFRF(
+            frequency,
+            sxy / sxx,
+            coherence,
+            y / x,
+            np.abs(x) ** 2 / sxx,
+            sources,
+            tuple(rejected),
+            rate,
+            True,
+            hits[0].quantity,
+            tuple(notes),
+        )
 
 
 def from_measured(frfs: list[MeasuredFRF]) -> AveragedFRF:
@@ -359,10 +417,22 @@ def from_measured(frfs: list[MeasuredFRF]) -> AveragedFRF:
     f = frfs[0].frequency_hz
     for r in frfs[1:]:
         if len(r.frequency_hz) != len(f) or not np.allclose(r.frequency_hz, f, rtol=1e-9, atol=1e-9):
-            raise MeasurementError(f"{r.source}: FRF lines differ from {frfs[0].source}'s; export every FRF on the "
-                                   "same frequency lines")
+            raise MeasurementError(
+                f"{r.source}: FRF lines differ from {frfs[0].source}'s; export every FRF on the "
+                "same frequency lines"
+            )
     h = np.array([r.frf for r in frfs])
     k = len(frfs)
-    return AveragedFRF(f, h.mean(axis=0), np.full(len(f), np.nan), h, np.full(h.shape, 1 / k),
-                       tuple(r.source for r in frfs), (), 0.0, True, frfs[0].quantity,
-                       ("FRF records as averaged by the acquisition: no coherence, no windows applied",))
+    return AveragedFRF(
+        f,
+        h.mean(axis=0),
+        np.full(len(f), np.nan),
+        h,
+        np.full(h.shape, 1 / k),
+        tuple(r.source for r in frfs),
+        (),
+        0.0,
+        True,
+        frfs[0].quantity,
+        ("FRF records as averaged by the acquisition: no coherence, no windows applied",),
+    )

@@ -20,6 +20,7 @@ against).  Two things differ from that full-band form, both for speed on a plate
   solution is one triangular solve in the leading block of R.  No normal equations are
   formed, so nothing cancels at high signal-to-noise ratios.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -34,8 +35,9 @@ from scipy import linalg
 ARC = 0.95
 
 
-def lscf_poles(frequency_hz: np.ndarray, h: np.ndarray, band_hz: tuple[float, float],
-               degrees) -> list[np.ndarray]:
+def lscf_poles(
+    frequency_hz: np.ndarray, h: np.ndarray, band_hz: tuple[float, float], degrees
+) -> list[np.ndarray]:
     """Poles [rad/s] (s = -zeta w + i w sqrt(1 - zeta^2) for a mode) of the common
     denominator of degree m fitted to the complex FRF ``h`` on the lines of
     ``frequency_hz`` [Hz] inside ``band_hz`` [Hz], for each m in ``degrees``.  Every root is
@@ -45,8 +47,10 @@ def lscf_poles(frequency_hz: np.ndarray, h: np.ndarray, band_hz: tuple[float, fl
     f, hk = frequency_hz[inside], h[inside]
     n = max(degrees)
     if 2 * (n + 1) > len(f):
-        raise ValueError(f"degree {n} needs at least {2 * (n + 1)} lines in band_hz = ({lo:g}, {hi:g}) Hz; "
-                         f"it holds {len(f)}")
+        raise ValueError(
+            f"degree {n} needs at least {2 * (n + 1)} lines in band_hz = ({lo:g}, {hi:g}) Hz; "
+            f"it holds {len(f)}"
+        )
     period = ARC / (hi - lo)  # T [s]: the band spans ARC x 2 pi in w T
     centre = 0.5 * (lo + hi)
     z = np.exp(2j * np.pi * np.outer(f - centre, np.arange(n + 1)) * period)

@@ -8,6 +8,7 @@ more than the finding itself ever costs; these two definitions are all the recor
 need.  ``tests/identify/test_maxima.py`` checks both against scipy's on random curves,
 plateaus and ties included.
 """
+
 from __future__ import annotations
 
 import numpy as np

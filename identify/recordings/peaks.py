@@ -26,8 +26,9 @@ interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
 one sensor cannot tell them apart.  ``frequency_hz`` is the undamped natural frequency
 |p| / 2 pi of the pole p (what an FE model predicts), ``damping_ratio`` -Re p / |p|.
 
-Scatter.  The same local fit, seeded with the H1 poles, estimates every mode on each
-hit's FRF H_k = Y_k / X_k (all hits at once, :func:`refined_per_record`).  ``std_hz`` is the standard error of ``frequency_hz``:
+Scatter.  The same local fit, seeded with the H1 poles, estimates every mode on each hit's
+FRF H_k = Y_k / X_k (all hits at once, :func:`refined_per_record`).  ``std_hz`` is the
+standard error of ``frequency_hz``:
 
     std_hz = s / c4(n) * sqrt(sum_k w_k^2)
 
@@ -67,6 +68,7 @@ the mode's half-power half-bandwidth: ``peak_hz`` is missing, null in JSON and b
 the report, never NaN).  Peaks picked on |H1| with no stable pole (a
 suspension, an anti-resonance's neighbour, a cable) are left out and named in the notes.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -143,7 +145,17 @@ GUIDED_SCATTER = 0.75
 #: Spurious peaks named in the notes (the most prominent).
 NOTED_PEAKS = 8
 CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
-FLAG_ORDER = ("response_only", "suspension", "low_coherence", "weak", "close", "single_hit", "guided", "std_pooled", "unpicked")
+FLAG_ORDER = (
+    "response_only",
+    "suspension",
+    "low_coherence",
+    "weak",
+    "close",
+    "single_hit",
+    "guided",
+    "std_pooled",
+    "unpicked",
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,6 +212,7 @@ class PeakList:
 
     def to_dict(self) -> dict:
         """JSON-ready: NaN becomes None."""
+
         def plain(v):
             v = v.item() if isinstance(v, np.generic) else v
             return None if isinstance(v, float) and not math.isfinite(v) else v
@@ -227,6 +240,7 @@ class PeakList:
 
 
 # --- local pole-residue fit ------------------------------------------------------------
+
 
 @dataclass(frozen=True, eq=False)
 class LocalFit:
@@ -285,8 +299,9 @@ class _Projection:
         centre = float(self.s.imag.mean())
         x = ((self.s.imag - centre) / centre)[:, None]
         a, b = 1 / (self.s[:, None] - fixed), 1 / (self.s[:, None] - fixed.conj())
-        self.q0 = np.linalg.qr(_stacked(np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x),
-                                                   x, 1j * x])))[0]
+        self.q0 = np.linalg.qr(
+            _stacked(np.hstack([a + b, 1j * (a - b), np.ones_like(x), 1j * np.ones_like(x), x, 1j * x]))
+        )[0]
         data = _stacked(np.atleast_2d(h).T).T  # (records, 2 lines)
         self.h = data - (data @ self.q0) @ self.q0.T
         self.seed = seed
@@ -358,10 +373,14 @@ def _gauss_newton(problem: _Projection, relative: float = 0.0) -> tuple[np.ndarr
             step = -_solve(r, np.einsum("jlk,jl->jk", q, problem.residual(x))[..., None])[..., 0]
             step[done] = 0.0
             x = x + step
-            done |= np.max(np.abs(step), axis=1) < np.maximum(NEWTON_STEP, relative * np.max(np.abs(x), axis=1))
+            done |= np.max(np.abs(step), axis=1) < np.maximum(
+                NEWTON_STEP, relative * np.max(np.abs(x), axis=1)
+            )
             if done.all():
                 break
-        done &= np.all(np.isfinite(problem.pole(x)), axis=1) & (np.sum(problem.residual(x) ** 2, axis=1) <= start)
+        done &= np.all(np.isfinite(problem.pole(x)), axis=1) & (
+            np.sum(problem.residual(x) ** 2, axis=1) <= start
+        )
     return x, done
 
 
@@ -372,12 +391,19 @@ def _least_squares(problem: _Projection) -> tuple[np.ndarray, bool]:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        result = optimize.least_squares(lambda y: problem.residual(y[None])[0], np.zeros(2 * len(problem.seed)),
-                                        jac=lambda y: problem.jacobian(y[None])[0], method="lm", x_scale=1.0)
+        result = optimize.least_squares(
+            lambda y: problem.residual(y[None])[0],
+            np.zeros(2 * len(problem.seed)),
+            jac=lambda y: problem.jacobian(y[None])[0],
+            method="lm",
+            x_scale=1.0,
+        )
     return result.x[None], bool(result.success)
 
 
-def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None) -> LocalFit:
+def local_fit(
+    frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: np.ndarray | None = None
+) -> LocalFit:
     """Poles near ``seed`` [rad/s] fitted to the complex FRF ``h`` on ``frequency_hz``.
 
     Model: sum of conjugate pole pairs with complex residues, the neighbouring modes'
@@ -397,12 +423,14 @@ def local_fit(frequency_hz: np.ndarray, h: np.ndarray, seed: np.ndarray, fixed: 
     rms = np.sqrt(np.sum(r**2) / len(frequency_hz)) + 1e-300
     inside = (p.imag / (2 * np.pi) > frequency_hz[0]) & (p.imag / (2 * np.pi) < frequency_hz[-1])
     decay = np.abs(p.real)
-    snr = np.abs(problem.residues(x)[0]) / np.where(decay > 0, decay, np.inf) / rms  # an undamped pole: 0, no peak
+    # an undamped pole: 0, no peak
+    snr = np.abs(problem.residues(x)[0]) / np.where(decay > 0, decay, np.inf) / rms
     return LocalFit(p, snr, success and bool(np.all(np.isfinite(p)) and inside.all()))
 
 
-def refined_per_record(frequency_hz: np.ndarray, h: np.ndarray, pole: np.ndarray,
-                       fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def refined_per_record(
+    frequency_hz: np.ndarray, h: np.ndarray, pole: np.ndarray, fixed: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The poles ``pole`` [rad/s] (fitted on H1) refitted on each record of ``h``
     (records, lines), all records at once (:func:`_gauss_newton`; a hit's pole lies within
     a few % of a half-power bandwidth of H1's, the hit-to-hit scatter): (records, poles)
@@ -412,8 +440,10 @@ def refined_per_record(frequency_hz: np.ndarray, h: np.ndarray, pole: np.ndarray
     problem = _Projection(frequency_hz, h, pole, fixed)
     x, done = _gauss_newton(problem, PER_HIT_RELATIVE)
     for j in np.flatnonzero(~done):
-        x[j], done[j] = (v[0] if isinstance(v, np.ndarray) else v
-                         for v in _least_squares(_Projection(frequency_hz, h[j], pole, fixed)))
+        x[j], done[j] = (
+            v[0] if isinstance(v, np.ndarray) else v
+            for v in _least_squares(_Projection(frequency_hz, h[j], pole, fixed))
+        )
     with np.errstate(all="ignore"):
         return problem.pole(x), done
 
@@ -446,8 +476,9 @@ def _neighbourhoods(frf: AveragedFRF, seeds: np.ndarray) -> list[tuple[np.ndarra
     return out
 
 
-def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray, cache: dict | None = None,
-             only=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _fit_all(
+    frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray, cache: dict | None = None, only=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Local fits of every seed (or of the seeds at the indices ``only``) with its
     neighbourhood (:func:`_neighbourhoods`) on ``h``: poles, SNR, success per seed (NaN,
     0, False where not fitted).  ``cache`` (a dict kept by the caller for one ``h``) skips
@@ -470,6 +501,7 @@ def _fit_all(frf: AveragedFRF, h: np.ndarray, seeds: np.ndarray, cache: dict | N
 
 # --- stabilisation diagram ---------------------------------------------------------------
 
+
 def sub_bands(frf: AveragedFRF, band_hz, picked: pd.DataFrame, max_order: int | None = None) -> list[SubBand]:
     """The band cut into equally wide sub-bands (a plate's modal density is constant) of
     about ``PEAKS_PER_SUB_BAND`` peaks of at least ``WEAK_DB`` picked on |H1| (stand-ins
@@ -486,7 +518,9 @@ def sub_bands(frf: AveragedFRF, band_hz, picked: pd.DataFrame, max_order: int | 
     lo, hi = band_hz
     f = picked["frequency_hz"].to_numpy()
     f = np.sort(f[(f > lo) & (f < hi) & (picked["prominence_db"].to_numpy() >= WEAK_DB)])
-    count = int(np.clip(round(len(f) / PEAKS_PER_SUB_BAND), 1, max(1, len(frf.lines(band_hz)) // MIN_SUB_BAND_LINES)))
+    count = int(
+        np.clip(round(len(f) / PEAKS_PER_SUB_BAND), 1, max(1, len(frf.lines(band_hz)) // MIN_SUB_BAND_LINES))
+    )
     cuts = np.unique([lo, *(_between_peaks(lo + k * (hi - lo) / count, f) for k in range(1, count)), hi])
     out = []
     for a, b in itertools.pairwise(cuts):
@@ -512,10 +546,18 @@ def stabilisation(frf: AveragedFRF, bands: list[SubBand]) -> Stabilisation:
     for k, sub in enumerate(bands):
         lines = frf.lines(sub.fitted_hz)
         degrees = list(range(2, 2 * sub.order + 1, 2))
-        for degree, p in zip(degrees, lscf_poles(frf.frequency_hz[lines], frf.h1[lines], sub.fitted_hz, degrees)):
+        for degree, p in zip(
+            degrees, lscf_poles(frf.frequency_hz[lines], frf.h1[lines], sub.fitted_hz, degrees)
+        ):
             f, zeta = correct_for_window(p, frf.decay_rate)
-            keep = ((p.imag > 0) & (p.real < 0) & (f >= sub.core_hz[0]) & (f < sub.core_hz[1]) & (zeta > 0)
-                    & (zeta < MAX_DAMPING))
+            keep = (
+                (p.imag > 0)
+                & (p.real < 0)
+                & (f >= sub.core_hz[0])
+                & (f < sub.core_hz[1])
+                & (zeta > 0)
+                & (zeta < MAX_DAMPING)
+            )
             orders.append(np.full(keep.sum(), degree))
             poles.append(p[keep])
             part.append(np.full(keep.sum(), k))
@@ -558,8 +600,9 @@ def _columns(diagram: Stabilisation) -> np.ndarray:
     return np.array(seeds)
 
 
-def _split(members: np.ndarray, band: np.ndarray, order: np.ndarray, pole: np.ndarray,
-           enough: float) -> list[np.ndarray]:
+def _split(
+    members: np.ndarray, band: np.ndarray, order: np.ndarray, pole: np.ndarray, enough: float
+) -> list[np.ndarray]:
     """``members`` (indices, by frequency) as the columns of ``_columns``: one, or k where
     at least ``enough`` (sub-band, order) pairs hold k poles each and the k medians stand
     apart by more than the linkage's quarter of the narrower one's half-power
@@ -591,8 +634,10 @@ def _split(members: np.ndarray, band: np.ndarray, order: np.ndarray, pole: np.nd
 
 # --- peak picking --------------------------------------------------------------------------
 
-def picked_peaks(frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndarray,
-                 prominence_db: float = PICK_DB) -> pd.DataFrame:
+
+def picked_peaks(
+    frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndarray, prominence_db: float = PICK_DB
+) -> pd.DataFrame:
     """Local maxima of 20 log10 |H| in ``lines`` with at least ``prominence_db``:
     frequency by Gaussian interpolation (a parabola through the three dB values)."""
     level = 20 * np.log10(np.abs(magnitude[lines]) + 1e-300)
@@ -603,8 +648,9 @@ def picked_peaks(frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndar
     with np.errstate(invalid="ignore", divide="ignore"):
         shift = np.where(a - 2 * b + c < 0, 0.5 * (a - c) / (a - 2 * b + c), 0.0)
     df = frequency_hz[1] - frequency_hz[0]
-    return pd.DataFrame({"frequency_hz": frequency_hz[lines][i] + shift * df, "prominence_db": prom,
-                         "line": lines[i]})
+    return pd.DataFrame(
+        {"frequency_hz": frequency_hz[lines][i] + shift * df, "prominence_db": prom, "line": lines[i]}
+    )
 
 
 def _prominences_at(frf: AveragedFRF, lines: np.ndarray, f: np.ndarray, half_bw: np.ndarray) -> np.ndarray:
@@ -622,6 +668,7 @@ def _prominences_at(frf: AveragedFRF, lines: np.ndarray, f: np.ndarray, half_bw:
 
 # --- the entry point -------------------------------------------------------------------
 
+
 def _c4(n: np.ndarray) -> np.ndarray:
     n = np.asarray(n, dtype=float)
     return np.sqrt(2 / (n - 1)) * np.exp(gammaln(n / 2) - gammaln((n - 1) / 2))
@@ -631,11 +678,14 @@ def _check_band(band_hz, nyquist: float) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in band_hz)
     except (TypeError, ValueError):
-        raise MeasurementError(f"band_hz = {band_hz!r} must be two frequencies (low, high) in Hz, "
-                               "e.g. (20, 1000)") from None
+        raise MeasurementError(
+            f"band_hz = {band_hz!r} must be two frequencies (low, high) in Hz, e.g. (20, 1000)"
+        ) from None
     if not (0 <= lo < hi <= nyquist):
-        raise MeasurementError(f"band_hz = ({lo:g}, {hi:g}) must satisfy 0 <= low < high <= {nyquist:g} Hz (half the "
-                               "sample rate); give a band inside the measured range")
+        raise MeasurementError(
+            f"band_hz = ({lo:g}, {hi:g}) must satisfy 0 <= low < high <= {nyquist:g} Hz (half the "
+            "sample rate); give a band inside the measured range"
+        )
     return lo, hi
 
 
@@ -645,8 +695,10 @@ def _check_guide(guide_hz) -> np.ndarray:
     except (TypeError, ValueError):
         guide = np.array([np.nan])
     if not len(guide) or not np.all(np.isfinite(guide) & (guide > 0)):
-        raise MeasurementError(f"guide_hz = {guide_hz!r} must be positive frequencies in Hz, e.g. the model's "
-                               "[129.3, 191.2]; leave it out to search the whole band")
+        raise MeasurementError(
+            f"guide_hz = {guide_hz!r} must be positive frequencies in Hz, e.g. the model's "
+            "[129.3, 191.2]; leave it out to search the whole band"
+        )
     return guide
 
 
@@ -664,9 +716,14 @@ def _band(frf_records, hits, band_hz, guide_hz, nyquist) -> tuple[float, float]:
 
 
 @one_blas_thread
-def extract_peaks(recordings, configuration: str = "original", sample_rate: float | None = None,
-                  band_hz: tuple[float, float] | None = None, guide_hz=None,
-                  max_order: int | None = None) -> PeakList:
+def extract_peaks(
+    recordings,
+    configuration: str = "original",
+    sample_rate: float | None = None,
+    band_hz: tuple[float, float] | None = None,
+    guide_hz=None,
+    max_order: int | None = None,
+) -> PeakList:
     """The peak list of one configuration from its recordings.
 
     recordings: file paths (CSV, WAV, UFF/UNV; several files = several hits), or Hit /
@@ -692,8 +749,10 @@ def extract_peaks(recordings, configuration: str = "original", sample_rate: floa
     notes = list(frf.notes)
     lines = frf.lines(band)
     if len(lines) < 16:
-        raise MeasurementError(f"band_hz = ({band[0]:g}, {band[1]:g}) holds {len(lines)} spectral lines; need at least "
-                               "16: widen the band or record longer hits")
+        raise MeasurementError(
+            f"band_hz = ({band[0]:g}, {band[1]:g}) holds {len(lines)} spectral lines; need at least "
+            "16: widen the band or record longer hits"
+        )
     picked = picked_peaks(frf.frequency_hz, frf.h1, lines, PICK_DB)
     _note_below_band(frf, band, notes)
     diagram = stabilisation(frf, sub_bands(frf, band, picked, max_order))
@@ -712,8 +771,10 @@ def _note_below_band(frf: AveragedFRF, band, notes: list[str]) -> None:
     if len(below) >= 3:
         low = picked_peaks(frf.frequency_hz, frf.h1, below, SUSPENSION_DB)
         if len(low):
-            notes.append(f"peaks below the band at {', '.join(f'{f:.1f}' for f in low['frequency_hz'])} Hz "
-                         "(suspension modes of a free plate?) left out")
+            notes.append(
+                f"peaks below the band at {', '.join(f'{f:.1f}' for f in low['frequency_hz'])} Hz "
+                "(suspension modes of a free plate?) left out"
+            )
 
 
 def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
@@ -732,10 +793,15 @@ def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
         if not drop.any():
             return pole, snr, np.zeros(len(pole), dtype=bool)
         w = int(np.argmin(np.where(drop, snr, np.inf)))
-        reason = ("the local fit failed" if not ok[w] else
-                  f"damping ratio {zeta[w]:.3g} outside (0, {MAX_DAMPING:g})" if not 0 < zeta[w] <= MAX_DAMPING else
-                  f"its peak is only {snr[w]:.1f} times the fit residual (need {SNR_MIN:g})" if snr[w] < SNR_MIN else
-                  "it duplicates a neighbour")
+        reason = (
+            "the local fit failed"
+            if not ok[w]
+            else f"damping ratio {zeta[w]:.3g} outside (0, {MAX_DAMPING:g})"
+            if not 0 < zeta[w] <= MAX_DAMPING
+            else f"its peak is only {snr[w]:.1f} times the fit residual (need {SNR_MIN:g})"
+            if snr[w] < SNR_MIN
+            else "it duplicates a neighbour"
+        )
         notes.append(f"stable pole near {seeds[w].imag / (2 * np.pi):.2f} Hz left out: {reason}")
         seeds = np.delete(seeds, w)
 
@@ -753,7 +819,8 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
         if len(near):
             fp = float(near["frequency_hz"].iloc[np.argmax(near["prominence_db"])])
             candidates = diagram.pole[np.abs(diagram.frequency_hz / fp - 1) < FREQ_TOL * 5]
-            decay = np.median(candidates.real) if len(candidates) else -2 * np.pi * fp * 0.005  # start: 0.5 % damping
+            # start: 0.5 % damping
+            decay = np.median(candidates.real) if len(candidates) else -2 * np.pi * fp * 0.005
             seed = decay + 2j * np.pi * fp
         else:
             near_guide = np.abs(diagram.frequency_hz / g - 1) < GUIDE_REL
@@ -764,8 +831,13 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
         # fitted with the modes found as its neighbours: a weak mode on a strong one's skirt
         p, s, ok = (x[-1:] for x in _fit_all(frf, frf.h1, np.append(pole, seed), only=(len(pole),)))
         fn, zeta = correct_for_window(p, frf.decay_rate)
-        if (ok[0] and s[0] >= SNR_GUIDED and 0 < zeta[0] < MAX_DAMPING and abs(fn[0] / g - 1) < GUIDE_REL
-                and _on_the_hits(frf, np.append(pole, p))):
+        if (
+            ok[0]
+            and s[0] >= SNR_GUIDED
+            and 0 < zeta[0] < MAX_DAMPING
+            and abs(fn[0] / g - 1) < GUIDE_REL
+            and _on_the_hits(frf, np.append(pole, p))
+        ):
             pole, snr, guided = np.append(pole, p), np.append(snr, s), np.append(guided, True)
             notes.append(f"mode at {fn[0]:.2f} Hz found only by looking near the guide frequency {g:.1f} Hz")
         else:
@@ -784,8 +856,10 @@ def _on_the_hits(frf: AveragedFRF, pole: np.ndarray) -> bool:
     per_hit = _per_hit(frf, pole, only=(len(pole) - 1,))[0][:, -1]
     found = per_hit[np.isfinite(per_hit)]
     half_bandwidth = abs(pole[-1].real) / (2 * np.pi)
-    return bool(len(found) >= max(2, math.ceil(frf.n_hits / 2))
-                and np.std(found, ddof=1) <= GUIDED_SCATTER * 2 * half_bandwidth)
+    return bool(
+        len(found) >= max(2, math.ceil(frf.n_hits / 2))
+        and np.std(found, ddof=1) <= GUIDED_SCATTER * 2 * half_bandwidth
+    )
 
 
 def _persistent(pole: np.ndarray, frequency_hz: np.ndarray) -> complex:
@@ -810,19 +884,26 @@ def _per_hit(frf: AveragedFRF, pole: np.ndarray, only=None) -> tuple[np.ndarray,
             continue
         key = (joint.tobytes(), fixed.tobytes())
         if key not in fits:  # seeds fitted together share their fit
-            fits[key] = refined_per_record(frf.frequency_hz[lines], frf.per_hit[:, lines], pole[joint], pole[fixed])
+            fits[key] = refined_per_record(
+                frf.frequency_hz[lines], frf.per_hit[:, lines], pole[joint], pole[fixed]
+            )
         p, ok = fits[key]
         p = p[:, int(np.flatnonzero(joint == i)[0])]
         f, zeta = correct_for_window(p, frf.decay_rate)
         with np.errstate(invalid="ignore"):
-            good = ok & (np.abs(p.imag - pole[i].imag) < FIT_HALF_WIDTHS * abs(pole[i].real)) & (zeta > 0) \
+            good = (
+                ok
+                & (np.abs(p.imag - pole[i].imag) < FIT_HALF_WIDTHS * abs(pole[i].real))
+                & (zeta > 0)
                 & (zeta < MAX_DAMPING)
+            )
         out[good, i], damping[good, i] = f[good], zeta[good]
     return out, damping
 
 
-def broadening(frf: AveragedFRF, per_hit_hz: np.ndarray, frequency_hz: np.ndarray,
-               damping_ratio: np.ndarray) -> np.ndarray:
+def broadening(
+    frf: AveragedFRF, per_hit_hz: np.ndarray, frequency_hz: np.ndarray, damping_ratio: np.ndarray
+) -> np.ndarray:
     """How much wider than each hit's the H1 peak is [damping ratio]: averaging hits
     whose peaks scatter in frequency, s_f^2 / (zeta f^2), s_f^2 the H1-weighted variance of
     the (hits, modes) per-hit frequencies (NaN with fewer than two)."""
@@ -837,8 +918,9 @@ def broadening(frf: AveragedFRF, per_hit_hz: np.ndarray, frequency_hz: np.ndarra
     return out
 
 
-def damping_std(frf: AveragedFRF, per_hit_damping: np.ndarray, frequency_hz: np.ndarray,
-                broadened: np.ndarray) -> np.ndarray:
+def damping_std(
+    frf: AveragedFRF, per_hit_damping: np.ndarray, frequency_hz: np.ndarray, broadened: np.ndarray
+) -> np.ndarray:
     """damping_std [-] of the damping ratio corrected for ``broadening``: the standard error
     of the per-hit damping ratios (each hit's exponential window corrected; the formula of
     std_hz, module docstring) and the uncertainty of the broadening, a sample variance of
@@ -904,13 +986,27 @@ def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
     names = [[k for k in FLAG_ORDER if flags[k][j]] for j in range(len(f))]
     left = picked.drop(index=list(used)).nlargest(NOTED_PEAKS, "prominence_db").sort_values("frequency_hz")
     if len(left):
-        listed = ", ".join(f"{x:.1f} Hz ({p:.1f} dB)" for x, p in zip(left["frequency_hz"], left["prominence_db"], strict=True))
+        listed = ", ".join(
+            f"{x:.1f} Hz ({p:.1f} dB)"
+            for x, p in zip(left["frequency_hz"], left["prominence_db"], strict=True)
+        )
         more = len(picked) - len(used) - len(left)
-        notes.append(f"peaks picked on |H1| without a stable pole (spurious: suspension, anti-resonance, cable, "
-                     f"noise?) left out: {listed}" + (f" and {more} smaller ones" if more else ""))
-    return pd.DataFrame({
-        "frequency_hz": f, "std_hz": std, "damping_ratio": zeta, "damping_std": zeta_std,
-        "coherence": frf.coherence[line],
-        "prominence_db": prominence, "snr": snr, "hits": n, "peak_hz": peak_hz,
-        "quality": [k[0] if k else "good" for k in names], "flags": [",".join(k) for k in names],
-    })
+        notes.append(
+            f"peaks picked on |H1| without a stable pole (spurious: suspension, anti-resonance, cable, "
+            f"noise?) left out: {listed}" + (f" and {more} smaller ones" if more else "")
+        )
+    return pd.DataFrame(
+        {
+            "frequency_hz": f,
+            "std_hz": std,
+            "damping_ratio": zeta,
+            "damping_std": zeta_std,
+            "coherence": frf.coherence[line],
+            "prominence_db": prominence,
+            "snr": snr,
+            "hits": n,
+            "peak_hz": peak_hz,
+            "quality": [k[0] if k else "good" for k in names],
+            "flags": [",".join(k) for k in names],
+        }
+    )

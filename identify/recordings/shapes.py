@@ -45,6 +45,7 @@ MPC = (|sum_j R_jr^2| / sum_j |R_jr|^2)^2 (Pappa, Elliott and Schenk, 1993: the 
 ratio (l1 - l2) / (l1 + l2) of the eigenvalues of the real and imaginary parts' 2 x 2
 matrix) is 1 for a real (normal) mode and 0 for a travelling wave.
 """
+
 from __future__ import annotations
 
 import math
@@ -109,12 +110,15 @@ def lsfd(frequency_hz, h, poles, quantity: str = "acceleration") -> LSFDFit:
     h = np.atleast_2d(np.asarray(h, dtype=complex))
     p = np.atleast_1d(np.asarray(poles, dtype=complex))
     if quantity not in POWER:
-        raise MeasurementError(f"quantity = {quantity!r} is not a response LSFD can model; allowed: "
-                               f"{', '.join(POWER)}")
+        raise MeasurementError(
+            f"quantity = {quantity!r} is not a response LSFD can model; allowed: {', '.join(POWER)}"
+        )
     m, n = len(p), 2 * len(p) + 4
     if 2 * len(f) < n + 2 or h.shape[1] != len(f):
-        raise MeasurementError(f"the FRFs hold {h.shape[1]} lines on {len(f)} frequencies; LSFD of {m} modes needs "
-                               f"the same lines, at least {n // 2 + 1} of them: widen the band or record longer hits")
+        raise MeasurementError(
+            f"the FRFs hold {h.shape[1]} lines on {len(f)} frequencies; LSFD of {m} modes needs "
+            f"the same lines, at least {n // 2 + 1} of them: widen the band or record longer hits"
+        )
     s = 2j * np.pi * f[:, None]
     a, b = 1 / (s - p), 1 / (s - p.conj())
     one = np.ones_like(s)
@@ -128,9 +132,14 @@ def lsfd(frequency_hz, h, poles, quantity: str = "acceleration") -> LSFDFit:
     residual = basis @ coef - data
     sigma2 = np.sum(residual**2, axis=0) / (basis.shape[0] - n)
     variance = (np.sum(solve**2, axis=1) / scale**2)[:, None] * sigma2  # diag of sigma^2 (B^T B)^-1
-    return LSFDFit(coef[:m] + 1j * coef[m:2 * m], np.sqrt(variance[:m] + variance[m:2 * m]),
-                   coef[2 * m] + 1j * coef[2 * m + 1], coef[2 * m + 2] + 1j * coef[2 * m + 3],
-                   np.sqrt(np.sum(residual**2, axis=0) / len(f)), float(singular[0] / singular[-1]))
+    return LSFDFit(
+        coef[:m] + 1j * coef[m : 2 * m],
+        np.sqrt(variance[:m] + variance[m : 2 * m]),
+        coef[2 * m] + 1j * coef[2 * m + 1],
+        coef[2 * m + 2] + 1j * coef[2 * m + 3],
+        np.sqrt(np.sum(residual**2, axis=0) / len(f)),
+        float(singular[0] / singular[-1]),
+    )
 
 
 def normalised(residues: np.ndarray, std: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
@@ -179,27 +188,40 @@ class ShapeEstimate:
     def to_frame(self) -> pd.DataFrame:
         """The SHAPES.csv table: one row per mode and point."""
         n_modes, n_points = self.shapes.shape
-        return pd.DataFrame({
-            "configuration": self.configuration,
-            "frequency_hz": np.repeat(self.modes["frequency_hz"].to_numpy(), n_points),
-            "x_mm": np.tile(self.points["x_mm"].to_numpy(), n_modes),
-            "y_mm": np.tile(self.points["y_mm"].to_numpy(), n_modes),
-            "amplitude": self.shapes.real.ravel(),
-            "amplitude_imag": self.shapes.imag.ravel(),
-        })[CSV_COLUMNS]
+        return pd.DataFrame(
+            {
+                "configuration": self.configuration,
+                "frequency_hz": np.repeat(self.modes["frequency_hz"].to_numpy(), n_points),
+                "x_mm": np.tile(self.points["x_mm"].to_numpy(), n_modes),
+                "y_mm": np.tile(self.points["y_mm"].to_numpy(), n_modes),
+                "amplitude": self.shapes.real.ravel(),
+                "amplitude_imag": self.shapes.imag.ravel(),
+            }
+        )[CSV_COLUMNS]
 
     def to_dict(self) -> dict:
         """The ``peaks --points --json`` document: the modes (with MPC and the points that
         found each) and every shape per point with its standard error."""
         points = self.points.to_dict(orient="records")
-        return {"configuration": self.configuration, "band_hz": list(self.band_hz),
-                "peaks": self.modes.to_dict(orient="records"),
-                "shapes": [{"frequency_hz": float(f), "mpc": float(m),
-                            "points": [dict(p, amplitude=float(a.real), amplitude_imag=float(a.imag), std=float(e))
-                                       for p, a, e in zip(points, shape, std)]}
-                           for f, m, shape, std in zip(self.modes["frequency_hz"], self.modes["mpc"], self.shapes,
-                                                       self.shape_std)],
-                "notes": list(self.notes)}
+        return {
+            "configuration": self.configuration,
+            "band_hz": list(self.band_hz),
+            "peaks": self.modes.to_dict(orient="records"),
+            "shapes": [
+                {
+                    "frequency_hz": float(f),
+                    "mpc": float(m),
+                    "points": [
+                        dict(p, amplitude=float(a.real), amplitude_imag=float(a.imag), std=float(e))
+                        for p, a, e in zip(points, shape, std)
+                    ],
+                }
+                for f, m, shape, std in zip(
+                    self.modes["frequency_hz"], self.modes["mpc"], self.shapes, self.shape_std
+                )
+            ],
+            "notes": list(self.notes),
+        }
 
     def write_peaks_csv(self, path: str | Path) -> None:
         """The modes as a peak list (``configuration,frequency_hz,std_hz,damping_ratio,
@@ -218,12 +240,17 @@ class ShapeEstimate:
         write_text(path, frame.to_csv(index=False))
 
     def report(self) -> str:
-        lines = [f"Mode shapes of {self.configuration!r}: {len(self.points)} points, "
-                 f"{sum(pl.frf.n_hits for pl in self.peak_lists.values())} hits", "",
-                 "  frequency_hz      std_hz  damping_ratio  points   MPC  max shape std"]
+        lines = [
+            f"Mode shapes of {self.configuration!r}: {len(self.points)} points, "
+            f"{sum(pl.frf.n_hits for pl in self.peak_lists.values())} hits",
+            "",
+            "  frequency_hz      std_hz  damping_ratio  points   MPC  max shape std",
+        ]
         for row in self.modes.itertuples(index=False):
-            lines.append(f"  {row.frequency_hz:12.3f}  {row.std_hz:10.3g}  {row.damping_ratio:13.4g}  "
-                         f"{row.points_found:6d}  {row.mpc:.3f}  {row.max_shape_std:13.3g}")
+            lines.append(
+                f"  {row.frequency_hz:12.3f}  {row.std_hz:10.3g}  {row.damping_ratio:13.4g}  "
+                f"{row.points_found:6d}  {row.mpc:.3f}  {row.max_shape_std:13.3g}"
+            )
         if self.notes:
             lines += ["", "Notes:", *(f"  - {note}" for note in self.notes)]
         return "\n".join(lines) + "\n"
@@ -240,32 +267,44 @@ def _check_points(recordings_by_point, points) -> pd.DataFrame:
         if bad.size:
             value = points[axis].iloc[bad[0]]
             shown = repr(value) if isinstance(value, str) else str(value)
-            raise MeasurementError(f"points: {axis} of point {table['point'].iloc[bad[0]]!r} is {shown}, not a finite "
-                                   "number; give its position in mm from the plate's corner")
+            raise MeasurementError(
+                f"points: {axis} of point {table['point'].iloc[bad[0]]!r} is {shown}, not a finite "
+                "number; give its position in mm from the plate's corner"
+            )
     twice = table["point"].duplicated(keep=False)
     if twice.any():
         name = table["point"][twice].iloc[0]
         rows = [int(i) + 1 for i in np.flatnonzero(table["point"] == name)]
-        raise MeasurementError(f"points: point {name!r} is listed {len(rows)} times (rows {rows}); give each point once")
+        raise MeasurementError(
+            f"points: point {name!r} is listed {len(rows)} times (rows {rows}); give each point once"
+        )
     same = table.duplicated(["x_mm", "y_mm"], keep=False)
     if same.any():
         first = table[same].iloc[0]
         others = table["point"][same & (table["x_mm"] == first["x_mm"]) & (table["y_mm"] == first["y_mm"])]
-        raise MeasurementError(f"points: {', '.join(map(repr, others))} share x_mm, y_mm = ({first['x_mm']:g}, "
-                               f"{first['y_mm']:g}); a shape needs one point per position: merge their recordings")
+        raise MeasurementError(
+            f"points: {', '.join(map(repr, others))} share x_mm, y_mm = ({first['x_mm']:g}, "
+            f"{first['y_mm']:g}); a shape needs one point per position: merge their recordings"
+        )
     if not isinstance(recordings_by_point, dict) or not recordings_by_point:
-        raise MeasurementError("recordings_by_point must map each point to its recordings, e.g. "
-                               "{'P1': ['P1/hit1.csv', 'P1/hit2.csv'], ...}")
+        raise MeasurementError(
+            "recordings_by_point must map each point to its recordings, e.g. "
+            "{'P1': ['P1/hit1.csv', 'P1/hit2.csv'], ...}"
+        )
     given = {str(k): v for k, v in recordings_by_point.items()}
     unplaced = [k for k in given if k not in set(table["point"])]
     if unplaced:
-        raise MeasurementError(f"recordings_by_point: point {unplaced[0]!r} has recordings but no row in points; "
-                               "add its x_mm, y_mm to the points table")
+        raise MeasurementError(
+            f"recordings_by_point: point {unplaced[0]!r} has recordings but no row in points; "
+            "add its x_mm, y_mm to the points table"
+        )
     for name, x, y in table.itertuples(index=False):
         recordings = given.get(name)
         if recordings is None or (isinstance(recordings, (list, tuple)) and not recordings):
-            raise MeasurementError(f"recordings_by_point: point {name!r} (x_mm = {x:g}, y_mm = {y:g}) has no "
-                                   "recordings; give its hit files or drop its row from points")
+            raise MeasurementError(
+                f"recordings_by_point: point {name!r} (x_mm = {x:g}, y_mm = {y:g}) has no "
+                "recordings; give its hit files or drop its row from points"
+            )
     if len(table) < 2:
         raise MeasurementError(f"points: {len(table)} point given; a mode shape needs at least 2 points")
     return table.reset_index(drop=True)
@@ -274,8 +313,13 @@ def _check_points(recordings_by_point, points) -> pd.DataFrame:
 def _poles(peak_lists: list[PeakList]) -> pd.DataFrame:
     """The modes found at several points (module docstring): frequency_hz, std_hz,
     damping_ratio, damping_std, points_found."""
-    found = pd.concat([pl.table[["frequency_hz", "damping_ratio", "snr"]].assign(point=j)
-                       for j, pl in enumerate(peak_lists)], ignore_index=True).sort_values("frequency_hz")
+    found = pd.concat(
+        [
+            pl.table[["frequency_hz", "damping_ratio", "snr"]].assign(point=j)
+            for j, pl in enumerate(peak_lists)
+        ],
+        ignore_index=True,
+    ).sort_values("frequency_hz")
     f, zeta = found["frequency_hz"].to_numpy(), found["damping_ratio"].to_numpy()
     half = zeta * f
     breaks = np.flatnonzero(np.diff(f) > LINK * 0.5 * (half[1:] + half[:-1])) + 1
@@ -286,12 +330,18 @@ def _poles(peak_lists: list[PeakList]) -> pd.DataFrame:
         if members["point"].nunique() < need:
             continue
         best = members[members["snr"] >= members["snr"].max() / SNR_SPAN]
-        rows.append({"frequency_hz": float(np.median(best["frequency_hz"])),
-                     "std_hz": _median_error(best["frequency_hz"]),
-                     "damping_ratio": float(np.median(best["damping_ratio"])),
-                     "damping_std": _median_error(best["damping_ratio"]),
-                     "points_found": int(members["point"].nunique())})
-    return pd.DataFrame(rows, columns=["frequency_hz", "std_hz", "damping_ratio", "damping_std", "points_found"])
+        rows.append(
+            {
+                "frequency_hz": float(np.median(best["frequency_hz"])),
+                "std_hz": _median_error(best["frequency_hz"]),
+                "damping_ratio": float(np.median(best["damping_ratio"])),
+                "damping_std": _median_error(best["damping_ratio"]),
+                "points_found": int(members["point"].nunique()),
+            }
+        )
+    return pd.DataFrame(
+        rows, columns=["frequency_hz", "std_hz", "damping_ratio", "damping_std", "points_found"]
+    )
 
 
 def _median_error(values: pd.Series) -> float:
@@ -300,7 +350,9 @@ def _median_error(values: pd.Series) -> float:
     return float(math.sqrt(math.pi / 2) * np.std(values, ddof=1) / math.sqrt(n)) if n >= 2 else math.nan
 
 
-def recordings_in_folders(points, folder: str | Path | None = None) -> tuple[dict[str, list[Path]], pd.DataFrame]:
+def recordings_in_folders(
+    points, folder: str | Path | None = None
+) -> tuple[dict[str, list[Path]], pd.DataFrame]:
     """A roving-hammer test laid out on disk: a points table (CSV: point, x_mm, y_mm) and,
     in ``folder`` (default: the table's own folder), one sub-folder per point named as in
     the table holding that point's hits (as ``tap_simulation.write_roving`` writes them).
@@ -312,15 +364,22 @@ def recordings_in_folders(points, folder: str | Path | None = None) -> tuple[dic
         where = root / name
         files = sorted(f for f in where.glob("*") if f.suffix.lower() in READERS) if where.is_dir() else []
         if not files:
-            raise MeasurementError(f"point {name!r}: no recordings in {str(where)!r} (expected its hits there as "
-                                   f"{', '.join(READERS)} files, one file a hit)")
+            raise MeasurementError(
+                f"point {name!r}: no recordings in {str(where)!r} (expected its hits there as "
+                f"{', '.join(READERS)} files, one file a hit)"
+            )
         out[name] = files
     return out, table
 
 
-def estimate_shapes(recordings_by_point: dict, points, configuration: str = "original",
-                    sample_rate: float | None = None, band_hz: tuple[float, float] | None = None,
-                    guide_hz=None) -> ShapeEstimate:
+def estimate_shapes(
+    recordings_by_point: dict,
+    points,
+    configuration: str = "original",
+    sample_rate: float | None = None,
+    band_hz: tuple[float, float] | None = None,
+    guide_hz=None,
+) -> ShapeEstimate:
     """Mode shapes of one configuration from a roving-hammer test (module docstring).
 
     recordings_by_point: point name -> its recordings (file paths, or records already read,
@@ -337,20 +396,26 @@ def estimate_shapes(recordings_by_point: dict, points, configuration: str = "ori
         except MeasurementError as exc:
             raise MeasurementError(f"point {name!r}: {exc}") from None
         if not peak_lists[name].frf.has_force:
-            raise MeasurementError(f"point {name!r}: its recordings have no force channel; a roving-hammer shape "
-                                   "needs each point's force (the response alone scales with how hard it was hit): "
-                                   "record the hammer's force too")
+            raise MeasurementError(
+                f"point {name!r}: its recordings have no force channel; a roving-hammer shape "
+                "needs each point's force (the response alone scales with how hard it was hit): "
+                "record the hammer's force too"
+            )
     lists = list(peak_lists.values())
     modes = _poles(lists)
     notes = []
     if modes.empty:
-        raise MeasurementError(f"no mode was found at {max(2, math.ceil(MIN_POINTS_SHARE * len(lists)))} or more "
-                               "points; check the band and that the sensor stays on the plate")
+        raise MeasurementError(
+            f"no mode was found at {max(2, math.ceil(MIN_POINTS_SHARE * len(lists)))} or more "
+            "points; check the band and that the sensor stays on the plate"
+        )
     zeta, w = modes["damping_ratio"].to_numpy(), 2 * np.pi * modes["frequency_hz"].to_numpy()
     pole = -zeta * w + 1j * w * np.sqrt(1 - zeta**2)
     half_hz = zeta * modes["frequency_hz"].to_numpy()
-    band = (max(modes["frequency_hz"].iloc[0] - MARGIN * half_hz[0], *(pl.band_hz[0] for pl in lists)),
-            min(modes["frequency_hz"].iloc[-1] + MARGIN * half_hz[-1], *(pl.band_hz[1] for pl in lists)))
+    band = (
+        max(modes["frequency_hz"].iloc[0] - MARGIN * half_hz[0], *(pl.band_hz[0] for pl in lists)),
+        min(modes["frequency_hz"].iloc[-1] + MARGIN * half_hz[-1], *(pl.band_hz[1] for pl in lists)),
+    )
     residues = np.empty((len(modes), len(table)), dtype=complex)
     std = np.empty((len(modes), len(table)))
     for j, pl in enumerate(lists):
@@ -363,4 +428,6 @@ def estimate_shapes(recordings_by_point: dict, points, configuration: str = "ori
         residues[:, j], std[:, j] = fit.residues[:, 0], fit.residue_std[:, 0]
     shapes, shape_std = normalised(residues, std)
     modes = modes.assign(mpc=mpc(residues), max_shape_std=shape_std.max(axis=1))
-    return ShapeEstimate(configuration, table, modes, residues, shapes, shape_std, band, peak_lists, tuple(notes))
+    return ShapeEstimate(
+        configuration, table, modes, residues, shapes, shape_std, band, peak_lists, tuple(notes)
+    )

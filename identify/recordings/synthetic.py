@@ -1,4 +1,5 @@
 """Virtual experiments: measurements computed by the model itself (paper section 2.2)."""
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -27,7 +28,9 @@ def grid_points(length: float, width: float, grid: tuple[int, int]) -> np.ndarra
     return np.column_stack([xx.ravel(), yy.ravel()])
 
 
-def _measured_shape(solution, mode: int, xy: np.ndarray, rng, noise_rel: float, hammer_std: float) -> np.ndarray:
+def _measured_shape(
+    solution, mode: int, xy: np.ndarray, rng, noise_rel: float, hammer_std: float
+) -> np.ndarray:
     """A mode's deflection at the grid as a roving-hammer test gives it: each hit lands
     ``hammer_std`` [m] (std per direction) off its grid point, the response carries noise
     of ``noise_rel`` of the largest amplitude (real and imaginary part each), and the
@@ -66,7 +69,8 @@ def synthetic_measurements(
     solver = truth.with_options(modes=max(modes, truth.options.modes))
     specimen = truth.specimen
     rng = np.random.default_rng(seed)
-    shape_rng = np.random.default_rng([seed, 1])  # its own stream: shapes leave the frequencies' noise as it was
+    # its own stream: shapes leave the frequencies' noise as it was
+    shape_rng = np.random.default_rng([seed, 1])
     rows, shapes = [], []
     xy = None if shape_grid is None else grid_points(specimen.length, specimen.width, shape_grid)
     for c in specimen.configurations:
@@ -87,8 +91,14 @@ def synthetic_measurements(
                 row["label"] = solution.labels[i]
             rows.append(row)
             if xy is not None:
-                shapes.append(ModeShape(c.name, float(noisy[i]), xy,
-                                        _measured_shape(solution, i, xy, shape_rng, shape_noise_rel, 1e-3 * hammer_std_mm)))
+                shapes.append(
+                    ModeShape(
+                        c.name,
+                        float(noisy[i]),
+                        xy,
+                        _measured_shape(solution, i, xy, shape_rng, shape_noise_rel, 1e-3 * hammer_std_mm),
+                    )
+                )
         if damping_std_rel is not None:
             zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
             noisy_zeta = zeta * (1 + damping_std_rel * rng.standard_normal(modes))
@@ -103,4 +113,6 @@ def synthetic_measurements(
     frame = frame.sort_values(["configuration", "frequency_hz"], kind="stable")
     frame["mode"] = frame.groupby("configuration").cumcount() + 1
     measurements = parse_measurements(frame, truth, "<synthetic>")
-    return replace(measurements, shapes=MeasuredShapes(tuple(shapes), "<synthetic>")) if shapes else measurements
+    return (
+        replace(measurements, shapes=MeasuredShapes(tuple(shapes), "<synthetic>")) if shapes else measurements
+    )

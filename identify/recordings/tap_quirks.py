@@ -10,6 +10,7 @@ combine them; :func:`real_like_plate` gives modal data shaped like a real plate'
 (constant modal density, damping 0.3-1.1 %, modal constants of both signs over two
 decades, a few modes with a node near the sensor).
 """
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -24,8 +25,9 @@ from .readers import Hit
 from .tap_simulation import Modes
 
 
-def real_like_plate(n_modes: int = 36, band_hz: tuple[float, float] = (60.0, 1900.0), seed: int = 0,
-                    above: int = 40) -> Modes:
+def real_like_plate(
+    n_modes: int = 36, band_hz: tuple[float, float] = (60.0, 1900.0), seed: int = 0, above: int = 40
+) -> Modes:
     """``n_modes`` modes spread over ``band_hz`` [Hz] (a plate's modal density is
     constant in frequency: evenly spaced with 30 % random shifts) and ``above`` more up
     to 12 kHz, damping ratios log-uniform in 0.3-1.1 %, modal constants log-uniform over
@@ -52,11 +54,15 @@ def with_hum(hit: Hit, mains_hz: float = 50.0, level_rel: float = 3e-3, harmonic
     ``level_rel`` of the response's peak, each harmonic half the previous [-]."""
     t = np.arange(len(hit.response)) / hit.sample_rate
     peak = np.abs(hit.response).max()
-    hum = sum(level_rel * peak * 0.5**k * np.sin(2 * np.pi * (k + 1) * mains_hz * t + k) for k in range(harmonics))
+    hum = sum(
+        level_rel * peak * 0.5**k * np.sin(2 * np.pi * (k + 1) * mains_hz * t + k) for k in range(harmonics)
+    )
     return replace(hit, response=hit.response + hum)
 
 
-def with_bounce(hit: Hit, frequency_hz: float = 6.0, level_rel: float = 0.05, damping_ratio: float = 0.05) -> Hit:
+def with_bounce(
+    hit: Hit, frequency_hz: float = 6.0, level_rel: float = 0.05, damping_ratio: float = 0.05
+) -> Hit:
     """The plate bouncing on its suspension: a slow damped swing from the hit on."""
     t = np.arange(len(hit.response)) / hit.sample_rate
     w = 2 * np.pi * frequency_hz
@@ -84,13 +90,19 @@ def clipped(hit: Hit, channel: str = "force", at_rel: float = 0.7) -> Hit:
 def write_rounded_csv(hit: Hit, path: str | Path, digits: int = 7) -> None:
     """``time_s,force,<quantity>`` with every value printed to ``digits`` significant
     digits (``%.7g``: what DAQ exports and ``numpy.savetxt`` write)."""
-    frame = pd.DataFrame({"time_s": np.arange(len(hit.response)) / hit.sample_rate, "force": hit.force,
-                          hit.quantity: hit.response})
+    frame = pd.DataFrame(
+        {
+            "time_s": np.arange(len(hit.response)) / hit.sample_rate,
+            "force": hit.force,
+            hit.quantity: hit.response,
+        }
+    )
     write_text(path, frame.to_csv(index=False, float_format=f"%.{digits}g"))
 
 
-def write_counts_csv(hit: Hit, path: str | Path, bits: int = 24, offset_counts: int = 1200,
-                     headroom: float = 1.5) -> None:
+def write_counts_csv(
+    hit: Hit, path: str | Path, bits: int = 24, offset_counts: int = 1200, headroom: float = 1.5
+) -> None:
     """``force,<quantity>`` as integer ADC counts of a ``bits``-bit converter on an
     ``offset_counts`` DC offset, full scale ``headroom`` x each channel's peak; no time
     column (read with ``sample_rate``)."""

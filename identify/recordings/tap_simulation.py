@@ -14,6 +14,7 @@ is added.  Writers put hits into CSV, WAV (float32) and UFF58 files for the read
 A roving-hammer test (:func:`roving_hits`) is such hits at each point of a grid, the
 modal constants taken from mode-shape functions where each hit lands.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
@@ -93,16 +94,22 @@ def exact_response(modes: Modes, force: np.ndarray, sample_rate: float) -> np.nd
     response = np.zeros_like(force)
     w = 2 * np.pi * modes.frequencies_hz
     for a, z, wr in zip(modes.residues, modes.damping_ratios, w):
-        b, den, _ = signal.cont2discrete(([a, 0.0, 0.0], [1.0, 2 * z * wr, wr**2]), 1 / sample_rate, method="foh")
+        b, den, _ = signal.cont2discrete(
+            ([a, 0.0, 0.0], [1.0, 2 * z * wr, wr**2]), 1 / sample_rate, method="foh"
+        )
         response += signal.lfilter(np.ravel(b), den, force)
     return response
 
 
-def simulate_hit(modes: Modes, rng: np.random.Generator, options: TapOptions = TapOptions(),
-                 source: str = "<simulated>") -> Hit:
+def simulate_hit(
+    modes: Modes, rng: np.random.Generator, options: TapOptions = TapOptions(), source: str = "<simulated>"
+) -> Hit:
     """One recorded hit: the modes jittered by ``options.jitter_rel``, noise on both channels."""
-    jittered = Modes(modes.frequencies_hz * (1 + options.jitter_rel * rng.standard_normal(len(modes.frequencies_hz))),
-                     modes.damping_ratios, modes.residues)
+    jittered = Modes(
+        modes.frequencies_hz * (1 + options.jitter_rel * rng.standard_normal(len(modes.frequencies_hz))),
+        modes.damping_ratios,
+        modes.residues,
+    )
     force = hammer_force(options)
     response = exact_response(jittered, force, options.sample_rate)
     noisy = [x + options.noise_rel * np.abs(x).max() * rng.standard_normal(len(x)) for x in (force, response)]
@@ -129,9 +136,11 @@ class Session:
         rng = np.random.default_rng(self.seed)
         out = []
         for i in range(self.n_hits):
-            o = replace(varied(self.options, rng, self.amplitude_spread),
-                        double_hit_ms=self.double_hit_ms if i in self.double_hits else None,
-                        duration_s=self.cut_short.get(i, self.options.duration_s))
+            o = replace(
+                varied(self.options, rng, self.amplitude_spread),
+                double_hit_ms=self.double_hit_ms if i in self.double_hits else None,
+                duration_s=self.cut_short.get(i, self.options.duration_s),
+            )
             out.append(simulate_hit(self.modes, rng, o, source=f"hit{i + 1}"))
         return out
 
@@ -139,13 +148,25 @@ class Session:
 def varied(options: TapOptions, rng: np.random.Generator, amplitude_spread: float) -> TapOptions:
     """One hit's options: the amplitude times exp(``amplitude_spread`` x a standard normal
     draw), the pre-trigger 0.5-1.5 x the options' (a hand-held hammer's hits differ)."""
-    return replace(options, amplitude=options.amplitude * np.exp(amplitude_spread * rng.standard_normal()),
-                   pretrigger_s=options.pretrigger_s * rng.uniform(0.5, 1.5))
+    return replace(
+        options,
+        amplitude=options.amplitude * np.exp(amplitude_spread * rng.standard_normal()),
+        pretrigger_s=options.pretrigger_s * rng.uniform(0.5, 1.5),
+    )
 
 
-def roving_hits(frequencies_hz, damping_ratios, shapes, sensor_mm: tuple[float, float], points: pd.DataFrame,
-                hits: int = 3, position_std_mm: float = 1.0, seed: int = 0, options: TapOptions = TapOptions(),
-                amplitude_spread: float = 0.3) -> dict[str, list[Hit]]:
+def roving_hits(
+    frequencies_hz,
+    damping_ratios,
+    shapes,
+    sensor_mm: tuple[float, float],
+    points: pd.DataFrame,
+    hits: int = 3,
+    position_std_mm: float = 1.0,
+    seed: int = 0,
+    options: TapOptions = TapOptions(),
+    amplitude_spread: float = 0.3,
+) -> dict[str, list[Hit]]:
     """A roving-hammer test: the sensor fixed at ``sensor_mm`` (x, y) [mm], ``hits`` hits
     at each point of ``points`` (columns point, x_mm, y_mm).  ``shapes``: one callable
     shape(x_mm, y_mm) per mode, mass-normalised, so that a hit at (x, y) has the modal
@@ -162,7 +183,9 @@ def roving_hits(frequencies_hz, damping_ratios, shapes, sensor_mm: tuple[float, 
             landed = (x, y) + position_std_mm * rng.standard_normal(2)
             constants = np.array([shape(*landed) for shape in shapes], dtype=float) * at_sensor
             modes = Modes(frequencies_hz, damping_ratios, constants)
-            hit = simulate_hit(modes, rng, varied(options, rng, amplitude_spread), source=f"{point}/hit{k + 1}")
+            hit = simulate_hit(
+                modes, rng, varied(options, rng, amplitude_spread), source=f"{point}/hit{k + 1}"
+            )
             out[str(point)].append(hit)
     return out
 
@@ -195,25 +218,43 @@ def write_wav(hit: Hit, path: str | Path, force_channel: bool = True) -> None:
         wavfile.write(tmp, round(hit.sample_rate), data.astype(np.float32))
 
 
-def _uff58(func_type: int, data, x_min: float, x_inc: float, ordinate: int, denominator: int, name: str) -> dict:
+def _uff58(
+    func_type: int, data, x_min: float, x_inc: float, ordinate: int, denominator: int, name: str
+) -> dict:
     import pyuff
 
     return pyuff.prepare_58(
-        binary=0, func_type=func_type, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3,
-        data=np.asarray(data), x=x_min + x_inc * np.arange(len(data)), abscissa_spacing=1,
-        abscissa_min=x_min, abscissa_inc=x_inc, abscissa_spec_data_type=17 if func_type == UFF_TIME else 18,
-        ordinate_spec_data_type=ordinate, orddenom_spec_data_type=denominator)
+        binary=0,
+        func_type=func_type,
+        id1=name,
+        rsp_node=1,
+        rsp_dir=3,
+        ref_node=1,
+        ref_dir=3,
+        data=np.asarray(data),
+        x=x_min + x_inc * np.arange(len(data)),
+        abscissa_spacing=1,
+        abscissa_min=x_min,
+        abscissa_inc=x_inc,
+        abscissa_spec_data_type=17 if func_type == UFF_TIME else 18,
+        ordinate_spec_data_type=ordinate,
+        orddenom_spec_data_type=denominator,
+    )
 
 
-def write_uff(path: str | Path, hit: Hit | None = None, frf: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+def write_uff(
+    path: str | Path, hit: Hit | None = None, frf: tuple[np.ndarray, np.ndarray] | None = None
+) -> None:
     """UFF58: a hit as two time records (force: data type 13, acceleration: 12), or an
     FRF ``(frequency_hz, H)`` as one record of function type 4."""
     import pyuff
 
     if hit is not None:
         dt = 1 / hit.sample_rate
-        sets = [_uff58(UFF_TIME, hit.force, 0.0, dt, 13, 0, "force"),
-                _uff58(UFF_TIME, hit.response, 0.0, dt, 12, 0, "acceleration")]
+        sets = [
+            _uff58(UFF_TIME, hit.force, 0.0, dt, 13, 0, "force"),
+            _uff58(UFF_TIME, hit.response, 0.0, dt, 12, 0, "acceleration"),
+        ]
     else:
         f, h = frf
         sets = [_uff58(UFF_FRF, h, f[0], f[1] - f[0], 12, 13, "accelerance")]

@@ -1,6 +1,7 @@
 """The diagnosis (``identify.diagnosis.diagnose.Diagnosis``) as text and as the notebook
 view, from what it is handed: the verdict, every round's candidates, the refit with the
 selection and the comparison's own report and tables."""
+
 from __future__ import annotations
 
 import math
@@ -18,55 +19,88 @@ from .rounding import percent, status_line, with_std
 def diagnosis_view(diagnosis) -> str:
     """The notebook view: the verdict, every round's candidates and the comparison's
     tables, drawn by the HTML report's code."""
-    rounds = [(f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
-               h.table(pd.DataFrame([{"effect": c.kind, "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
-                                      "BIC gain": finite_or_none(c.gain),
-                                      "status": c.status,
-                                      "parameters": ", ".join(f"{k} = {v:.4g}"
-                                                              for k, v in c.effect_values().items()),
-                                      "note": " ".join(x for x in (c.note, c.error) if x)}
-                                     for c in s.candidates]), "{:.4g}") + h.paragraph(f"-> {s.reason}"))
-              for s in diagnosis.steps]
+    rounds = [
+        (
+            f"Round {s.number}: from {' + '.join(s.selected_before) or 'the baseline'}",
+            h.table(
+                pd.DataFrame(
+                    [
+                        {
+                            "effect": c.kind,
+                            "RMS after [%]": 100 * c.rms_rel_error if c.fit else None,
+                            "BIC gain": finite_or_none(c.gain),
+                            "status": c.status,
+                            "parameters": ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items()),
+                            "note": " ".join(x for x in (c.note, c.error) if x),
+                        }
+                        for c in s.candidates
+                    ]
+                ),
+                "{:.4g}",
+            )
+            + h.paragraph(f"-> {s.reason}"),
+        )
+        for s in diagnosis.steps
+    ]
     good = diagnosis.explained
-    return h.view("Diagnosis", ("explained" if good else "not explained", diagnosis.verdict, good),
-                  rounds + diagnosis.comparison.sections())
+    return h.view(
+        "Diagnosis",
+        ("explained" if good else "not explained", diagnosis.verdict, good),
+        rounds + diagnosis.comparison.sections(),
+    )
 
 
 def diagnosis_text(diagnosis) -> str:
     """The diagnosis as text: the verdict, every round's candidates with their gain, status
     and parameters, the refit with the selection, then the comparison's report."""
     base = diagnosis.baseline.statistics
-    lines = ["== diagnosis ==", "", diagnosis.verdict, "",
-             f"baseline: RMS relative error {100 * diagnosis.baseline.rms_rel_error:.4f} %, "
-             f"reduced chi^2 {base.reduced_chi2:.3g}"]
+    lines = [
+        "== diagnosis ==",
+        "",
+        diagnosis.verdict,
+        "",
+        f"baseline: RMS relative error {100 * diagnosis.baseline.rms_rel_error:.4f} %, "
+        f"reduced chi^2 {base.reduced_chi2:.3g}",
+    ]
     if diagnosis.at_noise_level:
-        lines += ["no effect was refitted: the residual patterns below (a score test) show what each would "
-                  "explain"]
+        lines += [
+            "no effect was refitted: the residual patterns below (a score test) show what each would explain"
+        ]
     for step in diagnosis.steps:
         start = " + ".join(step.selected_before) or "the baseline"
         took = f", {step.seconds:.0f} s" if math.isfinite(step.seconds) else ""
-        lines += ["", f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %{took})",
-                  f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s} {'refit s':>7s}  "
-                  "status / parameters"]
+        lines += [
+            "",
+            f"round {step.number}: from {start} (RMS {100 * step.start.rms_rel_error:.4f} %{took})",
+            f"  {'effect':17s} {'RMS after %':>11s} {'BIC gain':>9s} {'gain / c':>9s} {'refit s':>7s}  "
+            "status / parameters",
+        ]
         for c in step.candidates:
             values = ", ".join(f"{k} = {v:.4g}" for k, v in c.effect_values().items())
             gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
             status = c.status if c.fit else c.status.replace("_", " ")
             mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
-            lines.append(f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain} {c.added.seconds:7.0f}  {status}  "
-                         f"{values}{mark}".rstrip())
+            lines.append(
+                f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain} {c.added.seconds:7.0f}  {status}  "
+                f"{values}{mark}".rstrip()
+            )
             if not c.fit:
                 lines.append(f"  {'':17s} {c.error}")
         if step.skipped:
             refined = {r for k in step.skipped for r in effect(k).refines}
-            lines.append(f"  not tried: {', '.join(step.skipped)} (refines {' or '.join(sorted(refined))}, "
-                         "which did not pay)")
+            lines.append(
+                f"  not tried: {', '.join(step.skipped)} (refines {' or '.join(sorted(refined))}, "
+                "which did not pay)"
+            )
         lines.append(f"  -> {step.reason}")
     final = diagnosis.final
     if final is not None:
-        lines += ["", f"refit with {' + '.join(c.kind for c in diagnosis.selected)}",
-                  f"  {status_line(final.status.value, final.message)}",
-                  f"  RMS relative error {percent(final.rms_rel_error, 3)}"]
+        lines += [
+            "",
+            f"refit with {' + '.join(c.kind for c in diagnosis.selected)}",
+            f"  {status_line(final.status.value, final.message)}",
+            f"  RMS relative error {percent(final.rms_rel_error, 3)}",
+        ]
         added = [p for p in final.parameters if p not in diagnosis.baseline.parameters]
         for p in added:
             shown = with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])
@@ -74,9 +108,12 @@ def diagnosis_text(diagnosis) -> str:
         notes = [text for _, text in final.effect_notes]
         lines += [f"  - {text}" for text in notes]
     if diagnosis.above_start:
-        lines += ["", "refits that ended above the fit they were added to (where its effect vanishes each is "
-                      "that fit, so the refit failed: a start, or on a peak list a matching made for the fit "
-                      f"without the effect): {', '.join(diagnosis.above_start)}"]
+        lines += [
+            "",
+            "refits that ended above the fit they were added to (where its effect vanishes each is "
+            "that fit, so the refit failed: a start, or on a peak list a matching made for the fit "
+            f"without the effect): {', '.join(diagnosis.above_start)}",
+        ]
     if math.isfinite(diagnosis.seconds):
         lines += ["", f"({diagnosis.seconds:.1f} s)"]
     return "\n".join(lines) + "\n\n" + diagnosis.comparison.report()

@@ -2,6 +2,7 @@
 (specimen, the spec and measurement files with their SHA-256, date, tool version), the
 sections of the text report as tables, and the figures embedded (base64 PNG), so one
 file opens in any browser without a server or the files beside it."""
+
 from __future__ import annotations
 
 import base64
@@ -72,38 +73,49 @@ def blank_missing(frame: pd.DataFrame, blank: str = "") -> pd.DataFrame:
     float columns keep NaN for the writer's own ``na_rep``."""
     out = frame.copy()
     for column in out.columns[out.dtypes == object]:
-        out[column] = out[column].map(lambda v: blank if v is None or (isinstance(v, float) and v != v) else v)
+        out[column] = out[column].map(
+            lambda v: blank if v is None or (isinstance(v, float) and v != v) else v
+        )
     return out
 
 
 def table(frame: pd.DataFrame, float_format: str = "{:.6g}") -> str:
     """A data frame as an HTML table (numbers formatted, text escaped, a value that does
     not exist (NaN, None) a blank cell)."""
-    return blank_missing(frame).to_html(index=False, escape=True, na_rep="", border=0,
-                         float_format=lambda x: float_format.format(x))
+    return blank_missing(frame).to_html(
+        index=False, escape=True, na_rep="", border=0, float_format=lambda x: float_format.format(x)
+    )
 
 
 def figure(path: str | Path, caption: str) -> str:
     """A PNG embedded as a data URI, with its caption."""
     data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
-    return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
-            f"<figcaption class=\"small\">{html.escape(caption)}</figcaption></figure>")
+    return (
+        f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
+        f'<figcaption class="small">{html.escape(caption)}</figcaption></figure>'
+    )
 
 
 def notes(items) -> str:
     items = list(items)
-    return "<ul class=\"notes\">" + "".join(f"<li>{html.escape(str(i))}</li>" for i in items) + "</ul>" if items \
+    return (
+        '<ul class="notes">' + "".join(f"<li>{html.escape(str(i))}</li>" for i in items) + "</ul>"
+        if items
         else "<p>none</p>"
+    )
 
 
-def document(title: str, header: dict[str, str], status: tuple[str, bool] | None,
-             sections: list[tuple[str, str]]) -> str:
+def document(
+    title: str, header: dict[str, str], status: tuple[str, bool] | None, sections: list[tuple[str, str]]
+) -> str:
     """The whole page: title, header table, a status box (one status line, good?), then
     (heading, html) sections."""
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in header.items())
-    parts = [f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
-             f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>",
-             f"<table class=\"header\">{rows}</table>"]
+    parts = [
+        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
+        f"<style>{STYLE}</style></head><body><h1>{html.escape(title)}</h1>",
+        f'<table class="header">{rows}</table>',
+    ]
     if status is not None:
         parts.append(status_box(*status))
     parts += [f"<h2>{html.escape(heading)}</h2>{body}" for heading, body in sections]
@@ -115,8 +127,10 @@ def status_box(name: str, message: str, good: bool) -> str:
     """How an analysis ended, green when it may be used as it stands, amber otherwise: one
     status line (the status not repeated when the message starts with it)."""
     head, colon, rest = status_line(name, message).partition(": ")
-    return (f"<div class=\"status {'converged' if good else 'warning'}\"><strong>{html.escape(head)}</strong>"
-            f"{colon}{html.escape(rest)}</div>")
+    return (
+        f'<div class="status {"converged" if good else "warning"}"><strong>{html.escape(head)}</strong>'
+        f"{colon}{html.escape(rest)}</div>"
+    )
 
 
 def paragraph(text: str) -> str:
@@ -127,7 +141,7 @@ def view(title: str, status: tuple[str, str, bool] | None, sections: list[tuple[
     """A notebook view (``_repr_html_``): the same status box and section tables as the
     report page, in a block styled only inside itself."""
     scoped = "\n".join(f".layer-id {rule}" for rule in VIEW_STYLE.strip().splitlines())
-    parts = [f"<div class=\"layer-id\"><style>{scoped}</style><h3>{html.escape(title)}</h3>"]
+    parts = [f'<div class="layer-id"><style>{scoped}</style><h3>{html.escape(title)}</h3>']
     if status is not None:
         parts.append(status_box(*status))
     parts += [f"<h4>{html.escape(heading)}</h4>{body}" for heading, body in sections]
@@ -135,4 +149,14 @@ def view(title: str, status: tuple[str, str, bool] | None, sections: list[tuple[
     return "\n".join(parts)
 
 
-__all__ = ["provenance", "table", "figure", "notes", "document", "file_digest", "status_box", "paragraph", "view"]
+__all__ = [
+    "provenance",
+    "table",
+    "figure",
+    "notes",
+    "document",
+    "file_digest",
+    "status_box",
+    "paragraph",
+    "view",
+]

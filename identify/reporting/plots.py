@@ -1,6 +1,7 @@
 """Plots of an identification and of model against measurement: convergence, residuals,
 residuals with mode shapes, the point-mass map, the error per mode before and after an
 effect is added.  Drawn with ``fem.plotting`` (never the global matplotlib state)."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -40,8 +41,14 @@ def plot_convergence(result, path: Path) -> Path:
                 continue
             unit = UNITS[p.kind][0]
             on = ax if unit == "GPa" else (right := right or ax.twinx())
-            on.plot(iterations, [display(p, v) for v in history[:, j]], marker="o", ms=3,
-                    linestyle="-" if on is ax else "--", label=f"{p.kind}" + (f" [{unit}]" if unit else ""))
+            on.plot(
+                iterations,
+                [display(p, v) for v in history[:, j]],
+                marker="o",
+                ms=3,
+                linestyle="-" if on is ax else "--",
+                label=f"{p.kind}" + (f" [{unit}]" if unit else ""),
+            )
         ax.set_title(target, fontsize=10)
         ax.set_xlabel("iteration")
         ax.set_ylabel("modulus [GPa]")
@@ -78,11 +85,25 @@ def plot_residuals(result, path: Path) -> Path:
     for name, colour in colours.items():
         mask = (rows["configuration"] == name).to_numpy() & matched
         error = rows["rel_error"].to_numpy(dtype=float, na_value=np.nan)
-        ax.errorbar(x[mask], 100 * error[mask], yerr=None if std is None else std[mask],
-                    fmt="o", color=colour, capsize=3, label=name)
+        ax.errorbar(
+            x[mask],
+            100 * error[mask],
+            yerr=None if std is None else std[mask],
+            fmt="o",
+            color=colour,
+            capsize=3,
+            label=name,
+        )
     if (~matched).any():  # a left-out peak has no error; it is drawn at its nearest mode's
         nearest = result.peaks.model_hz / measured - 1
-        ax.plot(x[~matched], 100 * nearest[~matched], "o", mfc="none", color="grey", label="left out (nearest mode)")
+        ax.plot(
+            x[~matched],
+            100 * nearest[~matched],
+            "o",
+            mfc="none",
+            color="grey",
+            label="left out (nearest mode)",
+        )
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(x)
     ax.set_xticklabels(_row_names(rows, rows["label"].tolist()), fontsize=6.5, rotation=90)
@@ -103,13 +124,18 @@ def plot_mode_shapes(result, path: Path) -> Path:
     n = int(rows.groupby("configuration").size().max())
     solver = solving_model(result.model, result.measurements)
     aspect = result.specimen.width / result.specimen.length
-    fig, axes = new_figure(len(configurations), n, figsize=(1.9 * n + 0.5, (1.9 * aspect + 0.6) * len(configurations)),
-                           squeeze=False)
+    fig, axes = new_figure(
+        len(configurations),
+        n,
+        figsize=(1.9 * n + 0.5, (1.9 * aspect + 0.6) * len(configurations)),
+        squeeze=False,
+    )
     for r, name in enumerate(configurations):
         solution = solver.solve(name)
         units = solution.units
         w = solution.modes.shapes.reshape(units.mesh.n_nodes, -1, solution.modes.shapes.shape[1])[
-            :, units.element_type.NODE_DOFS.index("w"), :]
+            :, units.element_type.NODE_DOFS.index("w"), :
+        ]
         grid = (units.mesh.ny + 1, units.mesh.nx + 1)
         group = rows[rows["configuration"] == name]
         for k in range(n):
@@ -120,8 +146,11 @@ def plot_mode_shapes(result, path: Path) -> Path:
             mode = int(group["mode"].iloc[k])
             shape = w[:, mode - 1].reshape(grid)
             _draw_shape(ax, units.mesh, shape)
-            ax.set_title(f"{name if k == 0 else ''}\nmode {mode} {group['label'].iloc[k]}\n"
-                         f"{group['model_hz'].iloc[k]:.1f} Hz", fontsize=7)
+            ax.set_title(
+                f"{name if k == 0 else ''}\nmode {mode} {group['label'].iloc[k]}\n"
+                f"{group['model_hz'].iloc[k]:.1f} Hz",
+                fontsize=7,
+            )
     return save_figure(fig, path, dpi=100)
 
 
@@ -139,8 +168,13 @@ def plot_comparison(comparison, model: SpecimenModel, path: Path) -> Path:
     table = comparison.table
     configurations = list(dict.fromkeys(table["configuration"]))
     n_modes = int(table.groupby("configuration").size().max())
-    fig, axes = new_figure(2 * len(configurations), n_modes, figsize=(1.6 * n_modes + 1, 3.2 * len(configurations)),
-                           squeeze=False, gridspec_kw={"height_ratios": [1, 1.4] * len(configurations)})
+    fig, axes = new_figure(
+        2 * len(configurations),
+        n_modes,
+        figsize=(1.6 * n_modes + 1, 3.2 * len(configurations)),
+        squeeze=False,
+        gridspec_kw={"height_ratios": [1, 1.4] * len(configurations)},
+    )
     pairings = comparison.fitted.pairings if comparison.fitted is not None else {}
     for row, name in enumerate(configurations):
         rows = table[table["configuration"] == name]
@@ -155,10 +189,14 @@ def plot_comparison(comparison, model: SpecimenModel, path: Path) -> Path:
             if k >= len(rows):
                 ax_bar.axis("off")
                 continue
-            shape = solution.modes.shapes[:, indices[k]].reshape(units.mesh.n_nodes, -1)[:, w_index].reshape(grid)
+            shape = (
+                solution.modes.shapes[:, indices[k]].reshape(units.mesh.n_nodes, -1)[:, w_index].reshape(grid)
+            )
             _draw_shape(ax_shape, units.mesh, shape)
-            ax_shape.set_title(f"{name}\nmode {rows['mode'].iloc[k]}" if k == 0 else f"mode {rows['mode'].iloc[k]}",
-                               fontsize=8)
+            ax_shape.set_title(
+                f"{name}\nmode {rows['mode'].iloc[k]}" if k == 0 else f"mode {rows['mode'].iloc[k]}",
+                fontsize=8,
+            )
             err = 100 * rows["rel_error"].iloc[k]
             ax_bar.bar([0], [err], color="tab:red" if err > 0 else "tab:blue")
             ax_bar.axhline(0, color="k", lw=0.6)
@@ -193,18 +231,35 @@ def plot_before_after(before, after, label: str, path: Path) -> Path:
     """Signed error per measured mode [%] without and with the effect, with the
     measurement std as a band (a peak either fit left out has no bar there)."""
     rows = before_after_table(before, after)
-    names = [f"{c}\nmode {'-' if m is None else m}" for c, m in zip(rows["configuration"], rows["mode"], strict=True)]
+    names = [
+        f"{c}\nmode {'-' if m is None else m}"
+        for c, m in zip(rows["configuration"], rows["mode"], strict=True)
+    ]
     x = np.arange(len(names))
     fig, ax = new_figure(figsize=(max(7.0, 0.5 * len(names) + 2), 4.2))
-    for shift, column, text, result in ((-0.2, "rel_error_before", "baseline", before),
-                                        (0.2, "rel_error_after", f"with {label}", after)):
+    for shift, column, text, result in (
+        (-0.2, "rel_error_before", "baseline", before),
+        (0.2, "rel_error_after", f"with {label}", after),
+    ):
         error = rows[column].to_numpy(dtype=float, na_value=np.nan)
-        ax.bar(x + shift, np.nan_to_num(100 * error), 0.4, label=f"{text} (RMS {100 * result.rms_rel_error:.3g} %)")
+        ax.bar(
+            x + shift,
+            np.nan_to_num(100 * error),
+            0.4,
+            label=f"{text} (RMS {100 * result.rms_rel_error:.3g} %)",
+        )
     if before.measurements.has_std:
         table = before.peaks.measurements.table if before.peaks is not None else before.measurements.table
         std = 100 * table["std_hz"] / table["frequency_hz"]
-        ax.errorbar(x, np.zeros_like(x, dtype=float), yerr=std, fmt="none", ecolor="k", capsize=3,
-                    label="measurement std")
+        ax.errorbar(
+            x,
+            np.zeros_like(x, dtype=float),
+            yerr=std,
+            fmt="none",
+            ecolor="k",
+            capsize=3,
+            label="measurement std",
+        )
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(x)
     ax.set_xticklabels(names, fontsize=7, rotation=90)

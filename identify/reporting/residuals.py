@@ -1,6 +1,7 @@
 """The residual rows of a fit or a comparison: measured against model per configuration
 and mode.  Formats what it is handed (a fit result, duck-typed: ``peaks``,
 ``measurements``, ``model_hz``, ``pairings``, ``model``); imports no result module."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -15,11 +16,15 @@ from ..measurements import MeasuredShapes, Measurements
 def residual_table(measurements: Measurements, model_hz: np.ndarray) -> pd.DataFrame:
     """Per measured mode: measured and model frequency, relative error, error / std."""
     table = measurements.table
-    out = pd.DataFrame({
-        "configuration": table["configuration"], "mode": table["mode"],
-        "measured_hz": table["frequency_hz"], "model_hz": model_hz,
-        "rel_error": model_hz / table["frequency_hz"] - 1,
-    })
+    out = pd.DataFrame(
+        {
+            "configuration": table["configuration"],
+            "mode": table["mode"],
+            "measured_hz": table["frequency_hz"],
+            "model_hz": model_hz,
+            "rel_error": model_hz / table["frequency_hz"] - 1,
+        }
+    )
     if measurements.has_std:
         out["error_over_std"] = (out["model_hz"] - out["measured_hz"]) / table["std_hz"]
     return out
@@ -55,8 +60,9 @@ def _paired_rows(result) -> pd.DataFrame:
     return out
 
 
-def shape_correlations(model, measurements: Measurements, rows: pd.DataFrame,
-                       shapes: MeasuredShapes | None) -> dict[str, ShapeCorrelation]:
+def shape_correlations(
+    model, measurements: Measurements, rows: pd.DataFrame, shapes: MeasuredShapes | None
+) -> dict[str, ShapeCorrelation]:
     """Per configuration, the measured ``shapes`` against the modes of ``model`` as the
     fit of ``measurements`` solves it, each shape's peak paired as the residual ``rows``
     say (``mode``: the model mode, 1-based; None or 0 for a peak left out)."""
@@ -67,8 +73,11 @@ def shape_correlations(model, measurements: Measurements, rows: pd.DataFrame,
     for name in dict.fromkeys(rows["configuration"]):
         mine = rows[rows["configuration"] == name]
         found = [(shapes.of(name, f), m) for f, m in zip(mine["measured_hz"], mine["mode"])]
-        found = [(shape, int(m) - 1 if m is not None and not pd.isna(m) and m > 0 else -1)
-                 for shape, m in found if shape is not None]
+        found = [
+            (shape, int(m) - 1 if m is not None and not pd.isna(m) and m > 0 else -1)
+            for shape, m in found
+            if shape is not None
+        ]
         if found:
             solution = solver.solve(name)
             paired = np.array([m if m < len(solution.frequencies_hz) else -1 for _, m in found])
@@ -81,10 +90,14 @@ def with_macs(rows: pd.DataFrame, correlations: dict[str, ShapeCorrelation]) -> 
     model mode; None where the peak has no shape or was left out), when shapes were given."""
     if not correlations:
         return rows
-    macs = {(c.configuration, f): m for c in correlations.values() for f, m in zip(c.measured_hz, c.paired_mac)}
+    macs = {
+        (c.configuration, f): m for c in correlations.values() for f, m in zip(c.measured_hz, c.paired_mac)
+    }
     out = rows.copy()
-    out["mac"] = [None if pd.isna(m := macs.get((name, f), np.nan)) else float(m)
-                  for name, f in zip(rows["configuration"], rows["measured_hz"])]
+    out["mac"] = [
+        None if pd.isna(m := macs.get((name, f), np.nan)) else float(m)
+        for name, f in zip(rows["configuration"], rows["measured_hz"])
+    ]
     return out
 
 
@@ -106,7 +119,9 @@ def _model_labels(result, rows: pd.DataFrame) -> list[str]:
     out = []
     for name, mode in zip(rows["configuration"], rows["mode"]):
         known = labels.get(name, ())
-        out.append(known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else "")
+        out.append(
+            known[int(mode) - 1] if mode is not None and not pd.isna(mode) and 0 < mode <= len(known) else ""
+        )
     return out
 
 
@@ -116,8 +131,9 @@ def _row_errors(result) -> tuple[pd.DataFrame, np.ndarray]:
     if result.peaks is not None:
         table = result.peaks.measurements.table
         error = result.peaks.model_hz / table["frequency_hz"].to_numpy() - 1
-        return table, np.array([e if m else None for e, m in zip(error, result.peaks.matched, strict=True)],
-                               dtype=object)
+        return table, np.array(
+            [e if m else None for e, m in zip(error, result.peaks.matched, strict=True)], dtype=object
+        )
     return result.measurements.table, result.rel_error.astype(object)
 
 
@@ -132,10 +148,22 @@ def before_after_table(before, after) -> pd.DataFrame:
         modes = pd.Series([int(m) if m > 0 else None for m in after.peaks.modes], dtype=object)
     else:
         modes = table["mode"].to_numpy()
-    return pd.DataFrame({"configuration": table["configuration"].to_numpy(), "mode": modes,
-                         "measured_hz": table["frequency_hz"].to_numpy(), "rel_error_before": error_before,
-                         "rel_error_after": error_after})
+    return pd.DataFrame(
+        {
+            "configuration": table["configuration"].to_numpy(),
+            "mode": modes,
+            "measured_hz": table["frequency_hz"].to_numpy(),
+            "rel_error_before": error_before,
+            "rel_error_after": error_after,
+        }
+    )
 
 
-__all__ = ["before_after_table", "fit_correlations", "fit_residuals", "residual_table", "shape_correlations",
-           "with_macs"]
+__all__ = [
+    "before_after_table",
+    "fit_correlations",
+    "fit_residuals",
+    "residual_table",
+    "shape_correlations",
+    "with_macs",
+]

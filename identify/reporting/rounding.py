@@ -5,6 +5,7 @@ uncertainty (``67.8287 +- 1.15955`` GPa reads ``67.8 ± 1.2 GPa (1.7 %)``), rela
 errors in per cent, and a status once.  Text and HTML reports both use these helpers;
 the JSON and CSV outputs keep full precision.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,7 +22,7 @@ def _decimals(std: float, digits: int = STD_DIGITS) -> int:
 def _fixed(x: float, decimals: int) -> str:
     if decimals >= 0:
         return f"{x:.{decimals}f}"
-    step = 10.0 ** -decimals
+    step = 10.0**-decimals
     return f"{round(x / step) * step:.0f}"
 
 

@@ -1,6 +1,7 @@
 """Plots of measured mode shapes against the model's: the MAC matrices, the measured
 nodal lines over the model's, and the maps of where on the plate the shapes disagree.
 Formats the shape correlations it is handed (``engine.pairing.ShapeCorrelation``)."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -16,16 +17,20 @@ def shape_lines(correlations: dict) -> list[str]:
     """Text lines: per configuration the paired MACs and where the shapes fail most."""
     lines = []
     for name, c in correlations.items():
-        macs = ", ".join(f"{f:.6g} Hz {m:.3f}" if np.isfinite(m) else f"{f:.6g} Hz -"
-                         for f, m in zip(c.measured_hz, c.paired_mac))
+        macs = ", ".join(
+            f"{f:.6g} Hz {m:.3f}" if np.isfinite(m) else f"{f:.6g} Hz -"
+            for f, m in zip(c.measured_hz, c.paired_mac)
+        )
         lines.append(f"  {name}: MAC with the paired mode: {macs}")
         if c.worst_point is None:
             lines.append(f"  {name}: no peak with a shape is paired: no map of where the shapes disagree")
             continue
         x, y = 1e3 * c.worst_point
-        lines.append(f"  {name}: shapes disagree most at ({x:.0f}, {y:.0f}) mm (residual "
-                     f"{np.nanmax(c.residual):.2f} of the measured amplitude there; COMAC lowest "
-                     f"{np.nanmin(c.comac):.3f})")
+        lines.append(
+            f"  {name}: shapes disagree most at ({x:.0f}, {y:.0f}) mm (residual "
+            f"{np.nanmax(c.residual):.2f} of the measured amplitude there; COMAC lowest "
+            f"{np.nanmin(c.comac):.3f})"
+        )
     return lines
 
 
@@ -66,8 +71,10 @@ def plot_shape_maps(correlations: dict, length: float, width: float, path: Path)
     fig, axes = new_figure(2, len(names), figsize=(4.0 * len(names), 2 * (3.4 * aspect + 0.9)), squeeze=False)
     for k, name in enumerate(names):
         c = correlations[name]
-        for ax, values, title, cmap in ((axes[0, k], c.residual, "shape residual", "magma_r"),
-                                        (axes[1, k], c.comac, "COMAC", "viridis")):
+        for ax, values, title, cmap in (
+            (axes[0, k], c.residual, "shape residual", "magma_r"),
+            (axes[1, k], c.comac, "COMAC", "viridis"),
+        ):
             x, y = 1e3 * c.xy[:, 0], 1e3 * c.xy[:, 1]
             drawn = _filled(ax, x, y, values, cmap)
             ax.plot([0, 1e3 * length, 1e3 * length, 0, 0], [0, 0, 1e3 * width, 1e3 * width, 0], "k-", lw=0.8)
@@ -94,7 +101,9 @@ def plot_shape_point_map(shape_map, correlations: dict, length: float, width: fl
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_aspect("equal")
-    ax.set_title(f"where would a point mass explain the shapes? ({1e3 * hint['mass_kg']:.2g} g at the +)", fontsize=9)
+    ax.set_title(
+        f"where would a point mass explain the shapes? ({1e3 * hint['mass_kg']:.2g} g at the +)", fontsize=9
+    )
     return save_figure(fig, path, dpi=100)
 
 
@@ -107,7 +116,9 @@ def plot_measured_shapes(estimate, path: Path) -> Path:
     aspect = max(np.ptp(y), 1.0) / max(np.ptp(x), 1.0)
     columns = min(n, 5)
     rows = -(-n // columns)
-    fig, axes = new_figure(rows, columns, figsize=(2.3 * columns + 0.4, (2.3 * aspect + 0.7) * rows), squeeze=False)
+    fig, axes = new_figure(
+        rows, columns, figsize=(2.3 * columns + 0.4, (2.3 * aspect + 0.7) * rows), squeeze=False
+    )
     for k, ax in enumerate(axes.ravel()):
         ax.axis("off")
         if k >= n:
@@ -121,8 +132,10 @@ def plot_measured_shapes(estimate, path: Path) -> Path:
         ax.plot(x, y, "k.", ms=2)
         ax.set_aspect("equal")
         mode = estimate.modes.iloc[k]
-        ax.set_title(f"{mode['frequency_hz']:.1f} Hz\nMPC {mode['mpc']:.3f}, {int(mode['points_found'])} points",
-                     fontsize=7)
+        ax.set_title(
+            f"{mode['frequency_hz']:.1f} Hz\nMPC {mode['mpc']:.3f}, {int(mode['points_found'])} points",
+            fontsize=7,
+        )
     return save_figure(fig, path, dpi=100)
 
 
@@ -143,7 +156,9 @@ def plot_nodal_lines(correlations: dict, solutions: dict, path: Path) -> Path:
     n = max(len(c.measured_hz) for c in correlations.values())
     mesh = next(iter(solutions.values())).units.mesh
     aspect = mesh.width / mesh.length
-    fig, axes = new_figure(len(names), n, figsize=(1.9 * n + 0.5, (1.9 * aspect + 0.7) * len(names)), squeeze=False)
+    fig, axes = new_figure(
+        len(names), n, figsize=(1.9 * n + 0.5, (1.9 * aspect + 0.7) * len(names)), squeeze=False
+    )
     for r, name in enumerate(names):
         c, solution = correlations[name], solutions[name]
         units = solution.units
@@ -162,16 +177,31 @@ def plot_nodal_lines(correlations: dict, solutions: dict, path: Path) -> Path:
             model = shape_at_points(solution, shapes[k])[:, j]
             measured = shapes[k].amplitude * np.exp(-1j * np.angle(np.vdot(model, shapes[k].amplitude)))
             try:
-                ax.tricontour(*shapes[k].xy.T, measured.real, levels=[0], colors="tab:red",
-                              linestyles="--", linewidths=1.0)
+                ax.tricontour(
+                    *shapes[k].xy.T,
+                    measured.real,
+                    levels=[0],
+                    colors="tab:red",
+                    linestyles="--",
+                    linewidths=1.0,
+                )
             except (ValueError, RuntimeError):
                 pass  # too few points for a line
             ax.plot(*shapes[k].xy.T, "k.", ms=1.5)
             ax.set_aspect("equal")
-            ax.set_title(f"{name if k == 0 else ''}\n{c.measured_hz[k]:.1f} Hz: mode {j + 1}\n"
-                         f"MAC {c.paired_mac[k]:.3f}", fontsize=7)
+            ax.set_title(
+                f"{name if k == 0 else ''}\n{c.measured_hz[k]:.1f} Hz: mode {j + 1}\n"
+                f"MAC {c.paired_mac[k]:.3f}",
+                fontsize=7,
+            )
     return save_figure(fig, path, dpi=100)
 
 
-__all__ = ["plot_mac_matrices", "plot_measured_shapes", "plot_nodal_lines", "plot_shape_maps", "plot_shape_point_map",
-           "shape_lines"]
+__all__ = [
+    "plot_mac_matrices",
+    "plot_measured_shapes",
+    "plot_nodal_lines",
+    "plot_shape_maps",
+    "plot_shape_point_map",
+    "shape_lines",
+]

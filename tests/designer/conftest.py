@@ -1,6 +1,7 @@
 """Fixtures of the test-planner tests: the paper's plate (Table 1 values, 5 modes per
 plate) and design spaces on it.  Solved configurations are cached by content in the
 test process, so every test after the first reuses them."""
+
 import copy
 import tomllib
 from dataclasses import replace
@@ -15,9 +16,12 @@ PAPER_TOML = DATA / "paper_plate_table1.toml"
 #: The acceptance space: brass / aluminium / steel x 0.5-3 mm x top / bottom (36 candidates);
 #: the lab's mass limit of 600 g keeps the 3 mm brass (575 g), which the default limit
 #: (3 x the specimen's 149 g) would leave out.
-ACCEPTANCE_DESIGN = {"materials": ["brass", "aluminium", "steel_stock"],
-                     "thicknesses_mm": [0.5, 1.0, 1.5, 2.0, 2.5, 3.0], "placements": ["top", "bottom"],
-                     "max_added_mass_g": 600.0}
+ACCEPTANCE_DESIGN = {
+    "materials": ["brass", "aluminium", "steel_stock"],
+    "thicknesses_mm": [0.5, 1.0, 1.5, 2.0, 2.5, 3.0],
+    "placements": ["top", "bottom"],
+    "max_added_mass_g": 600.0,
+}
 
 
 def paper_data() -> dict:

@@ -13,6 +13,7 @@ An unsymmetric (bonded) laminate is modelled with the reduced bending stiffness
 D* = D - B A^-1 B, the bending stiffness with the membrane forces relaxed: an
 approximation for a free plate (exact when the in-plane forces vanish everywhere).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -40,8 +41,15 @@ class RitzPlate:
     6) [N m] and mass per area ``mass_per_area`` [kg/m^2], with ``point_masses``
     (mass [kg], x, y [m]) moving with w."""
 
-    def __init__(self, length: float, width: float, D: np.ndarray, mass_per_area: float, order: int = 16,
-                 point_masses=()):
+    def __init__(
+        self,
+        length: float,
+        width: float,
+        D: np.ndarray,
+        mass_per_area: float,
+        order: int = 16,
+        point_masses=(),
+    ):
         self.length, self.width, self.order = length, width, order
         with threadpool_limits(1, "blas"):  # small dense algebra: threads only add overhead on busy cores
             self._solve(D, mass_per_area, point_masses)
@@ -57,15 +65,21 @@ class RitzPlate:
             return np.einsum("im,jn->ijmn", a, b).reshape(q * q, order * order)
 
         phi = product(P, P)
-        curvatures = np.stack([product(ddP * sx**2, P), product(P, ddP * sy**2), 2 * product(dP * sx, dP * sy)],
-                              axis=1)  # (points, 3, dofs)
+        curvatures = np.stack(
+            [product(ddP * sx**2, P), product(P, ddP * sy**2), 2 * product(dP * sx, dP * sy)], axis=1
+        )  # (points, 3, dofs)
         area_weight = np.outer(weights, weights).ravel() * length * width / 4
         moments = np.einsum("ij,pjb->pib", D, curvatures)  # D kappa per basis function
-        K = (curvatures * area_weight[:, None, None]).reshape(-1, order * order).T @ moments.reshape(-1, order * order)
+        K = (curvatures * area_weight[:, None, None]).reshape(-1, order * order).T @ moments.reshape(
+            -1, order * order
+        )
         M = mass_per_area * (phi * area_weight[:, None]).T @ phi
         for mass, x, y in point_masses:  # kinetic energy m w(x, y)^2 / 2 (its in-plane motion left out)
-            at = np.einsum("m,n->mn", _tables(np.array([2 * x / length - 1]), order)[0][0],
-                           _tables(np.array([2 * y / width - 1]), order)[0][0]).ravel()
+            at = np.einsum(
+                "m,n->mn",
+                _tables(np.array([2 * x / length - 1]), order)[0][0],
+                _tables(np.array([2 * y / width - 1]), order)[0][0],
+            ).ravel()
             M = M + mass * np.outer(at, at)
         K = (K + K.T) / 2
         eigenvalues, vectors = sla.eigh(K, M)

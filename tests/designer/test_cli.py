@@ -1,5 +1,6 @@
 """plan-tests: check / recommend / sweep, their JSON contracts (docs/json.md), exit
 statuses, the sweep's report folder, and a sweep's numbers against a direct check."""
+
 import io
 import json
 
@@ -38,8 +39,9 @@ def test_check_single_plate_is_infeasible_exit_1(capsys):
 
 
 def test_check_bad_input_exit_2_one_line(capsys, tmp_path):
-    data = PAPER_TOML.read_text().replace('materials = ["brass", "aluminium", "steel_stock"]',
-                                         'materials = ["brass", "unobtainium"]')
+    data = PAPER_TOML.read_text().replace(
+        'materials = ["brass", "aluminium", "steel_stock"]', 'materials = ["brass", "unobtainium"]'
+    )
     bad = tmp_path / "bad.toml"
     bad.write_text(data)
     status, _, err = run(capsys, "check", bad)
@@ -59,7 +61,9 @@ def test_recommend_json_best_first(capsys):
     # 24 candidates, of which the default mass limit (3 x the specimen's 148.7 g = 446.2 g) leaves out
     # the 3 mm brass (575.1 g) and steel (531.2 g) plates on either face: C(20, 2) sets
     assert data["search"]["method"] == "exhaustive" and data["search"]["sets"] == 190
-    assert data["limits"]["max_added_mass_g"] == pytest.approx(3 * 0.0225 * (2 * 2700 * 0.2 + 7900 * 0.7), rel=1e-12)
+    assert data["limits"]["max_added_mass_g"] == pytest.approx(
+        3 * 0.0225 * (2 * 2700 * 0.2 + 7900 * 0.7), rel=1e-12
+    )
     assert data["limits"]["defaults"] == ["mass", "thickness"] and len(data["search"]["excluded"]) == 4
 
 
@@ -81,8 +85,21 @@ def test_recommend_refine_json(capsys):
 @pytest.fixture(scope="module")
 def swept(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweep")
-    assert main(["sweep", str(PAPER_TOML), "--vary", "thickness=0.5,2", "--vary", "brass_top.material=aluminium",
-                 "--out", str(folder)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                str(PAPER_TOML),
+                "--vary",
+                "thickness=0.5,2",
+                "--vary",
+                "brass_top.material=aluminium",
+                "--out",
+                str(folder),
+            ]
+        )
+        == 0
+    )
     return folder
 
 
@@ -99,30 +116,41 @@ def test_sweep_report_folder(swept):
 def spec_with(tmp_path, thickness_top: float, thickness_bottom: float, top_material: str = "brass"):
     """The paper spec with other added plates, written as a user would."""
     text = PAPER_TOML.read_text()
-    text = text.replace('bottom = [ { material = "adhesive", thickness_mm = 0.05 },\n'
-                        '           { material = "brass", thickness_mm = 1.0 } ]',
-                        'bottom = [ { material = "adhesive", thickness_mm = 0.05 },\n'
-                        f'           {{ material = "brass", thickness_mm = {thickness_bottom} }} ]')
-    text = text.replace('top = [ { material = "adhesive", thickness_mm = 0.05 },\n'
-                        '        { material = "brass", thickness_mm = 1.0 } ]',
-                        'top = [ { material = "adhesive", thickness_mm = 0.05 },\n'
-                        f'        {{ material = "{top_material}", thickness_mm = {thickness_top} }} ]')
+    text = text.replace(
+        'bottom = [ { material = "adhesive", thickness_mm = 0.05 },\n'
+        '           { material = "brass", thickness_mm = 1.0 } ]',
+        'bottom = [ { material = "adhesive", thickness_mm = 0.05 },\n'
+        f'           {{ material = "brass", thickness_mm = {thickness_bottom} }} ]',
+    )
+    text = text.replace(
+        'top = [ { material = "adhesive", thickness_mm = 0.05 },\n'
+        '        { material = "brass", thickness_mm = 1.0 } ]',
+        'top = [ { material = "adhesive", thickness_mm = 0.05 },\n'
+        f'        {{ material = "{top_material}", thickness_mm = {thickness_top} }} ]',
+    )
     if top_material == "aluminium":  # a spec defines its materials: the stock values written out
-        text = text.replace("[[configurations]]", '''[materials.aluminium]
+        text = text.replace(
+            "[[configurations]]",
+            """[materials.aluminium]
 E1_GPa = 68.9
 E2_GPa = 68.9
 G12_GPa = 25.902255639097744
 nu12 = 0.33
 density_kg_m3 = 2700
 
-[[configurations]]''', 1)
+[[configurations]]""",
+            1,
+        )
     path = tmp_path / "variant.toml"
     path.write_text(text)
     return path
 
 
-@pytest.mark.parametrize("row,variant", [(2, (2.0, 2.0, "brass")), (3, (1.0, 1.0, "aluminium"))],
-                         ids=["thickness=2", "brass_top.material=aluminium"])
+@pytest.mark.parametrize(
+    "row,variant",
+    [(2, (2.0, 2.0, "brass")), (3, (1.0, 1.0, "aluminium"))],
+    ids=["thickness=2", "brass_top.material=aluminium"],
+)
 def test_sweep_numbers_equal_a_direct_check(swept, tmp_path, capsys, row, variant):
     """A sweep row and `plan-tests check` of a spec written with that design: the same
     condition number, Fisher information and predicted std (same solves: to round-off)."""
@@ -167,5 +195,7 @@ def test_check_over_a_limit_is_infeasible(capsys, tmp_path):
     status, out, _ = run(capsys, "check", spec, "--json")
     data = json.loads(out)
     assert status == 1 and data["verdict"] == "good" and data["feasible"] is False
-    assert data["violations"] == ["'brass_bottom' adds 192.6 g > max_added_mass_g = 150",
-                                  "'brass_top' adds 192.6 g > max_added_mass_g = 150"]
+    assert data["violations"] == [
+        "'brass_bottom' adds 192.6 g > max_added_mass_g = 150",
+        "'brass_top' adds 192.6 g > max_added_mass_g = 150",
+    ]

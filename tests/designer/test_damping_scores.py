@@ -1,5 +1,6 @@
 """plan-tests scores designs for the layers' loss factors: the condition number of the
 loss-factor columns and each loss factor's predicted std (``designer.scores.damping``)."""
+
 import json
 
 import numpy as np

@@ -1,5 +1,6 @@
 """What the lab reads: mirror designs shown once, verdicts against target uncertainties,
 and default limits on what may be bonded to a specimen."""
+
 import json
 
 import numpy as np
@@ -28,7 +29,9 @@ def test_no_mirror_ties_in_the_top_five(paper_problem):
     model = load_spec(COATED_PLATE)
     assert is_mirror_symmetric(model.specimen) and not is_mirror_symmetric(paper_problem.specimen)
     data = {"materials": ["brass", "steel_stock"], "thicknesses_mm": [0.5, 1.0, 2.0]}
-    problem = Problem.of(parse_spec({**_toml(COATED_PLATE), "design": {**_toml(COATED_PLATE)["design"], **data}}))
+    problem = Problem.of(
+        parse_spec({**_toml(COATED_PLATE), "design": {**_toml(COATED_PLATE)["design"], **data}})
+    )
     r = recommend(problem, top=5)
     keys = [set_key([s.configuration for s in d.solved]) for d in r.designs]
     mirrors = [mirror_key([s.configuration for s in d.solved]) for d in r.designs]
@@ -58,7 +61,9 @@ def test_verdict_names_the_parameters_that_miss_their_targets(capsys, tmp_path):
     of 30 % it is feasible again."""
     problem = problem_of(paper_data(), frequency_std_rel=0.005)
     design = check(problem).design
-    assert design.scores.verdict == "good" and design.scores.condition_number == pytest.approx(35.33, rel=1e-3)
+    assert design.scores.verdict == "good" and design.scores.condition_number == pytest.approx(
+        35.33, rel=1e-3
+    )
     misses = design.target_misses()
     assert len(misses) == 12 and all(std > target for _, std, target in misses)
     assert "MISSED by 12 of 12 parameters" in design.report()
@@ -69,7 +74,9 @@ def test_verdict_names_the_parameters_that_miss_their_targets(capsys, tmp_path):
     assert data["verdict"] == "good" and data["feasible"] is False
     assert data["targets"]["met"] is False and data["targets"]["default"] is True
     assert {m["parameter"] for m in data["targets"]["missed"]} >= {"steel.nu12", "top_coating.E2"}
-    relaxed = problem_of(paper_data(), frequency_std_rel=0.005, target_std_rel={"E": 0.3, "G": 0.3, "nu": 0.3})
+    relaxed = problem_of(
+        paper_data(), frequency_std_rel=0.005, target_std_rel={"E": 0.3, "G": 0.3, "nu": 0.3}
+    )
     assert check(relaxed).feasible
 
 
@@ -89,9 +96,17 @@ def light_specimen(**design) -> Problem:
     space (up to 3 mm brass: 575 g with the adhesive)."""
     data = paper_data()
     data["specimen"]["layers"] = [{"material": "core", "thickness_mm": 1.1}]
-    data["materials"] = {"core": {"E1_GPa": 20.0, "E2_GPa": 15.0, "G12_GPa": 5.0, "nu12": 0.3,
-                                  "density_kg_m3": 65e-3 / (0.0225 * 1.1e-3), "identify": True},
-                         **{k: v for k, v in data["materials"].items() if k in ("brass", "adhesive")}}
+    data["materials"] = {
+        "core": {
+            "E1_GPa": 20.0,
+            "E2_GPa": 15.0,
+            "G12_GPa": 5.0,
+            "nu12": 0.3,
+            "density_kg_m3": 65e-3 / (0.0225 * 1.1e-3),
+            "identify": True,
+        },
+        **{k: v for k, v in data["materials"].items() if k in ("brass", "adhesive")},
+    }
     data["configurations"] = [{"name": "original"}]
     data["design"].update(materials=["brass"], **design)
     return problem_of(data)

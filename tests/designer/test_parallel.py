@@ -1,5 +1,6 @@
 """The same solves on worker processes and on a local Dask cluster give the same
 numbers as in this process."""
+
 import numpy as np
 import pytest
 
@@ -47,7 +48,9 @@ def test_local_dask_cluster_matches_serial(small):
     """Two worker processes of a local Dask cluster, reached by address as a remote one is."""
     distributed = pytest.importorskip("distributed")
     problem, configurations, here = small
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         with executor(scheduler=cluster.scheduler_address) as pool:
             assert_same(solve_elsewhere(problem, configurations, pool), here)
 

@@ -1,4 +1,5 @@
 """Thickness refinement (nlopt, snapped to stock) and the Poisson-plate rule (paper eq. 16)."""
+
 import itertools
 import math
 
@@ -30,8 +31,12 @@ def test_refinement_snaps_to_stock_and_reports_only_improvements(brass_problem):
     start, and counts as a refinement only when it beats the start."""
     problem = brass_problem
     brass, adhesive = problem.space.materials[0], problem.space.adhesive
-    start = Design.of(problem, problem.solve([ORIGINAL] + [plate_configuration(brass, 1e-3, p, adhesive)
-                                                           for p in ("bottom", "top")]))
+    start = Design.of(
+        problem,
+        problem.solve(
+            [ORIGINAL] + [plate_configuration(brass, 1e-3, p, adhesive) for p in ("bottom", "top")]
+        ),
+    )
     r = refine(problem, start)
     assert all(0.5e-3 <= t <= 3e-3 for t in r.continuous)
     assert r.continuous_design.scores.condition_number < start.scores.condition_number
@@ -64,11 +69,16 @@ def test_refinement_improves_a_poor_stock_set_within_the_limits():
     """3 mm brass on both faces is far from the optimum (0.5-0.6 mm): the refinement
     moves both plates to stock thicknesses next to the continuous optimum, improves the
     condition number, and keeps every plate within the 600 g mass limit."""
-    problem = problem_of(paper_data(), materials=["brass"], thicknesses_mm=[0.5, 1.0, 2.0, 3.0],
-                         max_added_mass_g=600.0)
+    problem = problem_of(
+        paper_data(), materials=["brass"], thicknesses_mm=[0.5, 1.0, 2.0, 3.0], max_added_mass_g=600.0
+    )
     brass, adhesive = problem.space.materials[0], problem.space.adhesive
-    start = Design.of(problem, problem.solve([ORIGINAL] + [plate_configuration(brass, 3e-3, p, adhesive)
-                                                           for p in ("bottom", "top")]))
+    start = Design.of(
+        problem,
+        problem.solve(
+            [ORIGINAL] + [plate_configuration(brass, 3e-3, p, adhesive) for p in ("bottom", "top")]
+        ),
+    )
     r = refine(problem, start)
     assert r.improved and r.design.scores.condition_number < start.scores.condition_number
     assert set(r.thicknesses) <= set(problem.space.thicknesses)

@@ -1,6 +1,7 @@
 """Robust scores: sets scored over the prior range of the unknown properties
 ([design] prior_range_rel), the prior sample itself, and a case where the design that is
 best at the nominal values fails over the prior while the robust one does not."""
+
 import itertools
 import math
 
@@ -18,8 +19,12 @@ from .conftest import paper_data, problem_of
 
 #: A small space on the paper's plate (4 candidates, 6 sets) scored over 8 prior samples
 #: of +-30 %: 45 solves.
-SMALL = {"materials": ["brass", "steel_stock"], "thicknesses_mm": [0.5], "prior_range_rel": 0.3,
-         "prior_samples": 8}
+SMALL = {
+    "materials": ["brass", "steel_stock"],
+    "thicknesses_mm": [0.5],
+    "prior_range_rel": 0.3,
+    "prior_samples": 8,
+}
 
 
 @pytest.fixture(scope="module")
@@ -31,10 +36,24 @@ def test_prior_sample_covers_the_range_and_stays_physical():
     """Every identified parameter gets one log-factor in each of the 8 equal strata of
     [-ln 1.3, ln 1.3] (a Latin hypercube), the same every run; a nu12 whose factor would
     break nu12^2 < E1/E2 is held at 0.95 sqrt(E1/E2)."""
-    data = {"specimen": {"length_mm": 150.0, "width_mm": 150.0, "layers": [{"material": "m", "thickness_mm": 1.0}]},
-            "materials": {"m": {"E1_GPa": 10.0, "E2_GPa": 10.0, "G12_GPa": 3.0, "nu12": 0.9, "density_kg_m3": 1500,
-                                "identify": True}},
-            "design": {"prior_range_rel": 0.3, "prior_samples": 8}}
+    data = {
+        "specimen": {
+            "length_mm": 150.0,
+            "width_mm": 150.0,
+            "layers": [{"material": "m", "thickness_mm": 1.0}],
+        },
+        "materials": {
+            "m": {
+                "E1_GPa": 10.0,
+                "E2_GPa": 10.0,
+                "G12_GPa": 3.0,
+                "nu12": 0.9,
+                "density_kg_m3": 1500,
+                "identify": True,
+            }
+        },
+        "design": {"prior_range_rel": 0.3, "prior_samples": 8},
+    }
     problem = Problem.of(parse_spec(data))
     prior = problem.prior
     assert prior.samples == 8 and prior.problems[0] is problem
@@ -47,7 +66,9 @@ def test_prior_sample_covers_the_range_and_stays_physical():
     np.testing.assert_array_equal(latin_hypercube(8, 4), latin_hypercube(8, 4))
     values = problem.values * prior.factors
     E1, E2, nu = values[:, 0], values[:, 1], values[:, 3]
-    assert np.all(nu**2 < E1 / E2) and np.any(np.isclose(nu, NU_MARGIN * np.sqrt(E1 / E2))), "clipped somewhere"
+    assert np.all(nu**2 < E1 / E2) and np.any(np.isclose(nu, NU_MARGIN * np.sqrt(E1 / E2))), (
+        "clipped somewhere"
+    )
     for q, v in zip(prior.problems[1:], values):
         assert q.specimen.materials["m"].nu12 == pytest.approx(v[3], rel=1e-12)
     assert np.array_equal(physical(problem, problem.values[None]), problem.values[None])
@@ -73,21 +94,27 @@ def test_robust_scores_are_checks_at_each_sample(small):
     solved = solve_points(points, pool)
     worst = {}
     for pair in itertools.combinations(range(len(pool)), 2):
-        losses = [Design.of(small, original[k] + [solved[k][i] for i in pair]).scores.loss("condition")
-                  for k in range(len(points))]
+        losses = [
+            Design.of(small, original[k] + [solved[k][i] for i in pair]).scores.loss("condition")
+            for k in range(len(points))
+        ]
         worst[frozenset(pool[i].name for i in pair)] = max(losses)
     assert frozenset(best.names[1:]) == min(worst, key=worst.get)
     assert [d.loss("condition") for d in r.designs] == sorted(d.loss("condition") for d in r.designs)
     text = r.report()
     assert "ranked by the worst case" in text and "worst cond" in text
     data = r.to_dict()
-    assert data["search"]["ranked_by"] == "worst over the prior" and data["designs"][0]["robust"]["points"] == 9
+    assert (
+        data["search"]["ranked_by"] == "worst over the prior" and data["designs"][0]["robust"]["points"] == 9
+    )
 
 
 def out_of_sample_worst(problem: Problem, design: Design, n: int = 16) -> float:
     """The design's largest condition number over ``n`` fresh prior points (another seed)."""
     factors = 1.3 ** (2 * latin_hypercube(n, len(problem.parameters), seed=7) - 1)
-    points = [problem.at(dict(zip(problem.parameters, v))) for v in physical(problem, problem.values * factors)]
+    points = [
+        problem.at(dict(zip(problem.parameters, v))) for v in physical(problem, problem.values * factors)
+    ]
     solved = solve_points(points, [s.configuration for s in design.solved])
     return max(Design.of(problem, s).scores.condition_number for s in solved)
 
@@ -105,7 +132,9 @@ def test_robust_design_beats_the_nominal_design_over_the_prior():
     nominal_problem = problem_of(paper_data(), **{**SMALL, "band_hz": [20.0, 620.0], "prior_range_rel": 0.0})
     nominal = recommend(nominal_problem, top=1).best
     assert set(nominal.names[1:]) == {"steel_stock_0.5mm_top", "steel_stock_0.5mm_bottom"}
-    assert nominal.scores.condition_number < robust.scores.condition_number, "nominal wins at the nominal point"
+    assert nominal.scores.condition_number < robust.scores.condition_number, (
+        "nominal wins at the nominal point"
+    )
     assert set(robust.names[1:]) != set(nominal.names[1:])
     assert robust.robust.worst("condition") < 200
     fresh_nominal, fresh_robust = out_of_sample_worst(problem, nominal), out_of_sample_worst(problem, robust)

@@ -1,6 +1,7 @@
 """Set scores against independent references: the physics core's own sensitivity
 matrix with numpy's condition number, the paper's figures, and a Monte Carlo of the
 linearised identification for the predicted std."""
+
 import numpy as np
 import pytest
 
@@ -49,9 +50,10 @@ def test_paper_single_plate_is_singular(paper):
 def test_verdict_thresholds_are_the_papers():
     """Good below 1e3, ill-conditioned up to 1e7, singular above (paper section 4.6)."""
     t = CONDITION["thresholds"]
-    assert [verdict(x) for x in (1.0, 999.0, t["ill_conditioned_above"], 1e5, t["singular_above"],
-                                 1.0001e7, np.inf)] == \
-        ["good", "good", "ill-conditioned", "ill-conditioned", "ill-conditioned", "singular", "singular"]
+    assert [
+        verdict(x)
+        for x in (1.0, 999.0, t["ill_conditioned_above"], 1e5, t["singular_above"], 1.0001e7, np.inf)
+    ] == ["good", "good", "ill-conditioned", "ill-conditioned", "ill-conditioned", "singular", "singular"]
 
 
 def test_predicted_std_matches_monte_carlo(paper_problem):

@@ -1,5 +1,6 @@
 """recommend: the planner's acceptance space, exhaustive search against the convex
 relaxation, and the lab's limits."""
+
 import itertools
 
 import numpy as np
@@ -39,7 +40,9 @@ def test_best_design_scored_like_the_fem_matrix(exhaustive_result, acceptance_pr
     physics core's global matrix and numpy: the same condition number."""
     best = exhaustive_result.best
     specimen = acceptance_problem.specimen.with_configurations([s.configuration for s in best.solved])
-    matrix = SpecimenModel(specimen, acceptance_problem.options).sensitivity_matrix(list(acceptance_problem.parameters))
+    matrix = SpecimenModel(specimen, acceptance_problem.options).sensitivity_matrix(
+        list(acceptance_problem.parameters)
+    )
     assert best.scores.condition_number == pytest.approx(np.linalg.cond(matrix), rel=1e-10)
 
 
@@ -53,8 +56,9 @@ def all_set_losses(problem: Problem, criterion: str) -> tuple[list, np.ndarray]:
     info0, infos = rows0.T @ rows0, np.einsum("mrp,mrq->mpq", blocks, blocks)
     pairs = list(itertools.combinations(range(len(infos)), 2))
     idx = np.array(pairs)
-    return [(pool.configurations[i].name, pool.configurations[j].name) for i, j in pairs], \
-        information_loss(info0 + infos[idx[:, 0]] + infos[idx[:, 1]], criterion)
+    return [(pool.configurations[i].name, pool.configurations[j].name) for i, j in pairs], information_loss(
+        info0 + infos[idx[:, 0]] + infos[idx[:, 1]], criterion
+    )
 
 
 @pytest.mark.parametrize("criterion", ["d", "e", "condition"])
@@ -69,7 +73,9 @@ def test_exhaustive_and_relaxation_agree(acceptance_problem, criterion):
     assert set(names[int(np.argmin(losses))]) == set(exact.names[1:])
     b = relaxed.bound
     assert b.criterion == ("d" if criterion == "d" else "e")
-    optimum = recommend(with_criterion(problem, b.criterion), top=1, method="exhaustive").best.scores.value(b.criterion)
+    optimum = recommend(with_criterion(problem, b.criterion), top=1, method="exhaustive").best.scores.value(
+        b.criterion
+    )
     assert b.chosen == pytest.approx(relaxed.best.scores.value(b.criterion), rel=1e-8)
     assert b.chosen <= optimum * (1 + 1e-9)
     assert b.relaxed >= optimum * (1 - 1e-6)
@@ -88,8 +94,11 @@ def test_band_that_excludes_every_mode():
     """recommend, check and sweep all stop with the same one-line error."""
     problem = problem_of(paper_data(), band_hz=[5000.0, 6000.0])
     for run in (recommend, check, lambda p: sweep(p, [])):
-        with pytest.raises(DesignError, match=r"band_hz = \[5000, 6000\] excludes every mode of configuration "
-                                              r"'original' \(its 5 modes lie at 129.3\.\.337 Hz\)"):
+        with pytest.raises(
+            DesignError,
+            match=r"band_hz = \[5000, 6000\] excludes every mode of configuration "
+            r"'original' \(its 5 modes lie at 129.3\.\.337 Hz\)",
+        ):
             run(problem)
 
 
@@ -97,8 +106,9 @@ def test_band_leaves_out_stiff_candidates():
     """A band ending at 195 Hz keeps the original plate's first two modes (129, 192 Hz).
     Added plates raise the first mode, the 0.5 mm brass least (to 189 Hz: its mass nearly
     cancels its stiffness), so every other candidate is left out, with the reason."""
-    problem = problem_of(paper_data(), band_hz=[20.0, 195.0], materials=["aluminium", "brass"],
-                         thicknesses_mm=[0.5, 2.0])
+    problem = problem_of(
+        paper_data(), band_hz=[20.0, 195.0], materials=["aluminium", "brass"], thicknesses_mm=[0.5, 2.0]
+    )
     solved = problem.solve(candidates(problem.space, problem.specimen).configurations)
     inside = {s.configuration.name for s in solved if s.frequencies_hz[0] <= 195.0}
     assert inside == {"brass_0.5mm_top", "brass_0.5mm_bottom"}
@@ -112,12 +122,20 @@ def test_mass_and_thickness_limits():
     """Added mass = area x sum(density x thickness): brass 1 mm + 50 um adhesive on the
     150 x 150 mm plate is 0.0225 (8500e-3 + 1200 x 50e-6) = 192.6 g.  Limits at 150 g and
     1.6 mm total leave the 0.5 mm brass and the 1 mm aluminium (62.0 + 1.35 g)."""
-    problem = problem_of(paper_data(), materials=["brass", "aluminium"], thicknesses_mm=[0.5, 1.0, 2.0],
-                         max_added_mass_g=150.0, max_added_thickness_mm=1.6)
+    problem = problem_of(
+        paper_data(),
+        materials=["brass", "aluminium"],
+        thicknesses_mm=[0.5, 1.0, 2.0],
+        max_added_mass_g=150.0,
+        max_added_thickness_mm=1.6,
+    )
     pool = candidates(problem.space, problem.specimen)
     kept = {c.name for c in pool.configurations}
-    assert kept == {f"{m}_{t}mm_{p}" for m, t in (("brass", 0.5), ("aluminium", 0.5), ("aluminium", 1))
-                    for p in ("top", "bottom")}
+    assert kept == {
+        f"{m}_{t}mm_{p}"
+        for m, t in (("brass", 0.5), ("aluminium", 0.5), ("aluminium", 1))
+        for p in ("top", "bottom")
+    }
     assert "192.6 g > max_added_mass_g = 150" in pool.excluded["brass_1mm_top"]
     assert "2.05 mm > max_added_thickness_mm = 1.6" in pool.excluded["aluminium_2mm_bottom"]
     r = recommend(problem, top=3)

@@ -2,6 +2,7 @@
 against an independent model (``ritz.RitzPlate``, a Rayleigh-Ritz solution written for
 these tests, not the project's finite elements), the sensor's mass shift against an
 exact solve, and the JSON contract of docs/json.md."""
+
 import json
 
 import numpy as np
@@ -25,12 +26,26 @@ SEEN = 0.15
 SUPPORT_TOLERANCE = 0.5e-3
 
 ANGLE_PLY = {
-    "specimen": {"name": "angle ply", "length_mm": 200.0, "width_mm": 130.0,
-                 "layers": [{"material": "ply", "thickness_mm": 2.0, "angle_deg": 30.0}]},
-    "materials": {"ply": {"E1_GPa": 40.0, "E2_GPa": 10.0, "G12_GPa": 4.0, "nu12": 0.3, "density_kg_m3": 1900,
-                          "identify": True}},
-    "configurations": [{"name": "original"},
-                       {"name": "aluminium_top", "top": [{"material": "aluminium", "thickness_mm": 1.0}]}],
+    "specimen": {
+        "name": "angle ply",
+        "length_mm": 200.0,
+        "width_mm": 130.0,
+        "layers": [{"material": "ply", "thickness_mm": 2.0, "angle_deg": 30.0}],
+    },
+    "materials": {
+        "ply": {
+            "E1_GPa": 40.0,
+            "E2_GPa": 10.0,
+            "G12_GPa": 4.0,
+            "nu12": 0.3,
+            "density_kg_m3": 1900,
+            "identify": True,
+        }
+    },
+    "configurations": [
+        {"name": "original"},
+        {"name": "aluminium_top", "top": [{"material": "aluminium", "thickness_mm": 1.0}]},
+    ],
     "model": {"modes": 6},
 }
 
@@ -47,15 +62,22 @@ def sheets(paper_problem):
 def ritz_of(problem: Problem, configuration) -> RitzPlate:
     laminate = problem.specimen.laminate(configuration)
     m = laminate.matrices()
-    return RitzPlate(problem.specimen.length, problem.specimen.width, reduced_bending_stiffness(m["A"], m["B"], m["D"]),
-                     laminate.inertia[0])
+    return RitzPlate(
+        problem.specimen.length,
+        problem.specimen.width,
+        reduced_bending_stiffness(m["A"], m["B"], m["D"]),
+        laminate.inertia[0],
+    )
 
 
 CASES = [("paper", 0, 2e-4), ("paper", 2, 2e-3), ("angle ply", 0, 5e-4), ("angle ply", 1, 2e-3)]
 
 
-@pytest.mark.parametrize("case,index,tolerance", CASES,
-                         ids=["paper original", "paper brass_top (D*)", "angle ply original", "angle ply bonded (D*)"])
+@pytest.mark.parametrize(
+    "case,index,tolerance",
+    CASES,
+    ids=["paper original", "paper brass_top (D*)", "angle ply original", "angle ply bonded (D*)"],
+)
 def test_sensor_sees_every_mode_and_supports_sit_on_the_nodal_line(sheets, case, index, tolerance):
     """Against the Ritz model of the same plate: (1) it is the same plate: frequencies
     within ``tolerance`` (symmetric stacks 2e-4 / 5e-4: the FE mesh error of the highest
@@ -83,8 +105,11 @@ def test_sensor_sees_every_mode_and_supports_sit_on_the_nodal_line(sheets, case,
     for point in (sheet.sensor_point, sheet.excitation_point):
         amplitude = np.abs(ritz.field([point[0]], [point[1]], match)[0][0]) / peaks
         assert np.all(amplitude >= SEEN), (point, amplitude)
-        np.testing.assert_allclose(amplitude, sheet.sensor_amplitudes if point is sheet.sensor_point
-                                   else sheet.excitation_amplitudes, atol=0.01)  # the sheet's own figures
+        np.testing.assert_allclose(
+            amplitude,
+            sheet.sensor_amplitudes if point is sheet.sensor_point else sheet.excitation_amplitudes,
+            atol=0.01,
+        )  # the sheet's own figures
     L, W = problem.specimen.length, problem.specimen.width
     for x, y in (sheet.sensor_point, sheet.excitation_point):
         assert EDGE_MARGIN * L - 1e-9 <= x <= (1 - EDGE_MARGIN) * L + 1e-9
@@ -128,12 +153,18 @@ def test_sensor_mass_shift_against_ritz():
     bare = ritz_of(problem, configuration)
     laminate = problem.specimen.laminate(configuration)
     m = laminate.matrices()
-    loaded = RitzPlate(problem.specimen.length, problem.specimen.width,
-                       reduced_bending_stiffness(m["A"], m["B"], m["D"]), laminate.inertia[0],
-                       point_masses=[(3e-3, *sheet.sensor_point)])
+    loaded = RitzPlate(
+        problem.specimen.length,
+        problem.specimen.width,
+        reduced_bending_stiffness(m["A"], m["B"], m["D"]),
+        laminate.inertia[0],
+        point_masses=[(3e-3, *sheet.sensor_point)],
+    )
     exact = loaded.frequencies_hz[:5] / bare.frequencies_hz[:5] - 1
     shift = sheet.sensor_shift_rel
-    assert np.all(shift < 0) and shift.min() < -0.01, "a 3 g sensor on a 149 g plate shifts the modes measurably"
+    assert np.all(shift < 0) and shift.min() < -0.01, (
+        "a 3 g sensor on a 149 g plate shifts the modes measurably"
+    )
     np.testing.assert_allclose(shift, exact, rtol=0.02)
     w = bare.field([sheet.sensor_point[0]], [sheet.sensor_point[1]], range(5))[0][0]
     first_order = -3e-3 * w**2 / 2
@@ -152,10 +183,16 @@ def test_frequency_spread_over_the_prior():
     result = check(problem, [problem.specimen.configuration("original")])
     sheet = result.test_sheet.configurations[0]
     samples = np.array([p[0].frequencies_hz[:5] for p in result.prior])
-    np.testing.assert_allclose(sheet.frequency_range_hz[:, 0], np.minimum(samples.min(axis=0), sheet.frequencies_hz))
-    np.testing.assert_allclose(sheet.frequency_range_hz[:, 1], np.maximum(samples.max(axis=0), sheet.frequencies_hz))
+    np.testing.assert_allclose(
+        sheet.frequency_range_hz[:, 0], np.minimum(samples.min(axis=0), sheet.frequencies_hz)
+    )
+    np.testing.assert_allclose(
+        sheet.frequency_range_hz[:, 1], np.maximum(samples.max(axis=0), sheet.frequencies_hz)
+    )
     assert "exact solves" in sheet.spread
-    linear = check(problem_of(paper_data()), [problem.specimen.configuration("original")]).test_sheet.configurations[0]
+    linear = check(
+        problem_of(paper_data()), [problem.specimen.configuration("original")]
+    ).test_sheet.configurations[0]
     assert "linearised" in linear.spread
     for s in (sheet, linear):
         low, high = s.frequency_range_hz.T / s.frequencies_hz
@@ -173,14 +210,20 @@ def test_check_json_test_sheet_and_figures(capsys, tmp_path):
     sheet = data["test_sheet"]
     assert [s["configuration"] for s in sheet] == ["original", "brass_bottom", "brass_top"]
     for s, c in zip(sheet, data["configurations"]):
-        assert {"configuration", "frequencies_hz", "support_points_mm", "excitation_point_mm",
-                "sensor_point_mm"} <= set(s)
+        assert {
+            "configuration",
+            "frequencies_hz",
+            "support_points_mm",
+            "excitation_point_mm",
+            "sensor_point_mm",
+        } <= set(s)
         np.testing.assert_allclose(s["frequencies_hz"], c["frequencies_hz"], rtol=1e-9)
         for x, y in s["support_points_mm"] + [s["excitation_point_mm"], s["sensor_point_mm"]]:
             assert 0 < x < 150 and 0 < y < 150
         assert min(s["sensor_amplitude_rel"]) >= SEEN
-    assert sorted(p.name for p in tmp_path.glob("*.png")) == [f"test_sheet_{s['configuration']}.png" for s in
-                                                              sorted(sheet, key=lambda s: s["configuration"])]
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == [
+        f"test_sheet_{s['configuration']}.png" for s in sorted(sheet, key=lambda s: s["configuration"])
+    ]
     assert data["figures"] and all(f.endswith(".png") for f in data["figures"])
     main(["check", str(PAPER_TOML)])
     text = capsys.readouterr().out

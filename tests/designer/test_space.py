@@ -1,5 +1,6 @@
 """The [design] table and the stock library: cross-checked values, and one-line errors
 that name the key, the value, what is allowed and a fix."""
+
 import json
 import math
 
@@ -60,20 +61,37 @@ def edit_design(**changes):
 
 
 CASES = [
-    ("unknown material", edit_design(materials=["brass", "alumnium"]),
-     ["[design].materials[1] = 'alumnium'", "neither a spec material nor built-in stock", "did you mean 'aluminium'"]),
-    ("identified material as added plate", edit_design(materials=["steel"]),
-     ["[design].materials[0] = 'steel' is identified", "use 'steel_stock'"]),
+    (
+        "unknown material",
+        edit_design(materials=["brass", "alumnium"]),
+        [
+            "[design].materials[1] = 'alumnium'",
+            "neither a spec material nor built-in stock",
+            "did you mean 'aluminium'",
+        ],
+    ),
+    (
+        "identified material as added plate",
+        edit_design(materials=["steel"]),
+        ["[design].materials[0] = 'steel' is identified", "use 'steel_stock'"],
+    ),
     ("empty thickness list", edit_design(thicknesses_mm=[]), ["[design].thicknesses_mm is empty", "e.g."]),
     ("thickness in metres", edit_design(thicknesses_mm=[0.001]), ["thicknesses_mm[0] = 0.001", "in mm"]),
     ("bad placement", edit_design(placements=["top", "side"]), ["placements[1] = 'side'", "'top', 'bottom'"]),
     ("misspelt key", edit_design(frequency_std=0.001), ["unknown key 'frequency_std'", "frequency_std_rel"]),
     ("one configuration", edit_design(configurations=1), ["configurations = 1", ">= 2"]),
-    ("scatter in per cent", edit_design(frequency_std_rel=0.5), ["frequency_std_rel = 0.5", "0.001 for 0.1 %"]),
+    (
+        "scatter in per cent",
+        edit_design(frequency_std_rel=0.5),
+        ["frequency_std_rel = 0.5", "0.001 for 0.1 %"],
+    ),
     ("reversed band", edit_design(band_hz=[5000, 20]), ["band_hz = [5000, 20]", "low < high"]),
     ("unknown criterion", edit_design(criterion="a"), ["criterion = 'a'", "'condition', 'd', 'e'"]),
-    ("unknown adhesive", edit_design(adhesive={"material": "glue", "thickness_mm": 0.05}),
-     ["[design].adhesive.material = 'glue'", "stock:"]),
+    (
+        "unknown adhesive",
+        edit_design(adhesive={"material": "glue", "thickness_mm": 0.05}),
+        ["[design].adhesive.material = 'glue'", "stock:"],
+    ),
     ("material listed twice", edit_design(materials=["brass", "brass"]), ["'brass' is listed twice"]),
 ]
 

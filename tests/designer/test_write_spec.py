@@ -1,5 +1,6 @@
 """`plan-tests recommend --write-spec`: the best design as a spec that `check` and `fit`
 take as they are, reproducing the recommendation's scores."""
+
 import json
 import tomllib
 
@@ -84,11 +85,16 @@ def test_cli_write_spec_then_check_and_fit(tmp_path, capsys):
     assert not list(tmp_path.glob(".*")), "written atomically: no temporary file left"
     assert plan_tests(["check", str(out), "--json"]) == 0
     checked = json.loads(capsys.readouterr().out)
-    assert checked["condition_number"] == pytest.approx(recommended["designs"][0]["condition_number"], rel=SAME)
+    assert checked["condition_number"] == pytest.approx(
+        recommended["designs"][0]["condition_number"], rel=SAME
+    )
 
     model = identify.load_spec(out)
-    rows = [{"configuration": name, "mode": i + 1, "frequency_hz": f}
-            for name, fs in identify.predict(model).frequencies_hz.items() for i, f in enumerate(fs)]
+    rows = [
+        {"configuration": name, "mode": i + 1, "frequency_hz": f}
+        for name, fs in identify.predict(model).frequencies_hz.items()
+        for i, f in enumerate(fs)
+    ]
     csv = tmp_path / "measured.csv"
     pd.DataFrame(rows).to_csv(csv, index=False)
     assert identify_layers(["fit", str(out), str(csv), "--json"]) == 0

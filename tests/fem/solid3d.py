@@ -7,6 +7,7 @@ as ``tests/data/solid3d/compare_plate_models.py`` does.
 
     python -m tests.fem.solid3d [CASE ...]     # CLT / FSDT / layerwise error tables
 """
+
 from __future__ import annotations
 
 import json
@@ -52,8 +53,11 @@ def reference(case: str, configuration: str, n: int = N_COMPARED) -> tuple[np.nd
     """Frequencies [Hz], w on the grid (143, n) and labels of the first n flexural modes."""
     (conf,) = [c for c in load(case)["configurations"] if c["name"] == configuration]
     flexural = [m for m in conf["modes"] if m["classification"] == "flexural"][:n]
-    return (np.array([m["frequency_hz"] for m in flexural]), np.array([np.ravel(m["w"]) for m in flexural]).T,
-            [m["label"] for m in flexural])
+    return (
+        np.array([m["frequency_hz"] for m in flexural]),
+        np.array([np.ravel(m["w"]) for m in flexural]).T,
+        [m["label"] for m in flexural],
+    )
 
 
 def grid_w(solution, length: float, width: float, nx: int = 13, ny: int = 11) -> np.ndarray:
@@ -81,7 +85,9 @@ def paired(model: SpecimenModel, configuration: str, w3d: np.ndarray) -> tuple[n
     return index, macs[np.arange(len(index)), index]
 
 
-def errors(case: str, configuration: str, divisions: int | None = None, **options) -> tuple[np.ndarray, np.ndarray]:
+def errors(
+    case: str, configuration: str, divisions: int | None = None, **options
+) -> tuple[np.ndarray, np.ndarray]:
     """Relative frequency errors (plate / 3-D - 1) of the first 10 flexural modes, and MAC."""
     f3d, w3d, _ = reference(case, configuration)
     model = spec_model(case).with_options(modes=PLATE_MODES, divisions=divisions, **options)
@@ -95,16 +101,23 @@ def table(case: str) -> str:
         f3d, _, labels = reference(case, conf["name"])
         results = {name: errors(case, conf["name"], **options) for name, options in MODELS.items()}
         lines.append(f"  {conf['name']}")
-        lines.append(f"  {'mode':>4} {'label':>7} {'3-D Hz':>9} " + " ".join(f"{n:>10}" for n in MODELS)
-                     + "  min MAC")
+        lines.append(
+            f"  {'mode':>4} {'label':>7} {'3-D Hz':>9} " + " ".join(f"{n:>10}" for n in MODELS) + "  min MAC"
+        )
         for k in range(len(f3d)):
-            lines.append(f"  {k + 1:>4} {labels[k]:>7} {f3d[k]:9.2f} "
-                         + " ".join(f"{100 * results[n][0][k]:+10.3f}" for n in MODELS)
-                         + f"  {min(results[n][1][k] for n in MODELS):.3f}")
-        lines.append(f"  {'max':>4} {'':>7} {'':>9} " + " ".join(f"{100 * np.abs(results[n][0]).max():10.3f}"
-                                                                 for n in MODELS))
-        lines.append(f"  {'rms':>4} {'':>7} {'':>9} " + " ".join(
-            f"{100 * np.sqrt(np.mean(results[n][0] ** 2)):10.3f}" for n in MODELS))
+            lines.append(
+                f"  {k + 1:>4} {labels[k]:>7} {f3d[k]:9.2f} "
+                + " ".join(f"{100 * results[n][0][k]:+10.3f}" for n in MODELS)
+                + f"  {min(results[n][1][k] for n in MODELS):.3f}"
+            )
+        lines.append(
+            f"  {'max':>4} {'':>7} {'':>9} "
+            + " ".join(f"{100 * np.abs(results[n][0]).max():10.3f}" for n in MODELS)
+        )
+        lines.append(
+            f"  {'rms':>4} {'':>7} {'':>9} "
+            + " ".join(f"{100 * np.sqrt(np.mean(results[n][0] ** 2)):10.3f}" for n in MODELS)
+        )
     return "\n".join(lines)
 
 

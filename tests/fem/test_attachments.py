@@ -1,4 +1,5 @@
 """Point masses and suspension springs: physics checks and exact derivatives."""
+
 import numpy as np
 import pytest
 
@@ -49,9 +50,16 @@ def test_springs_first_order_and_suspension_modes_dropped(plate):
 
 
 @pytest.mark.parametrize("base", [0.0, 0.03], ids=["point", "base 30 mm"])
-@pytest.mark.parametrize("parameter", [Parameter("mass", "point_mass"), Parameter("x", "point_mass"),
-                                       Parameter("y", "point_mass"), Parameter("stiffness", "suspension")],
-                         ids=lambda p: p.kind)
+@pytest.mark.parametrize(
+    "parameter",
+    [
+        Parameter("mass", "point_mass"),
+        Parameter("x", "point_mass"),
+        Parameter("y", "point_mass"),
+        Parameter("stiffness", "suspension"),
+    ],
+    ids=lambda p: p.kind,
+)
 def test_attachment_derivatives_match_central_differences(plate, parameter, base, monkeypatch):
     """Relative step 1e-5 (positions: 1e-5 m): agreement to 1e-4 of the column.  The 30 mm
     footprint spans parts of four elements (19 mm each), whose lines it crosses as it moves;
@@ -62,8 +70,10 @@ def test_attachment_derivatives_match_central_differences(plate, parameter, base
     exact = SpecimenModel(specimen, OPTIONS).sensitivity_matrix([parameter], relative=False)[:, 0]
     value = specimen.value(parameter)
     h = 1e-5 * abs(value)
-    finite = (frequencies(specimen.with_values({parameter: value + h}))
-              - frequencies(specimen.with_values({parameter: value - h}))) / (2 * h)
+    finite = (
+        frequencies(specimen.with_values({parameter: value + h}))
+        - frequencies(specimen.with_values({parameter: value - h}))
+    ) / (2 * h)
     assert np.abs(exact - finite).max() < 1e-4 * np.abs(exact).max()
 
 
@@ -80,8 +90,11 @@ def test_a_footprint_is_the_mass_spread_evenly_over_its_square(plate, monkeypatc
     midpoint = {}
     for n in (20, 40):
         centres = (np.arange(n) + 0.5) / n * base - base / 2
-        grid = [PointMass(mass / n**2, x + a, y + b, f"m{i}_{j}") for i, a in enumerate(centres)
-                for j, b in enumerate(centres)]
+        grid = [
+            PointMass(mass / n**2, x + a, y + b, f"m{i}_{j}")
+            for i, a in enumerate(centres)
+            for j, b in enumerate(centres)
+        ]
         midpoint[n] = frequencies(plate.with_attachments(grid))
     error = {n: np.abs(f / spread - 1).max() for n, f in midpoint.items()}
     assert 3.6 < error[20] / error[40] < 4.4
@@ -122,14 +135,17 @@ def test_a_footprint_converges_where_a_point_mass_does_not(monkeypatch):
     assert np.abs(solved(0.012, per_side=0) / reference - 1).max() > 3e-3
 
 
-@pytest.mark.parametrize("attachment,message", [
-    (PointMass(-1e-3, 0.05, 0.05), "must not be negative"),
-    (PointMass(1e-3, 0.05, 0.05, base=-1e-3), "base = -1 mm"),
-    (PointMass(1e-3, 0.05, 0.05, base=0.1), "square footprint"),
-    (PointMass(1e-3, 0.20, 0.05), "outside the plate"),
-    (Suspension(-5.0, CORNERS), "must not be negative"),
-    (Suspension(5.0, ((0.05, -0.01),)), "outside the plate"),
-])
+@pytest.mark.parametrize(
+    "attachment,message",
+    [
+        (PointMass(-1e-3, 0.05, 0.05), "must not be negative"),
+        (PointMass(1e-3, 0.05, 0.05, base=-1e-3), "base = -1 mm"),
+        (PointMass(1e-3, 0.05, 0.05, base=0.1), "square footprint"),
+        (PointMass(1e-3, 0.20, 0.05), "outside the plate"),
+        (Suspension(-5.0, CORNERS), "must not be negative"),
+        (Suspension(5.0, ((0.05, -0.01),)), "outside the plate"),
+    ],
+)
 def test_bad_attachments(plate, attachment, message):
     with pytest.raises(SpecError, match=message):
         plate.with_attachments([attachment])

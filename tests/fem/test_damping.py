@@ -1,5 +1,6 @@
 """Modal loss factors: the spec keys, the first-order (modal strain energy) estimate and
 the complex eigenproblem it is checked against."""
+
 import copy
 import tomllib
 from dataclasses import replace
@@ -26,8 +27,10 @@ def spec(edit=None, **options):
 
 def with_losses(model, **etas):
     """The model with loss factors per material: name -> (eta_E1, eta_E2, eta_G12)."""
-    materials = [replace(model.specimen.materials[name], eta_E1=a, eta_E2=b, eta_G12=c)
-                 for name, (a, b, c) in etas.items()]
+    materials = [
+        replace(model.specimen.materials[name], eta_E1=a, eta_E2=b, eta_G12=c)
+        for name, (a, b, c) in etas.items()
+    ]
     return model.with_specimen(model.specimen.with_materials(materials))
 
 
@@ -38,6 +41,7 @@ def test_spec_keys():
         d["materials"]["steel"].update(identify_damping=True)
         d["materials"]["top_coating"].update(identify_damping=["eta_E1", "eta_G12"])
         d["materials"]["bottom_coating"].update(eta=0.01, identify_damping=True)
+
     m = spec(edit).defined_materials
     assert (m["brass"].eta_E1, m["brass"].eta_E2, m["brass"].eta_G12) == (0.002, 0.002, 0.002)
     assert (m["adhesive"].eta_E1, m["adhesive"].eta_E2, m["adhesive"].eta_G12) == (0.1, None, 0.3)
@@ -46,19 +50,31 @@ def test_spec_keys():
     assert m["top_coating"].identify_damping == ("eta_E1", "eta_G12")
     assert m["bottom_coating"].identify_damping == ("eta",), "given as eta: one shared loss factor"
     assert spec(lambda d: d["materials"]["brass"].update(identify_damping=True)).defined_materials[
-        "brass"].identify_damping == ("eta",), "isotropic: one shared loss factor"
+        "brass"
+    ].identify_damping == ("eta",), "isotropic: one shared loss factor"
 
 
-@pytest.mark.parametrize("edit, words", [
-    (lambda d: d["materials"]["brass"].update(eta=-0.1), ["[materials.brass].eta = -0.1", "0 <= eta <= 2"]),
-    (lambda d: d["materials"]["brass"].update(eta_G12=5.0), ["eta_G12 = 5", "loss factor"]),
-    (lambda d: d["materials"]["brass"].update(eta_E1="0.1"), ["eta_E1 = '0.1'", "finite number"]),
-    (lambda d: d["materials"]["brass"].update(eta=0.1, eta_E1=0.2), ["eta and eta_E1 are both given"]),
-    (lambda d: d["materials"]["steel"].update(identify_damping="yes"), ["identify_damping = 'yes'", "true, false"]),
-    (lambda d: d["materials"]["steel"].update(identify_damping=["eta_E3"]), ["identify_damping = ['eta_E3']",
-                                                                             "eta_G12"]),
-    (lambda d: d["materials"]["steel"].update(identify_damping=["eta", "eta_E1"]), ["[\"eta\"] alone"]),
-])
+@pytest.mark.parametrize(
+    "edit, words",
+    [
+        (
+            lambda d: d["materials"]["brass"].update(eta=-0.1),
+            ["[materials.brass].eta = -0.1", "0 <= eta <= 2"],
+        ),
+        (lambda d: d["materials"]["brass"].update(eta_G12=5.0), ["eta_G12 = 5", "loss factor"]),
+        (lambda d: d["materials"]["brass"].update(eta_E1="0.1"), ["eta_E1 = '0.1'", "finite number"]),
+        (lambda d: d["materials"]["brass"].update(eta=0.1, eta_E1=0.2), ["eta and eta_E1 are both given"]),
+        (
+            lambda d: d["materials"]["steel"].update(identify_damping="yes"),
+            ["identify_damping = 'yes'", "true, false"],
+        ),
+        (
+            lambda d: d["materials"]["steel"].update(identify_damping=["eta_E3"]),
+            ["identify_damping = ['eta_E3']", "eta_G12"],
+        ),
+        (lambda d: d["materials"]["steel"].update(identify_damping=["eta", "eta_E1"]), ['["eta"] alone']),
+    ],
+)
 def test_bad_spec_keys(edit, words):
     with pytest.raises(SpecError) as error:
         spec(edit)
@@ -70,8 +86,20 @@ def single_material(eta, **options):
     """The example plate with every layer and addition of one steel-like material."""
     model = spec(**options)
     steel = model.specimen.materials["steel"]
-    one = [replace(steel, name=name, E1=200e9, E2=200e9, G12=200e9 / 2.6, nu12=0.3, eta_E1=eta, eta_E2=eta,
-                   eta_G12=eta) for name in model.specimen.materials]
+    one = [
+        replace(
+            steel,
+            name=name,
+            E1=200e9,
+            E2=200e9,
+            G12=200e9 / 2.6,
+            nu12=0.3,
+            eta_E1=eta,
+            eta_E2=eta,
+            eta_G12=eta,
+        )
+        for name in model.specimen.materials
+    ]
     return model.with_specimen(model.specimen.with_materials(one))
 
 
@@ -96,10 +124,22 @@ def contrast(scale):
     the coatings' loss factor is ``scale``, the steel's 0.001."""
     model = spec()
     soft = {"E1": 70e9, "E2": 70e9, "G12": 70e9 / 2.7, "nu12": 0.35}
-    materials = [replace(model.specimen.materials[n], **soft, eta_E1=scale, eta_E2=0.6 * scale, eta_G12=1.5 * scale)
-                 for n in ("top_coating", "bottom_coating")]
-    materials.append(replace(model.specimen.materials["steel"], E1=200e9, E2=200e9, G12=77e9, nu12=0.3,
-                             eta_E1=0.001, eta_E2=0.001, eta_G12=0.001))
+    materials = [
+        replace(model.specimen.materials[n], **soft, eta_E1=scale, eta_E2=0.6 * scale, eta_G12=1.5 * scale)
+        for n in ("top_coating", "bottom_coating")
+    ]
+    materials.append(
+        replace(
+            model.specimen.materials["steel"],
+            E1=200e9,
+            E2=200e9,
+            G12=77e9,
+            nu12=0.3,
+            eta_E1=0.001,
+            eta_E2=0.001,
+            eta_G12=0.001,
+        )
+    )
     return model.with_specimen(model.specimen.with_materials(materials))
 
 
@@ -162,8 +202,11 @@ def test_columns_are_relative_eigenvalue_sensitivities():
     col = loss_columns(model, [("steel", "eta_E1")])[:5, 0]
     steel = model.specimen.materials["steel"]
     h = 1e-4
-    up, down = (model.with_specimen(model.specimen.with_materials([replace(steel, E1=steel.E1 * (1 + s))]))
-                for s in (h, -h))
-    fd = (2 * np.log(up.solve("original").frequencies_hz) - 2 * np.log(down.solve("original").frequencies_hz)) / (
-        np.log1p(h) - np.log1p(-h))
+    up, down = (
+        model.with_specimen(model.specimen.with_materials([replace(steel, E1=steel.E1 * (1 + s))]))
+        for s in (h, -h)
+    )
+    fd = (
+        2 * np.log(up.solve("original").frequencies_hz) - 2 * np.log(down.solve("original").frequencies_hz)
+    ) / (np.log1p(h) - np.log1p(-h))
     assert col == pytest.approx(fd, rel=1e-5, abs=1e-8)

@@ -1,4 +1,5 @@
 """The effect registry: spec tables, free switching, a user-registered kind, bad input."""
+
 import copy
 import tomllib
 
@@ -30,8 +31,9 @@ def test_spec_point_mass_is_applied(example_spec):
     free = example_spec.solve("original").frequencies_hz
     assert np.all(loaded < free)
     assert mass.base == 0.0  # a point unless the spec gives the sensor's base
-    spread = parse_spec(with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0,
-                                      "base_mm": 12.0}))
+    spread = parse_spec(
+        with_effects({"kind": "point_mass", "mass_g": 3.0, "x_mm": 125.0, "y_mm": 110.0, "base_mm": 12.0})
+    )
     assert spread.specimen.attachments[0].base == pytest.approx(0.012)
 
 
@@ -41,15 +43,18 @@ def test_spec_plate_theory_effects_switch_options(example_spec):
     assert any("G13 = G23 = G12 assumed" in n for n in model.notes)
 
 
-@pytest.mark.parametrize("table,message", [
-    ({"kind": "sensor"}, "unknown effect kind 'sensor'; known: transverse_shear"),
-    ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 180.0, "y_mm": 10.0}, "outside the plate"),
-    ({"kind": "point_mass", "mass_g": -3.0, "x_mm": 10.0, "y_mm": 10.0}, "must not be negative"),
-    ({"kind": "suspension", "stiffness_N_m": -50.0}, "must not be negative"),
-    ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 10.0}, "missing field 'y_mm'"),
-    ({"kind": "point_mass", "mass": 3.0, "x_mm": 10.0, "y_mm": 10.0}, "unknown key 'mass'"),
-    ({"kind": "orientation", "layer": "layer9", "angle_deg": 5.0}, "layer = 'layer9'"),
-])
+@pytest.mark.parametrize(
+    "table,message",
+    [
+        ({"kind": "sensor"}, "unknown effect kind 'sensor'; known: transverse_shear"),
+        ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 180.0, "y_mm": 10.0}, "outside the plate"),
+        ({"kind": "point_mass", "mass_g": -3.0, "x_mm": 10.0, "y_mm": 10.0}, "must not be negative"),
+        ({"kind": "suspension", "stiffness_N_m": -50.0}, "must not be negative"),
+        ({"kind": "point_mass", "mass_g": 3.0, "x_mm": 10.0}, "missing field 'y_mm'"),
+        ({"kind": "point_mass", "mass": 3.0, "x_mm": 10.0, "y_mm": 10.0}, "unknown key 'mass'"),
+        ({"kind": "orientation", "layer": "layer9", "angle_deg": 5.0}, "layer = 'layer9'"),
+    ],
+)
 def test_bad_effect_tables_fail_at_load(table, message):
     with pytest.raises(SpecError, match=message.replace("(", r"\(")):
         parse_spec(with_effects(table))
@@ -59,9 +64,12 @@ def test_free_effects_bring_parameters(example_spec):
     on = effect("point_mass").free(example_spec)[0]
     assert on.free == tuple(Parameter(k, "point_mass") for k in ("mass", "x", "y"))
     assert effect("orientation").free_all(example_spec).free == tuple(
-        Parameter("angle", f"layer{i}") for i in (1, 2, 3))
+        Parameter("angle", f"layer{i}") for i in (1, 2, 3)
+    )
     assert {p.target for p in effect("adhesive").free(example_spec)[0].free} == {
-        "brass_bottom.bottom1", "brass_top.top1"}
+        "brass_bottom.bottom1",
+        "brass_top.top1",
+    }
 
 
 def test_user_registered_effect(example_spec):
@@ -78,7 +86,11 @@ def test_user_registered_effect(example_spec):
 
         def free(self, model, hint=None):
             top = model.specimen.layers[-1].material.name
-            return [SwitchedOn(self.kind, self._painted(model, 20.0), (Parameter("density", top),), "top mass free")]
+            return [
+                SwitchedOn(
+                    self.kind, self._painted(model, 20.0), (Parameter("density", top),), "top mass free"
+                )
+            ]
 
         @staticmethod
         def _painted(model, grams_per_m2):

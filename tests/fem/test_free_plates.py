@@ -46,7 +46,10 @@ def test_convergence_rate_is_fourth_order(paper_specimen):
     (the lowest modes are too close to converged to show a clean rate)."""
     converged = np.array(FREE_PLATES["paper_plate_clt_converged"]["first15_elastic_hz"])
     lam = paper_specimen.laminate("original")
-    err = {n: solve_laminate(lam, PlateMesh(0.15, 0.15, n, n), 15).frequencies_hz / converged - 1 for n in (8, 16)}
+    err = {
+        n: solve_laminate(lam, PlateMesh(0.15, 0.15, n, n), 15).frequencies_hz / converged - 1
+        for n in (8, 16)
+    }
     order = np.log2(err[8][4:] / err[16][4:])
     assert np.all((order > 3.5) & (order < 4.5)), order
 
@@ -75,8 +78,12 @@ def test_bonded_configurations_converge_and_mirror(paper_specimen):
         mirrored = Laminate(lam.layers[::-1])
         f_mirror = solve_laminate(mirrored, PlateMesh(0.15, 0.15, 12, 12), 10).frequencies_hz
         np.testing.assert_allclose(f_mirror, f[12], rtol=1e-9)
-    top = solve_laminate(paper_specimen.laminate("brass_top"), PlateMesh(0.15, 0.15, 12, 12), 10).frequencies_hz
-    bottom = solve_laminate(paper_specimen.laminate("brass_bottom"), PlateMesh(0.15, 0.15, 12, 12), 10).frequencies_hz
+    top = solve_laminate(
+        paper_specimen.laminate("brass_top"), PlateMesh(0.15, 0.15, 12, 12), 10
+    ).frequencies_hz
+    bottom = solve_laminate(
+        paper_specimen.laminate("brass_bottom"), PlateMesh(0.15, 0.15, 12, 12), 10
+    ).frequencies_hz
     assert np.abs(top / bottom - 1).max() > 1e-5, "top and bottom coatings differ, so must the configurations"
 
 

@@ -1,5 +1,6 @@
 """Classical lamination theory against closed forms, and its derivatives against
 central differences."""
+
 import math
 
 import numpy as np
@@ -51,27 +52,51 @@ def test_mirrored_stack_flips_B_only():
     assert COEFFICIENTS[6] == "B11"
 
 
-@pytest.mark.parametrize("kind,target", [
-    ("E1", "cfrp"), ("E2", "cfrp"), ("G12", "cfrp"), ("nu12", "cfrp"), ("density", "cfrp"),
-    ("E1", "steel"), ("nu12", "steel"), ("thickness", "b"), ("thickness", "c"), ("angle", "b"),
-])
+@pytest.mark.parametrize(
+    "kind,target",
+    [
+        ("E1", "cfrp"),
+        ("E2", "cfrp"),
+        ("G12", "cfrp"),
+        ("nu12", "cfrp"),
+        ("density", "cfrp"),
+        ("E1", "steel"),
+        ("nu12", "steel"),
+        ("thickness", "b"),
+        ("thickness", "c"),
+        ("angle", "b"),
+    ],
+)
 def test_stiffness_derivatives_match_central_differences(kind, target):
     """Analytic dX/dp and dI/dp against central differences (step 1e-6 relative:
     truncation ~1e-12, round-off ~1e-10; tolerance 1e-7 of the largest entry)."""
+
     def build(value):
         mats = {"steel": STEEL, "cfrp": CFRP}
         if kind in ("E1", "E2", "G12", "nu12", "density"):
             mats[target] = mats[target].with_values(**{kind: value})
-        layers = [Layer(mats["steel"], 7e-4, label="a"), Layer(mats["cfrp"], 3e-4, 0.4, label="b"),
-                  Layer(mats["steel"], 1e-4, label="c")]
+        layers = [
+            Layer(mats["steel"], 7e-4, label="a"),
+            Layer(mats["cfrp"], 3e-4, 0.4, label="b"),
+            Layer(mats["steel"], 1e-4, label="c"),
+        ]
         if kind in ("thickness", "angle"):
-            layers = [Layer(l.material, value if (l.label == target and kind == "thickness") else l.thickness,
-                            value if (l.label == target and kind == "angle") else l.angle, l.label) for l in layers]
+            layers = [
+                Layer(
+                    l.material,
+                    value if (l.label == target and kind == "thickness") else l.thickness,
+                    value if (l.label == target and kind == "angle") else l.angle,
+                    l.label,
+                )
+                for l in layers
+            ]
         return Laminate(tuple(layers))
 
     mats = {"steel": STEEL, "cfrp": CFRP}
     if kind in ("thickness", "angle"):
-        value = {"a": (7e-4, 0.0), "b": (3e-4, 0.4), "c": (1e-4, 0.0)}[target][0 if kind == "thickness" else 1]
+        value = {"a": (7e-4, 0.0), "b": (3e-4, 0.4), "c": (1e-4, 0.0)}[target][
+            0 if kind == "thickness" else 1
+        ]
     else:
         value = getattr(mats[target], kind)
     lam = build(value)

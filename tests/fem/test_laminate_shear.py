@@ -1,5 +1,6 @@
 """Laminate transverse shear stiffness: shear correction against closed forms, the
 default for missing G13/G23, and exact derivatives against central differences."""
+
 import math
 from dataclasses import replace
 
@@ -26,8 +27,11 @@ def test_homogeneous_plate_gets_five_sixths():
     ply = Layer(CFRP, 2e-3, math.radians(30))
     np.testing.assert_allclose(Laminate((ply,)).shear_stiffness, 5 / 6 * 2e-3 * ply.shear_moduli, rtol=1e-13)
     m, n = math.cos(math.radians(30)), math.sin(math.radians(30))
-    np.testing.assert_allclose(ply.shear_moduli, [3.5e9 * m * m + 5e9 * n * n, 5e9 * m * m + 3.5e9 * n * n,
-                                                  1.5e9 * m * n], rtol=1e-14)
+    np.testing.assert_allclose(
+        ply.shear_moduli,
+        [3.5e9 * m * m + 5e9 * n * n, 5e9 * m * m + 3.5e9 * n * n, 1.5e9 * m * n],
+        rtol=1e-14,
+    )
 
 
 def test_two_layer_stack_against_hand_computation():
@@ -82,13 +86,22 @@ def rebuilt(laminate, kind, target, value):
     return Laminate(tuple(layers))
 
 
-STACK = Laminate((
-    Layer(COATING, 2e-4, label="a"), Layer(STEEL, 7e-4, math.radians(10), label="b"),
-    Layer(CFRP, 3e-4, math.radians(-35), label="c"),
-))
+STACK = Laminate(
+    (
+        Layer(COATING, 2e-4, label="a"),
+        Layer(STEEL, 7e-4, math.radians(10), label="b"),
+        Layer(CFRP, 3e-4, math.radians(-35), label="c"),
+    )
+)
 CASES = [(k, "steel") for k in ("E1", "E2", "G12", "nu12", "G13", "G23")] + [
-    ("G12", "coating"), ("G13", "coating"), ("E2", "cfrp"), ("G23", "cfrp"),
-    ("thickness", "a"), ("thickness", "c"), ("angle", "b"), ("angle", "c"),
+    ("G12", "coating"),
+    ("G13", "coating"),
+    ("E2", "cfrp"),
+    ("G23", "cfrp"),
+    ("thickness", "a"),
+    ("thickness", "c"),
+    ("angle", "b"),
+    ("angle", "c"),
 ]
 
 
@@ -103,8 +116,10 @@ def test_shear_derivatives_match_central_differences(kind, target):
     else:
         value = next(layer.material.value(kind) for layer in STACK.layers if layer.material.name == target)
     h = 1e-6 * abs(value)
-    finite = (rebuilt(STACK, kind, target, value + h).shear_stiffness
-              - rebuilt(STACK, kind, target, value - h).shear_stiffness) / (2 * h)
+    finite = (
+        rebuilt(STACK, kind, target, value + h).shear_stiffness
+        - rebuilt(STACK, kind, target, value - h).shear_stiffness
+    ) / (2 * h)
     exact = STACK.shear_derivative(kind, target)
     assert np.abs(exact).max() > 0
     assert np.abs(exact - finite).max() < 1e-7 * np.abs(exact).max(), (exact, finite)

@@ -1,6 +1,7 @@
 """The layerwise (zig-zag) plate model: its limits (FSDT for one shear group, Kirchhoff for
 thin stiff stacks), the shear groups and corrections, convergence, rigid-body modes and
 the wiring (model option, spec key, effect)."""
+
 import math
 import pickle
 import tomllib
@@ -43,10 +44,18 @@ def relative(a, b):
     return np.asarray(a) / np.asarray(b) - 1
 
 
-@pytest.mark.parametrize("layers", [
-    (Layer(ALUMINIUM, 8e-3, 0.0, "al"),),  # the 3-D control plate's section, a/h = 19
-    (Layer(GFRP, 1.5e-3, 0.0, "g1"), Layer(CFRP, 3e-3, math.radians(30), "c"), Layer(GFRP, 1.5e-3, 0.0, "g2")),
-], ids=["homogeneous", "laminate"])
+@pytest.mark.parametrize(
+    "layers",
+    [
+        (Layer(ALUMINIUM, 8e-3, 0.0, "al"),),  # the 3-D control plate's section, a/h = 19
+        (
+            Layer(GFRP, 1.5e-3, 0.0, "g1"),
+            Layer(CFRP, 3e-3, math.radians(30), "c"),
+            Layer(GFRP, 1.5e-3, 0.0, "g2"),
+        ),
+    ],
+    ids=["homogeneous", "laminate"],
+)
 def test_one_shear_group_is_the_fsdt(layers):
     """One shear group (a single layer, or a stack without a soft layer under "blocks"):
     Phi = z, the group's shear stiffness is Whitney's (k = 5/6 for the homogeneous plate),
@@ -68,8 +77,9 @@ def test_homogeneous_shear_correction_and_sandwich_core():
     5/6 for a homogeneous layer (a parabola), also when the layer is split in halves
     (each half of a parabola has the same ratio); close to 1 for a soft core between
     stiff skins, whose shear stress is nearly constant (measured 0.999999; the skins' 0.763)."""
-    half = LayerwiseLaminate.of(Laminate((Layer(ALUMINIUM, 4e-3, 0.0, "a"), Layer(ALUMINIUM, 4e-3, 0.0, "b"))),
-                                "layers")
+    half = LayerwiseLaminate.of(
+        Laminate((Layer(ALUMINIUM, 4e-3, 0.0, "a"), Layer(ALUMINIUM, 4e-3, 0.0, "b"))), "layers"
+    )
     np.testing.assert_allclose(half.shear_correction, 5 / 6, rtol=1e-13)
     core = LayerwiseLaminate.of(sandwich().laminate("original"))
     assert core.groups == (0, 1, 0)
@@ -121,10 +131,18 @@ def test_convergence_under_mesh_refinement():
     4 +- 0.5 (measured 3.86-5.67, median 4.0).  The plate is small so that the meshes
     resolve the skins' free-edge zone, sqrt(2 D_skin / S_core) = 11 mm wide.  Without the
     core's stretch: with it, see ``test_core_stretch_converges``."""
-    lam = Laminate((Layer(SKIN, 2e-3, 0.0, "s1"), Layer(FOAM, 16e-3, 0.0, "c"), Layer(SKIN, 2e-3, 0.0, "s2"),
-                    Layer(ALUMINIUM, 4e-3, 0.0, "al")))
-    solutions = [solve_laminate(lam, PlateMesh(0.1, 0.1, n, n), 8, theory="layerwise", core_stretch=False)
-                 for n in (6, 12, 24)]
+    lam = Laminate(
+        (
+            Layer(SKIN, 2e-3, 0.0, "s1"),
+            Layer(FOAM, 16e-3, 0.0, "c"),
+            Layer(SKIN, 2e-3, 0.0, "s2"),
+            Layer(ALUMINIUM, 4e-3, 0.0, "al"),
+        )
+    )
+    solutions = [
+        solve_laminate(lam, PlateMesh(0.1, 0.1, n, n), 8, theory="layerwise", core_stretch=False)
+        for n in (6, 12, 24)
+    ]
     assert solutions[0].layerwise.groups == (0, 1, 0, 0) and solutions[0].layerwise.stretch == ()
     f = np.array([s.frequencies_hz for s in solutions])
     assert np.all(f[0] > f[1]) and np.all(f[1] > f[2])
@@ -141,21 +159,39 @@ def test_core_stretch_converges():
     than 4 here (about 2.5, the d = 16 -> 24 step): the stretch and the shear of a soft
     core have free-edge zones about the core thickness (6 mm) wide, which elements of
     10-30 mm do not resolve; their weight in the frequencies shrinks all the same."""
-    fabric = Material("cfrp_fabric", 62 * GPA, 60 * GPA, 4.8 * GPA, 0.05, 1500.0, G13=3.5 * GPA, G23=3.5 * GPA)
-    pvc = Material("pvc_foam", 0.1 * GPA, 0.1 * GPA, 0.035 * GPA, 0.4286, 80.0, G13=0.035 * GPA, G23=0.035 * GPA)
-    lam = Laminate((Layer(ALUMINIUM, 1e-3, 0.0, "al"), Layer(ADHESIVE, 1e-4, 0.0, "ad"),
-                    Layer(fabric, 0.5e-3, 0.0, "s1"), Layer(pvc, 6e-3, 0.0, "c"), Layer(fabric, 0.5e-3, 0.0, "s2")))
-    f = np.array([solve_laminate(lam, PlateMesh.with_element_size(0.25, 0.2, d), 10, theory="layerwise")
-                  .frequencies_hz for d in (8, 16, 24)])
+    fabric = Material(
+        "cfrp_fabric", 62 * GPA, 60 * GPA, 4.8 * GPA, 0.05, 1500.0, G13=3.5 * GPA, G23=3.5 * GPA
+    )
+    pvc = Material(
+        "pvc_foam", 0.1 * GPA, 0.1 * GPA, 0.035 * GPA, 0.4286, 80.0, G13=0.035 * GPA, G23=0.035 * GPA
+    )
+    lam = Laminate(
+        (
+            Layer(ALUMINIUM, 1e-3, 0.0, "al"),
+            Layer(ADHESIVE, 1e-4, 0.0, "ad"),
+            Layer(fabric, 0.5e-3, 0.0, "s1"),
+            Layer(pvc, 6e-3, 0.0, "c"),
+            Layer(fabric, 0.5e-3, 0.0, "s2"),
+        )
+    )
+    f = np.array(
+        [
+            solve_laminate(
+                lam, PlateMesh.with_element_size(0.25, 0.2, d), 10, theory="layerwise"
+            ).frequencies_hz
+            for d in (8, 16, 24)
+        ]
+    )
     assert np.all(f[0] > f[1]) and np.all(f[1] > f[2])
     assert np.abs(f[1] / f[2] - 1).max() < 3e-4, f[1] / f[2] - 1
 
 
 def test_exactly_six_rigid_body_modes():
     """Dense check of the deflated solve with the layerwise element (the bonded sandwich,
-    three groups, the foam stretching): in the definite pencil M x = mu (K - sigma M) x exactly six eigenvalues
-    are the rigid-body ones (mu = 1/|sigma| to 1e-8), the g fields are zero in rigid
-    motion (as e is), and the Lanczos solve returns the next six eigenvalues to 1e-6."""
+    three groups, the foam stretching): in the definite pencil M x = mu (K - sigma M) x
+    exactly six eigenvalues are the rigid-body ones (mu = 1/|sigma| to 1e-8), the g fields
+    are zero in rigid motion (as e is), and the Lanczos solve returns the next six
+    eigenvalues to 1e-6."""
     lam = sandwich().laminate("al_bottom")
     stack = LayerwiseLaminate.of(lam)
     mesh = PlateMesh(0.08, 0.06, 3, 2)
@@ -173,14 +209,20 @@ def test_exactly_six_rigid_body_modes():
 
 
 def test_groups():
-    """"auto": one group per layer (plies of a cross-ply zig-zag), except that the layers
+    """ "auto": one group per layer (plies of a cross-ply zig-zag), except that the layers
     that are not soft (shear modulus above 0.1 of the stack's largest) and carry under 5 %
     of the shear compliance each (a sandwich's skins, a bonded aluminium plate) share one,
     and adjacent layers of one material and angle are one; "blocks": soft layers alone,
     runs of stiff layers together; "layers": one per layer; unknown: one-line error."""
-    bonded = Laminate((Layer(CFRP, 1.25e-3, 0.0, "c1"), Layer(GFRP, 2.5e-3, math.pi / 2, "g"),
-                       Layer(CFRP, 1.25e-3, 0.0, "c2"), Layer(ADHESIVE, 1e-4, 0.0, "ad"),
-                       Layer(ALUMINIUM, 2e-3, 0.0, "al")))
+    bonded = Laminate(
+        (
+            Layer(CFRP, 1.25e-3, 0.0, "c1"),
+            Layer(GFRP, 2.5e-3, math.pi / 2, "g"),
+            Layer(CFRP, 1.25e-3, 0.0, "c2"),
+            Layer(ADHESIVE, 1e-4, 0.0, "ad"),
+            Layer(ALUMINIUM, 2e-3, 0.0, "al"),
+        )
+    )
     assert layer_groups(bonded) == layer_groups(bonded, "layers") == (0, 1, 2, 3, 4)
     assert layer_groups(bonded, "blocks") == (0, 0, 0, 1, 2)
     split = Laminate((Layer(CFRP, 1e-3, 0.0, "a"), Layer(CFRP, 1e-3, 0.0, "b"), Layer(GFRP, 1e-3, 0.0, "c")))
@@ -201,8 +243,12 @@ def test_element_classes_are_shared_and_pickle():
     three = LayerwisePlate.with_groups(3)
     assert three is LayerwisePlate.with_groups(3) and len(three.NODE_DOFS) == 12 + 8 * 3
     assert pickle.loads(pickle.dumps(three)) is three
-    solution = SpecimenModel(sandwich(), ModelOptions(modes=3, divisions=4, theory="layerwise")).solve("al_bottom")
-    np.testing.assert_array_equal(pickle.loads(pickle.dumps(solution)).frequencies_hz, solution.frequencies_hz)
+    solution = SpecimenModel(sandwich(), ModelOptions(modes=3, divisions=4, theory="layerwise")).solve(
+        "al_bottom"
+    )
+    np.testing.assert_array_equal(
+        pickle.loads(pickle.dumps(solution)).frequencies_hz, solution.frequencies_hz
+    )
 
 
 SPEC = """
@@ -237,7 +283,9 @@ def test_spec_theory_key():
     a one-line error with a suggestion."""
     model = parse_spec(tomllib.loads(SPEC + 'theory = "layerwise"\n'))
     assert model.options.theory == "layerwise" and model.solve("original").layerwise.groups == (0, 1, 0)
-    with pytest.raises(SpecError, match=r"\[model\].theory = 'layerwize' is unknown; did you mean 'layerwise'"):
+    with pytest.raises(
+        SpecError, match=r"\[model\].theory = 'layerwize' is unknown; did you mean 'layerwise'"
+    ):
         parse_spec(tomllib.loads(SPEC + 'theory = "layerwize"\n'))
     with pytest.raises(SpecError, match=r"\[model\].layer_groups = 'all'"):
         parse_spec(tomllib.loads(SPEC + 'layer_groups = "all"\n'))
@@ -256,8 +304,12 @@ def test_layerwise_effect():
     on = effect("layerwise").fixed(model, {"kind": "layerwise"})
     assert on.model.options.theory == "layerwise" and on.free == ()
     (variant,) = effect("layerwise").free(model)
-    assert variant.free == (Parameter("G13", "skin"), Parameter("G23", "skin"), Parameter("G13", "foam"),
-                            Parameter("G23", "foam"))
+    assert variant.free == (
+        Parameter("G13", "skin"),
+        Parameter("G23", "skin"),
+        Parameter("G13", "foam"),
+        Parameter("G23", "foam"),
+    )
     assert "on their own: foam" in variant.note
     assert "assumed G23 = G12 for skin, G13 = G23 = G12 for foam" in variant.note
     frequencies = variant.model.frequencies()["original"]
@@ -282,7 +334,10 @@ def test_sparse_unit_matrices_sum_as_the_dense_ones(monkeypatch):
         monkeypatch.setattr(assembly, "SPARSE_UNITS_ABOVE", above)
         units = UnitMatrices(mesh, element)
         assert sp.issparse(units.element_stiffness) == (above == 0)
-        forms[above] = (units.combined_data(stack.stiffness, units.element_stiffness),
-                        units.combined_data(stack.inertia, units.element_mass), units.first_unit_mass.toarray())
+        forms[above] = (
+            units.combined_data(stack.stiffness, units.element_stiffness),
+            units.combined_data(stack.inertia, units.element_mass),
+            units.first_unit_mass.toarray(),
+        )
     for sparse, dense in zip(forms[0], forms[1 << 40], strict=True):
         assert np.abs(sparse - dense).max() <= 1e-13 * np.abs(dense).max()

@@ -1,6 +1,7 @@
 """Identification and diagnosis with the layerwise model on the 3-D elasticity reference of
 the foam-core sandwich (``tests/data/solid3d/foam_sandwich.json``): the frequencies of a
 solid model, not of the plate model, with 0.05 % Gaussian noise (seeded)."""
+
 import re
 import tomllib
 
@@ -16,19 +17,31 @@ from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from tests.fem import solid3d
 
-pytestmark = pytest.mark.skipif(not solid3d.available("foam_sandwich"),
-                                reason="3-D reference tests/data/solid3d/foam_sandwich.json not generated yet "
-                                       "(python tests/data/solid3d/generate.py --case foam_sandwich)")
+pytestmark = pytest.mark.skipif(
+    not solid3d.available("foam_sandwich"),
+    reason="3-D reference tests/data/solid3d/foam_sandwich.json not generated yet "
+    "(python tests/data/solid3d/generate.py --case foam_sandwich)",
+)
 
 NOISE = 5e-4
-TRUE = {Parameter("E1", "cfrp_fabric"): 62e9, Parameter("E2", "cfrp_fabric"): 60e9,
-        Parameter("G12", "cfrp_fabric"): 4.8e9, Parameter("nu12", "cfrp_fabric"): 0.05,
-        Parameter("G13", "pvc_foam"): 35e6, Parameter("G23", "pvc_foam"): 35e6}
+TRUE = {
+    Parameter("E1", "cfrp_fabric"): 62e9,
+    Parameter("E2", "cfrp_fabric"): 60e9,
+    Parameter("G12", "cfrp_fabric"): 4.8e9,
+    Parameter("nu12", "cfrp_fabric"): 0.05,
+    Parameter("G13", "pvc_foam"): 35e6,
+    Parameter("G23", "pvc_foam"): 35e6,
+}
 #: Handbook starts: a generic woven carbon/epoxy (E 55 GPa, G12 4 GPa, nu12 0.1) and the
 #: data-sheet shear modulus of an 80 kg/m^3 PVC foam (27 MPa, e.g. Divinycell H80).
-START = {Parameter("E1", "cfrp_fabric"): 55e9, Parameter("E2", "cfrp_fabric"): 55e9,
-         Parameter("G12", "cfrp_fabric"): 4.0e9, Parameter("nu12", "cfrp_fabric"): 0.1,
-         Parameter("G13", "pvc_foam"): 27e6, Parameter("G23", "pvc_foam"): 27e6}
+START = {
+    Parameter("E1", "cfrp_fabric"): 55e9,
+    Parameter("E2", "cfrp_fabric"): 55e9,
+    Parameter("G12", "cfrp_fabric"): 4.0e9,
+    Parameter("nu12", "cfrp_fabric"): 0.1,
+    Parameter("G13", "pvc_foam"): 27e6,
+    Parameter("G23", "pvc_foam"): 27e6,
+}
 
 
 def sandwich_spec(foam_identify: str, theory: str = "layerwise"):
@@ -49,8 +62,16 @@ def measured(model, seed: int = 1):
     for conf in solid3d.load("foam_sandwich")["configurations"]:
         f3d, _, labels = solid3d.reference("foam_sandwich", conf["name"])
         noisy = f3d * (1 + NOISE * rng.standard_normal(len(f3d)))
-        rows += [{"configuration": conf["name"], "mode": k + 1, "frequency_hz": f, "std_hz": NOISE * f3d[k],
-                  "label": labels[k]} for k, f in enumerate(noisy)]
+        rows += [
+            {
+                "configuration": conf["name"],
+                "mode": k + 1,
+                "frequency_hz": f,
+                "std_hz": NOISE * f3d[k],
+                "label": labels[k],
+            }
+            for k, f in enumerate(noisy)
+        ]
     return parse_measurements(pd.DataFrame(rows), model, "<3-D foam sandwich>")
 
 
@@ -72,7 +93,12 @@ def test_identification_of_skins_and_core_shear():
         if parameter.kind in ("E1", "G13", "G23"):
             assert abs(value / truth - 1) < 0.05 and abs(value - truth) < 3 * std, (parameter, value, std)
         else:
-            assert abs(value - truth) < 3 * std or "weakly identifiable" in flags, (parameter, value, std, flags)
+            assert abs(value - truth) < 3 * std or "weakly identifiable" in flags, (
+                parameter,
+                value,
+                std,
+                flags,
+            )
 
 
 def test_foam_in_plane_constants_are_weakly_identifiable():
@@ -91,9 +117,15 @@ def test_foam_in_plane_constants_are_weakly_identifiable():
     std = dict(zip(parameters, std))
     for kind in ("E1", "E2"):
         assert std[Parameter(kind, "pvc_foam")] > WEAK_REL_STD
-    assert std[Parameter("nu12", "pvc_foam")] * model.value(Parameter("nu12", "pvc_foam")) > WEAK_REL_STD * 0.3
-    for parameter in (Parameter("E1", "cfrp_fabric"), Parameter("E2", "cfrp_fabric"), Parameter("G13", "pvc_foam"),
-                      Parameter("G23", "pvc_foam")):
+    assert (
+        std[Parameter("nu12", "pvc_foam")] * model.value(Parameter("nu12", "pvc_foam")) > WEAK_REL_STD * 0.3
+    )
+    for parameter in (
+        Parameter("E1", "cfrp_fabric"),
+        Parameter("E2", "cfrp_fabric"),
+        Parameter("G13", "pvc_foam"),
+        Parameter("G23", "pvc_foam"),
+    ):
         assert std[parameter] < 5e-3, (parameter, std[parameter])
 
 
@@ -105,8 +137,11 @@ def test_diagnosis_selects_the_layerwise_model():
     misfit to the noise level (within 2x; measured 0.042 % at the default mesh, G13 = 34.96,
     G23 = 35.02 MPa; the FSDT 7.4 %).  A 12-element mesh (0.05 % from converged at mode 10)
     keeps the test short."""
-    model = sandwich_spec("false", theory="single_layer").with_values(
-        {p: v for p, v in START.items() if p.target == "pvc_foam"}).with_options(divisions=12)
+    model = (
+        sandwich_spec("false", theory="single_layer")
+        .with_values({p: v for p, v in START.items() if p.target == "pvc_foam"})
+        .with_options(divisions=12)
+    )
     data = measured(model)
     diagnosis = diagnose(model, data, ["transverse_shear", "layerwise"])
     best = diagnosis.candidates[0]

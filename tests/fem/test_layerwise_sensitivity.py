@@ -1,5 +1,6 @@
 """Exact frequency sensitivities of the layerwise model against central differences of
 full solves, for every parameter kind, on a sandwich with a bonded plate."""
+
 import math
 
 import numpy as np
@@ -30,25 +31,38 @@ def sandwich() -> Specimen:
     """An 80 x 60 mm sandwich (0.5 mm skins, the bottom one at 10 degrees so the angle and
     the Qb45 terms are live; 4 mm foam, stretching), and a bonded configuration (0.1 mm
     bond line and 1 mm aluminium underneath): 2 shear groups unbonded, 3 bonded ("auto")."""
-    layers = (Layer(SKIN, 0.5e-3, math.radians(10), "layer1"), Layer(FOAM, 4e-3, 0.0, "layer2"),
-              Layer(SKIN, 0.5e-3, 0.0, "layer3"))
-    bonded = Configuration("al_bottom", bottom=(Layer(ADHESIVE, 0.1e-3, 0.0, "al_bottom.bottom1"),
-                                                Layer(ALUMINIUM, 1e-3, 0.0, "al_bottom.bottom2")))
+    layers = (
+        Layer(SKIN, 0.5e-3, math.radians(10), "layer1"),
+        Layer(FOAM, 4e-3, 0.0, "layer2"),
+        Layer(SKIN, 0.5e-3, 0.0, "layer3"),
+    )
+    bonded = Configuration(
+        "al_bottom",
+        bottom=(
+            Layer(ADHESIVE, 0.1e-3, 0.0, "al_bottom.bottom1"),
+            Layer(ALUMINIUM, 1e-3, 0.0, "al_bottom.bottom2"),
+        ),
+    )
     return Specimen("sandwich", 0.08, 0.06, layers, (Configuration("original"), bonded))
 
 
 PARAMETERS = [
     *(Parameter(kind, "skin") for kind in ("E1", "E2", "G12", "nu12", "density", "G13", "G23")),
     *(Parameter(kind, "foam") for kind in ("E1", "E2", "G12", "G13", "density")),  # E2: also its E3
-    Parameter("G12", "adhesive"), Parameter("G23", "aluminium"),
-    Parameter("thickness", "layer2"), Parameter("thickness", "al_bottom.bottom1"), Parameter("angle", "layer1"),
+    Parameter("G12", "adhesive"),
+    Parameter("G23", "aluminium"),
+    Parameter("thickness", "layer2"),
+    Parameter("thickness", "al_bottom.bottom1"),
+    Parameter("angle", "layer1"),
 ]
 GROUPINGS = ("auto", "layers")
 CASES = [(p, g) for g in GROUPINGS for p in PARAMETERS]
 
 
 def model(specimen, grouping):
-    return SpecimenModel(specimen, ModelOptions(modes=5, divisions=6, theory="layerwise", layer_groups=grouping))
+    return SpecimenModel(
+        specimen, ModelOptions(modes=5, divisions=6, theory="layerwise", layer_groups=grouping)
+    )
 
 
 def stacked(specimen, grouping):
@@ -63,8 +77,10 @@ def test_groups_of_the_sandwich():
     assert solutions["original"].layerwise.groups == (0, 1, 0)
     assert solutions["al_bottom"].layerwise.groups == (0, 1, 0, 2, 0)
     assert model(specimen, "layers").solve("al_bottom").layerwise.groups == (0, 1, 2, 3, 4)
-    assert all(s.layerwise.stretch == (specimen.laminate(n).layers.index(specimen.layers[1]),)
-               for n, s in solutions.items())  # the foam
+    assert all(
+        s.layerwise.stretch == (specimen.laminate(n).layers.index(specimen.layers[1]),)
+        for n, s in solutions.items()
+    )  # the foam
 
 
 @pytest.mark.parametrize("parameter,grouping", CASES, ids=[f"{p.name}-{g}" for p, g in CASES])
@@ -94,8 +110,12 @@ def test_relative_sensitivities_keep_homogeneity(grouping):
     m = model(specimen, grouping)
     names = list(specimen.materials)
     moduli = [Parameter(k, n) for n in names for k in ("E1", "E2", "G12")]
-    moduli += [Parameter(k, n) for n in names for k in ("G13", "G23")
-               if k not in specimen.materials[n].defaulted_shear_moduli]
+    moduli += [
+        Parameter(k, n)
+        for n in names
+        for k in ("G13", "G23")
+        if k not in specimen.materials[n].defaulted_shear_moduli
+    ]
     densities = [Parameter("density", n) for n in names]
     np.testing.assert_allclose(m.sensitivity_matrix(moduli).sum(axis=1), 0.5, atol=1e-9)
     np.testing.assert_allclose(m.sensitivity_matrix(densities).sum(axis=1), -0.5, atol=1e-9)

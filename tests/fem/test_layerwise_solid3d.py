@@ -2,6 +2,7 @@
 mesh-converged to 1e-5 .. 2e-4 of each frequency; ``tests/data/solid3d``), with the true
 material properties, the first 10 flexural modes of every configuration paired by the MAC
 of w (``tests.fem.solid3d``)."""
+
 import numpy as np
 import pytest
 
@@ -9,9 +10,11 @@ from tests.fem import solid3d
 
 
 def needs(case):
-    return pytest.mark.skipif(not solid3d.available(case),
-                              reason=f"3-D reference tests/data/solid3d/{case}.json not generated yet "
-                                     "(python tests/data/solid3d/generate.py --case " + case + ")")
+    return pytest.mark.skipif(
+        not solid3d.available(case),
+        reason=f"3-D reference tests/data/solid3d/{case}.json not generated yet "
+        "(python tests/data/solid3d/generate.py --case " + case + ")",
+    )
 
 
 def check(case, configuration, tolerance, **options):
@@ -67,7 +70,9 @@ def test_core_stretch_is_what_the_bonded_sandwich_needs():
     by -0.034 % (bonded) and -0.060 % (original) at mode 10: the layerwise model's residual
     (-0.033 %, -0.063 %) is that coupling.  So: bonded without the stretch above +0.15 %,
     with it within +-0.05 %."""
-    bonded = {c: solid3d.errors("foam_sandwich", "al_bottom", theory="layerwise", core_stretch=c)[0]
-              for c in (True, False)}
+    bonded = {
+        c: solid3d.errors("foam_sandwich", "al_bottom", theory="layerwise", core_stretch=c)[0]
+        for c in (True, False)
+    }
     assert 1.5e-3 < bonded[False].max() < 3e-3, bonded[False]
     assert np.abs(bonded[True]).max() < 5e-4, bonded[True]

@@ -6,6 +6,7 @@ On equal elements much wider than that, the twisting modes converge slowly; the 
 below show it on the bundled coated plate and on a 3-D solid (CalculiX) reference, and
 show that the graded default mesh removes it.
 """
+
 import json
 from pathlib import Path
 
@@ -55,8 +56,11 @@ def test_graded_mesh_interpolates_the_bicubic_field_xy_exactly():
     np.testing.assert_allclose(deflection_operator(units, px, py) @ field, px * py, atol=1e-15)
     for a, b in zip(px[:5], py[:5], strict=True):
         dofs, rows = point_operators(units, a, b)
-        np.testing.assert_allclose([rows["w"] @ field[dofs], rows["w_x"] @ field[dofs], rows["w_y"] @ field[dofs]],
-                                   [a * b, b, a], atol=1e-14)
+        np.testing.assert_allclose(
+            [rows["w"] @ field[dofs], rows["w_x"] @ field[dofs], rows["w_y"] @ field[dofs]],
+            [a * b, b, a],
+            atol=1e-14,
+        )
 
 
 def test_graded_kirchhoff_plate_keeps_its_fourth_order_accuracy():
@@ -92,7 +96,9 @@ def test_shear_plate_converges_on_the_graded_mesh_and_not_on_equal_elements():
     spec = model.specimen
     equal = PlateMesh.with_element_size(spec.length, spec.width, divisions)
     assert model.mesh != equal
-    f = solve_laminate(spec.laminate("original"), equal, 6, transverse_shear=True, rotary_inertia=True).frequencies_hz
+    f = solve_laminate(
+        spec.laminate("original"), equal, 6, transverse_shear=True, rotary_inertia=True
+    ).frequencies_hz
     assert np.max(np.abs(f / reference["original"] - 1)) > 5e-4
 
 
@@ -121,6 +127,7 @@ def test_twisted_strip_follows_saint_venant_edge_correction():
     +0.48 %; Kirchhoff, which has no edge layer, is more than 3 % above it."""
     from fem.laminates.laminate import Laminate, Layer
     from fem.laminates.material import Material
+
     E, nu, rho, length, b, h = 70e9, 0.3, 2700.0, 0.3, 0.03, 0.003
     shear_modulus = E / (2 * (1 + nu))
     strip = Laminate((Layer(Material("aluminium", E, E, shear_modulus, nu, rho), h),))

@@ -1,5 +1,6 @@
 """Nodal-pattern labels: the free-free beam basis against its closed form, labels that do
 not depend on the mesh or the plate theory, and patterns parsed from a lab's labels."""
+
 import numpy as np
 import pytest
 
@@ -21,16 +22,34 @@ def test_beam_functions_are_the_free_free_modes():
     assert [int(np.sum(np.diff(np.sign(v)) != 0)) for v in values] == list(range(ORDER))
 
 
-@pytest.mark.parametrize("options", [ModelOptions(modes=12, divisions=8), ModelOptions(modes=12, divisions=20),
-                                     ModelOptions(modes=12, transverse_shear=True)],
-                         ids=["coarse", "fine", "shear"])
+@pytest.mark.parametrize(
+    "options",
+    [
+        ModelOptions(modes=12, divisions=8),
+        ModelOptions(modes=12, divisions=20),
+        ModelOptions(modes=12, transverse_shear=True),
+    ],
+    ids=["coarse", "fine", "shear"],
+)
 def test_labels_do_not_depend_on_mesh_or_theory(paper_specimen, options):
     """The paper's plate, 12 modes: the same labels on an 8 x 8 and a 20 x 20 mesh and with
     transverse shear; each appears once; the square plate's second and third modes are the
     X and ring modes, (0,2) - (2,0) below (0,2) + (2,0) (Leissa's free square plate)."""
     labels = SpecimenModel(paper_specimen, options).solve("original").labels
-    assert labels == ("(1,1)", "(0,2)-(2,0)", "(0,2)+(2,0)", "(1,2)", "(2,1)", "(0,3)", "(3,0)", "(2,2)",
-                      "(1,3)-(3,1)", "(1,3)+(3,1)", "(2,3)", "(3,2)")
+    assert labels == (
+        "(1,1)",
+        "(0,2)-(2,0)",
+        "(0,2)+(2,0)",
+        "(1,2)",
+        "(2,1)",
+        "(0,3)",
+        "(3,0)",
+        "(2,2)",
+        "(1,3)-(3,1)",
+        "(1,3)+(3,1)",
+        "(2,3)",
+        "(3,2)",
+    )
 
 
 def test_patterns_and_affinity():

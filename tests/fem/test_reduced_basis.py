@@ -1,6 +1,7 @@
 """Reanalysis on a reduced basis (``fem.solver.reduced_basis``) against full solves: on a
 thin (Kirchhoff), a thick (first-order shear) and a layerwise model, each with a sensor
 whose mass and position are parameters too; and the screens' reach on a long spruce plate."""
+
 import numpy as np
 import pytest
 
@@ -12,26 +13,64 @@ from fem.specimen import Parameter
 #: A foam-core sandwich (skins 0.5 mm, core 6 mm; the layerwise benchmark's, smaller and
 #: on a coarse mesh so a full solve takes a fraction of a second).
 SANDWICH = {
-    "specimen": {"length_mm": 250.0, "width_mm": 200.0,
-                 "layers": [{"material": "skin", "thickness_mm": 0.5}, {"material": "foam", "thickness_mm": 6.0},
-                            {"material": "skin", "thickness_mm": 0.5}]},
-    "materials": {"skin": {"E1_GPa": 62.0, "E2_GPa": 60.0, "G12_GPa": 4.8, "nu12": 0.05, "density_kg_m3": 1500.0,
-                           "G13_GPa": 3.5, "G23_GPa": 3.5, "identify": True},
-                  "foam": {"E1_GPa": 0.1, "E2_GPa": 0.1, "G12_GPa": 0.035, "nu12": 0.4286, "density_kg_m3": 80.0,
-                           "G13_GPa": 0.035, "G23_GPa": 0.035, "identify": ["G13", "G23"]}},
+    "specimen": {
+        "length_mm": 250.0,
+        "width_mm": 200.0,
+        "layers": [
+            {"material": "skin", "thickness_mm": 0.5},
+            {"material": "foam", "thickness_mm": 6.0},
+            {"material": "skin", "thickness_mm": 0.5},
+        ],
+    },
+    "materials": {
+        "skin": {
+            "E1_GPa": 62.0,
+            "E2_GPa": 60.0,
+            "G12_GPa": 4.8,
+            "nu12": 0.05,
+            "density_kg_m3": 1500.0,
+            "G13_GPa": 3.5,
+            "G23_GPa": 3.5,
+            "identify": True,
+        },
+        "foam": {
+            "E1_GPa": 0.1,
+            "E2_GPa": 0.1,
+            "G12_GPa": 0.035,
+            "nu12": 0.4286,
+            "density_kg_m3": 80.0,
+            "G13_GPa": 0.035,
+            "G23_GPa": 0.035,
+            "identify": ["G13", "G23"],
+        },
+    },
     "configurations": [{"name": "original"}],
     "model": {"modes": 6, "divisions": 8},
 }
-THEORIES = {"thin": {}, "thick": {"transverse_shear": True, "rotary_inertia": True}, "layerwise": {"theory": "layerwise"}}
-PARAMETERS = [Parameter("E1", "skin"), Parameter("G12", "skin"), Parameter("nu12", "skin"), Parameter("G13", "foam"),
-              Parameter("mass", "sensor"), Parameter("x", "sensor"), Parameter("y", "sensor")]
+THEORIES = {
+    "thin": {},
+    "thick": {"transverse_shear": True, "rotary_inertia": True},
+    "layerwise": {"theory": "layerwise"},
+}
+PARAMETERS = [
+    Parameter("E1", "skin"),
+    Parameter("G12", "skin"),
+    Parameter("nu12", "skin"),
+    Parameter("G13", "foam"),
+    Parameter("mass", "sensor"),
+    Parameter("x", "sensor"),
+    Parameter("y", "sensor"),
+]
 #: A fit's step: the skins' E1 +5 %, the core's G13 -5 %, the sensor 4 -> 4.4 g and 10 mm along.
 STEP = {PARAMETERS[0]: 1.05, PARAMETERS[3]: 0.95, PARAMETERS[4]: 1.1, PARAMETERS[5]: 1.125}
 
 
 def _model(theory: str):
-    return parse_spec(SANDWICH).with_options(**THEORIES[theory]).with_attachments(
-        [PointMass(0.004, 0.08, 0.06, "sensor")])
+    return (
+        parse_spec(SANDWICH)
+        .with_options(**THEORIES[theory])
+        .with_attachments([PointMass(0.004, 0.08, 0.06, "sensor")])
+    )
 
 
 def _moved(model, scale: float = 1.0):
@@ -66,8 +105,10 @@ def test_sensitivities_are_the_ritz_values_derivatives(theory):
     analytic = reanalysis.solve(moved.specimen).derivatives(PARAMETERS)
     for j, p in enumerate(PARAMETERS):
         h = 1e-4 * moved.value(p)
-        up, down = (reanalysis.solve(moved.with_values({p: moved.value(p) + s * h}).specimen).frequencies_hz
-                    for s in (1, -1))
+        up, down = (
+            reanalysis.solve(moved.with_values({p: moved.value(p) + s * h}).specimen).frequencies_hz
+            for s in (1, -1)
+        )
         numeric = (up - down) / (2 * h)
         scale = max(np.abs(numeric).max(), 1e-300)
         assert np.max(np.abs(analytic[:, j] - numeric)) < 1e-5 * scale, p
@@ -102,7 +143,9 @@ def test_assembled_and_projected_reanalyses_agree(theory):
     quadratures)."""
     model = _model(theory)
     extra = model.solve("original").modes.shapes
-    projected, assembled = (Reanalysis.of(_moved(model), "original", extra, assembled=a) for a in (False, True))
+    projected, assembled = (
+        Reanalysis.of(_moved(model), "original", extra, assembled=a) for a in (False, True)
+    )
     halfway = _moved(model, 0.5).specimen
     assert assembled.frequencies_hz(halfway) == pytest.approx(projected.frequencies_hz(halfway), rel=1e-10)
     one, other = (r.solve(halfway).derivatives(PARAMETERS) for r in (projected, assembled))
@@ -111,14 +154,29 @@ def test_assembled_and_projected_reanalyses_agree(theory):
 
 
 #: A long spruce plate at handbook values (the shape of a public tap-test data set's).
-SPRUCE = {"specimen": {"length_mm": 580.0, "width_mm": 213.0, "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
-          "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.80, "G12_GPa": 0.62, "nu12": 0.40,
-                                   "density_kg_m3": 440.0, "identify": True}},
-          "configurations": [{"name": "original"}]}
+SPRUCE = {
+    "specimen": {
+        "length_mm": 580.0,
+        "width_mm": 213.0,
+        "layers": [{"material": "spruce", "thickness_mm": 5.0}],
+    },
+    "materials": {
+        "spruce": {
+            "E1_GPa": 10.0,
+            "E2_GPa": 0.80,
+            "G12_GPa": 0.62,
+            "nu12": 0.40,
+            "density_kg_m3": 440.0,
+            "identify": True,
+        }
+    },
+    "configurations": [{"name": "original"}],
+}
 
 
-@pytest.mark.parametrize("options", [{}, {"transverse_shear": True, "rotary_inertia": True}],
-                         ids=["kirchhoff", "shear_and_mass"])
+@pytest.mark.parametrize(
+    "options", [{}, {"transverse_shear": True, "rotary_inertia": True}], ids=["kirchhoff", "shear_and_mass"]
+)
 def test_the_screens_reach(options):
     """The peak-list screen's range on a long spruce plate: 30 basis modes (1.5 x the 20
     compared), E1 +15 %, E2 -5 %, G12 +5 %, nu12 0.40 -> 0.35.  The Ritz frequencies
@@ -129,8 +187,10 @@ def test_the_screens_reach(options):
     start = start.with_options(modes=30, divisions=divisions, **options)
     if options:
         start = start.with_attachments([PointMass(0.004, 0.4, 0.15, "sensor")])
-    moved = {Parameter(k, "spruce"): start.value(Parameter(k, "spruce")) * f
-             for k, f in {"E1": 1.15, "E2": 0.95, "G12": 1.05}.items()}
+    moved = {
+        Parameter(k, "spruce"): start.value(Parameter(k, "spruce")) * f
+        for k, f in {"E1": 1.15, "E2": 0.95, "G12": 1.05}.items()
+    }
     moved = start.with_values({**moved, Parameter("nu12", "spruce"): 0.35}).with_options(modes=20)
     ritz = Reanalysis.of(start, "original").frequencies_hz(moved.specimen)[:20]
     full = moved.solve("original").frequencies_hz[:20]

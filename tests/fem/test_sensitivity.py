@@ -1,4 +1,5 @@
 """Exact frequency sensitivities against central differences of full solves."""
+
 import math
 
 import numpy as np
@@ -18,10 +19,14 @@ PARAMETERS = [
     *(Parameter(kind, "steel") for kind in ("E1", "E2", "G12", "nu12", "density")),
     *(Parameter(kind, "top_coating") for kind in ("E1", "nu12")),
     # ... a known material filling two layers in two configurations (brass top and bottom)
-    Parameter("E1", "brass"), Parameter("G12", "brass"), Parameter("density", "brass"),
+    Parameter("E1", "brass"),
+    Parameter("G12", "brass"),
+    Parameter("density", "brass"),
     # layer parameters: thickness and angle of a specimen layer and of an added plate
-    Parameter("thickness", "layer2"), Parameter("angle", "layer2"),
-    Parameter("thickness", "brass_top.top2"), Parameter("thickness", "brass_bottom.bottom1"),
+    Parameter("thickness", "layer2"),
+    Parameter("angle", "layer2"),
+    Parameter("thickness", "brass_top.top2"),
+    Parameter("thickness", "brass_bottom.bottom1"),
 ]
 
 

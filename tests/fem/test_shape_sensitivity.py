@@ -1,6 +1,7 @@
 """Exact mode shape sensitivities (the algebraic method, ``eigenvector_derivatives``)
 against central differences of full solves, and their eigenvalue derivative against the
 modal-energy one (Fox and Kapoor), which shares no code with it."""
+
 import math
 from dataclasses import replace
 
@@ -50,8 +51,14 @@ def _check(model: SpecimenModel, configuration: str, parameters, modes) -> float
             plus = model.with_values({p: value + h}).solve(configuration).modes.shapes[:, modes]
             minus = model.with_values({p: value - h}).solve(configuration).modes.shapes[:, modes]
             finite = (_aligned(plus, reference) - _aligned(minus, reference)) / (2 * h)
-            errors.append(float(np.max(np.linalg.norm(at @ (exact[:, :, k] - finite), axis=0)
-                                       / np.linalg.norm(at @ finite, axis=0))))
+            errors.append(
+                float(
+                    np.max(
+                        np.linalg.norm(at @ (exact[:, :, k] - finite), axis=0)
+                        / np.linalg.norm(at @ finite, axis=0)
+                    )
+                )
+            )
         worst = max(worst, min(errors))
     return worst
 
@@ -78,15 +85,24 @@ def test_eigenvalue_derivative_of_the_bordered_system_is_fox_and_kapoor(paper_mo
     two formulas, one eigen-solve."""
     solution = paper_model.solve("brass_bottom")
     units = solution.units
-    coefficients, inertia = solution.laminate.stiffness, solution.laminate.inertia * np.array(solution.inertia_terms)
+    coefficients, inertia = (
+        solution.laminate.stiffness,
+        solution.laminate.inertia * np.array(solution.inertia_terms),
+    )
     stiffness, mass = units.stiffness(coefficients), units.mass(inertia)
     dx, di = (np.array(d) for d in zip(*(solution.laminate.derivative(p.kind, p.target) for p in PARAMETERS)))
     d_stiffness = [units.stiffness(x) for x in dx]
     d_mass = [units.mass(i * np.array(solution.inertia_terms)) for i in di]
     by_energies = solution.derivatives(PARAMETERS) * 8 * math.pi**2 * solution.frequencies_hz[:, None]
     for i in MODES:
-        _, d_lambda = eigenvector_derivatives(stiffness, mass, float(solution.modes.eigenvalues[i]),
-                                              solution.modes.shapes[:, i], d_stiffness, d_mass)
+        _, d_lambda = eigenvector_derivatives(
+            stiffness,
+            mass,
+            float(solution.modes.eigenvalues[i]),
+            solution.modes.shapes[:, i],
+            d_stiffness,
+            d_mass,
+        )
         np.testing.assert_allclose(d_lambda, by_energies[i], rtol=1e-9)
 
 

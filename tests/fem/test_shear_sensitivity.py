@@ -1,5 +1,6 @@
 """Exact frequency sensitivities with transverse shear and/or rotary inertia against
 central differences of full solves."""
+
 import math
 from dataclasses import replace
 
@@ -24,9 +25,12 @@ EFFECTS = {"shear": (True, False), "rotary": (False, True), "both": (True, True)
 #: adhesive's G12, and layer thickness and angle.
 PARAMETERS = [
     *(Parameter(kind, "steel") for kind in ("E1", "E2", "G12", "nu12", "density", "G13", "G23")),
-    Parameter("G12", "top_coating"), Parameter("G13", "top_coating"),
-    Parameter("G23", "brass"), Parameter("G12", "adhesive"),
-    Parameter("thickness", "layer2"), Parameter("angle", "layer2"),
+    Parameter("G12", "top_coating"),
+    Parameter("G13", "top_coating"),
+    Parameter("G23", "brass"),
+    Parameter("G12", "adhesive"),
+    Parameter("thickness", "layer2"),
+    Parameter("angle", "layer2"),
     Parameter("thickness", "brass_top.top1"),
 ]
 SHEAR_MODULI = [p for p in PARAMETERS if p.kind in ("G13", "G23")]
@@ -40,14 +44,20 @@ def thick(paper_specimen):
     matters (frequencies 1-10 % below Kirchhoff); steel with given, unequal G13 and G23
     and its axes at 10 degrees, so every shear term and the angle derivative is live."""
     specimen = replace(paper_specimen, length=0.03, width=0.03)
-    return specimen.with_values({
-        Parameter("G13", "steel"): 70e9, Parameter("G23", "steel"): 60e9, Parameter("angle", "layer2"): math.radians(10),
-    })
+    return specimen.with_values(
+        {
+            Parameter("G13", "steel"): 70e9,
+            Parameter("G23", "steel"): 60e9,
+            Parameter("angle", "layer2"): math.radians(10),
+        }
+    )
 
 
 def model(specimen, effect):
     shear, rotary = EFFECTS[effect]
-    return SpecimenModel(specimen, ModelOptions(modes=5, divisions=6, transverse_shear=shear, rotary_inertia=rotary))
+    return SpecimenModel(
+        specimen, ModelOptions(modes=5, divisions=6, transverse_shear=shear, rotary_inertia=rotary)
+    )
 
 
 def stacked_frequencies(specimen, effect):

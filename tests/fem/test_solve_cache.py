@@ -1,5 +1,6 @@
 """The byte-bounded caches: modal solves evicted by size, least recently used first; unit
 matrices shared, bounded by what they hold, let go with the solves that hold them."""
+
 import gc
 import weakref
 
@@ -20,16 +21,16 @@ def test_values_are_evicted_by_bytes_least_recently_used_first():
         calls.append(n)
         return np.zeros(n)  # 8 n bytes
 
-    array(100), array(150)             # 800 + 1200 bytes
-    array(100)                         # a hit: 100 is now the most recent
-    array(120)                         # 960 more: 2960 in all, within the budget
+    array(100), array(150)  # 800 + 1200 bytes
+    array(100)  # a hit: 100 is now the most recent
+    array(120)  # 960 more: 2960 in all, within the budget
     assert array.cache_info().entries == 3 and array.cache_info().bytes == 2960
-    array(50)                          # 400 more: 150, the least recently used, goes
+    array(50)  # 400 more: 150, the least recently used, goes
     info = array.cache_info()
     assert info.bytes == 2160 and info.entries == 3 and info.hits == 1
     array(150)
     assert calls == [100, 150, 120, 50, 150]
-    array(1000)                        # 8000 bytes: more than the budget, returned but not kept
+    array(1000)  # 8000 bytes: more than the budget, returned but not kept
     assert array.cache_info().bytes <= 3000
     array.cache_clear()
     assert array.cache_info().entries == 0 and array.cache_info().bytes == 0
@@ -43,7 +44,10 @@ def test_the_solve_cache_counts_a_solves_shapes():
     solution = model.solve("original")
     info = solve_laminate.cache_info()
     assert info.entries == 1 and info.misses == 1
-    assert info.bytes == solution.modes.shapes.nbytes + solution.modes.eigenvalues.nbytes + SOLUTION_OVERHEAD_BYTES
+    assert (
+        info.bytes
+        == solution.modes.shapes.nbytes + solution.modes.eigenvalues.nbytes + SOLUTION_OVERHEAD_BYTES
+    )
     assert model.solve("original") is solution and solve_laminate.cache_info().hits == 1
 
 
@@ -66,8 +70,8 @@ def test_shared_values_are_kept_by_bytes_and_found_again_while_held():
     a = cache.get("a", lambda: make(400))
     cache.get("b", lambda: make(400))
     assert dropped == [] and cache.info().bytes == 800
-    a.n = 700                            # "a" grew after it was made: 1100 > 1000
-    cache.get("b", lambda: make(1))      # measured again: "a", the least recent, goes
+    a.n = 700  # "a" grew after it was made: 1100 > 1000
+    cache.get("b", lambda: make(1))  # measured again: "a", the least recent, goes
     assert cache.get("c", lambda: make(100)) is not None
     assert dropped == [700] and cache.info().entries == 2
     assert cache.get("a", lambda: make(1)) is a and made == [400, 400, 100]
@@ -76,7 +80,7 @@ def test_shared_values_are_kept_by_bytes_and_found_again_while_held():
     assert cache.info().entries == 1 and made[-1] == 5000
     del a
     gc.collect()
-    cache.get("a", lambda: make(2))      # no longer held anywhere: made again
+    cache.get("a", lambda: make(2))  # no longer held anywhere: made again
     assert made[-1] == 2
 
 
@@ -95,8 +99,8 @@ def test_a_unit_set_let_go_takes_its_solves_with_it(monkeypatch):
     held = weakref.ref(first.units)
     frequencies = first.frequencies_hz
     del first
-    solve_laminate(laminate, mesh, 8)    # another mesh: its units grow as it is solved,
-    unit_matrices(mesh)                   # measured at the next use: the coarse units and their solve go
+    solve_laminate(laminate, mesh, 8)  # another mesh: its units grow as it is solved,
+    unit_matrices(mesh)  # measured at the next use: the coarse units and their solve go
     gc.collect()
     assert held() is None
     assert solve_laminate.cache_info().entries == 1

@@ -1,5 +1,6 @@
 """First-order shear deformation (transverse_shear) and rotary inertia against 3-D
 elasticity, the Kirchhoff model, a beam closed form and mesh refinement."""
+
 import math
 
 import numpy as np
@@ -143,7 +144,9 @@ def test_no_shear_locking():
     for ratio in (200, 1000):
         lam = plate(FV12, thickness=10.0 / ratio)
         kirchhoff = solve_laminate(lam, mesh, 8).frequencies_hz
-        difference[ratio] = relative(solve_laminate(lam, mesh, 8, transverse_shear=True).frequencies_hz, kirchhoff)
+        difference[ratio] = relative(
+            solve_laminate(lam, mesh, 8, transverse_shear=True).frequencies_hz, kirchhoff
+        )
     assert np.all(difference[1000] < 0) and np.abs(difference[1000]).max() < 5e-5, difference[1000]
     np.testing.assert_allclose(difference[200] / difference[1000], 25.0, rtol=0.1)
 
@@ -154,8 +157,12 @@ def test_convergence_under_mesh_refinement():
     Rayleigh-Ritz discretisation, nested spaces), and the observed order
     log2((f5 - f10) / (f10 - f20)) is at least 3.5 (the element's O(h^4); measured 3.8-5.7)."""
     lam = Laminate((Layer(iso(200e9, 0.3, 8000), 0.1),))
-    f = [solve_laminate(lam, PlateMesh(1.0, 1.0, n, n), 8, transverse_shear=True, rotary_inertia=True).frequencies_hz
-         for n in (5, 10, 20)]
+    f = [
+        solve_laminate(
+            lam, PlateMesh(1.0, 1.0, n, n), 8, transverse_shear=True, rotary_inertia=True
+        ).frequencies_hz
+        for n in (5, 10, 20)
+    ]
     assert np.all(f[0] > f[1]) and np.all(f[1] > f[2])
     order = np.log2((f[0] - f[1]) / (f[1] - f[2]))
     assert np.all(order > 3.5), order
@@ -172,7 +179,9 @@ def test_exactly_six_rigid_body_modes_with_shear_element(thickness, E, rotary_in
     Lanczos solve returns the 7th to 12th eigenvalues to 1e-6."""
     lam = Laminate((Layer(iso(E, 0.3, 7800), thickness),))
     mesh = PlateMesh(0.15, 0.1, 4, 3)
-    ours = solve_laminate(lam, mesh, 6, transverse_shear=True, rotary_inertia=rotary_inertia).modes.eigenvalues
+    ours = solve_laminate(
+        lam, mesh, 6, transverse_shear=True, rotary_inertia=rotary_inertia
+    ).modes.eigenvalues
     units = unit_matrices(mesh, ShearDifferencePlate)
     coefficients = np.concatenate([lam.stiffness, lam.shear_stiffness])
     K = units.matrix(units.combined_data(coefficients, units.element_stiffness)).toarray()
@@ -191,7 +200,9 @@ def test_model_options_switch_the_effects(paper_specimen):
     for shear, rotary in ((False, False), (True, False), (False, True), (True, True)):
         options = ModelOptions(modes=5, divisions=8, transverse_shear=shear, rotary_inertia=rotary)
         solution = SpecimenModel(paper_specimen, options).solve("brass_top")
-        assert solution.transverse_shear == shear and solution.inertia_terms == ((1, 1, 1) if rotary else (1, 0, 0))
+        assert solution.transverse_shear == shear and solution.inertia_terms == (
+            (1, 1, 1) if rotary else (1, 0, 0)
+        )
         frequencies[shear, rotary] = solution.frequencies_hz
     base = frequencies[False, False]
     for key in ((True, False), (False, True), (True, True)):

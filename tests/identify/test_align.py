@@ -1,5 +1,6 @@
 """``matching.align`` scans the scales cheapest lower bound first and stops early: it
 must pick exactly the scale, matching and cost of trying every scale."""
+
 import numpy as np
 import pytest
 
@@ -24,7 +25,9 @@ def test_align_equals_the_full_scan(seed):
     rng = np.random.default_rng(seed)
     model = np.sort(rng.uniform(50, 1000, rng.integers(5, 14)))
     n = int(rng.integers(3, len(model)))
-    peaks = np.sort(rng.choice(model, n, replace=False) * rng.uniform(0.5, 2) * (1 + 0.01 * rng.standard_normal(n)))
+    peaks = np.sort(
+        rng.choice(model, n, replace=False) * rng.uniform(0.5, 2) * (1 + 0.01 * rng.standard_normal(n))
+    )
     if seed % 3 == 0:
         peaks = np.sort(np.append(peaks, rng.uniform(50, 1000, 2)))
     std = None if seed % 2 else 0.002 * peaks

@@ -1,5 +1,6 @@
 """The uncertainty budget: known inputs' std propagated to the identified
 properties, checked by a refit and by Monte Carlo."""
+
 from dataclasses import replace
 
 import numpy as np
@@ -48,19 +49,34 @@ def test_budget_table_and_total(result):
     parts; the reported std is the total."""
     budget = result.budget
     assert result.converged and budget is not None
-    assert {u.name for u in budget.inputs} == {"aluminium.E1", "aluminium.E2", "aluminium.G12", "aluminium.density",
-                                               "coating.density", "layer1.thickness", "layer2.thickness",
-                                               "specimen.length", "specimen.width"}
-    np.testing.assert_allclose(budget.total_std**2, budget.measurement_std**2 + np.sum(budget.contributions**2, 1))
+    assert {u.name for u in budget.inputs} == {
+        "aluminium.E1",
+        "aluminium.E2",
+        "aluminium.G12",
+        "aluminium.density",
+        "coating.density",
+        "layer1.thickness",
+        "layer2.thickness",
+        "specimen.length",
+        "specimen.width",
+    }
+    np.testing.assert_allclose(
+        budget.total_std**2, budget.measurement_std**2 + np.sum(budget.contributions**2, 1)
+    )
     np.testing.assert_allclose(result.uncertainty.std, budget.total_std, rtol=1e-9)
     assert budget.total_std[0] > 100 * budget.measurement_std[0], "the inputs dominate the scatter here"
     table = budget.table()
     assert list(table["parameter"]) == ["coating.E1", "coating.E2", "coating.G12"]
 
 
-@pytest.mark.parametrize("name,kind,target,step", [("aluminium.E1", "E1", "aluminium", 0.01),
-                                                   ("layer1.thickness", "thickness", "layer1", 0.005),
-                                                   ("specimen.length", "length", None, 0.002)])
+@pytest.mark.parametrize(
+    "name,kind,target,step",
+    [
+        ("aluminium.E1", "E1", "aluminium", 0.01),
+        ("layer1.thickness", "thickness", "layer1", 0.005),
+        ("specimen.length", "length", None, 0.002),
+    ],
+)
 def test_sensitivity_matches_a_refit(nominal, data, result, name, kind, target, step):
     """d theta / d beta against central differences of refits with the input moved by
     +-step (relative): the data are the nominal plate's, so a refit with a changed input
@@ -71,7 +87,9 @@ def test_sensitivity_matches_a_refit(nominal, data, result, name, kind, target, 
     size = nominal.specimen.length if kind == "length" else nominal.value(key)
     moved = [fit_layers(with_inputs(nominal, {key: size * (1 + s * step)}), data).values for s in (1, -1)]
     central = (moved[0] - moved[1]) / (2 * step * size)
-    np.testing.assert_allclose(result.budget.sensitivity[:, j], central, rtol=0.03, atol=1e-3 * np.abs(central).max())
+    np.testing.assert_allclose(
+        result.budget.sensitivity[:, j], central, rtol=0.03, atol=1e-3 * np.abs(central).max()
+    )
 
 
 def test_monte_carlo_covers_the_observed_spread(nominal, data, result):
@@ -126,8 +144,10 @@ def test_a_held_property_carries_its_handbook_scatter(nominal, data):
     assert np.all(widened.uncertainty.std > 2 * held.uncertainty.std), "a 20 % G12 dominates E1 and E2's std"
     assert held.converged
     assert any("coating.G12 held at the spec's values" in w for w in widened.warnings)
-    moved = [fit_layers(start.with_values({g12: start.value(g12) * (1 + s * 0.01)}), data, free).values
-             for s in (1, -1)]
+    moved = [
+        fit_layers(start.with_values({g12: start.value(g12) * (1 + s * 0.01)}), data, free).values
+        for s in (1, -1)
+    ]
     central = (moved[0] - moved[1]) / (2 * 0.01 * start.value(g12))
     np.testing.assert_allclose(widened.budget.sensitivity[:, j], central, rtol=0.03)
     assert with_held_scatter(held, []) is held
@@ -146,7 +166,11 @@ def orthotropic():
     spec = tomllib.loads(SPEC.read_text())
     spec["specimen"]["layers"][1]["angle_deg_std"] = ANGLE_STD_DEG
     model = parse_spec(spec)
-    values = {Parameter("E1", "coating"): 40e9, Parameter("E2", "coating"): 10e9, Parameter("G12", "coating"): 4e9}
+    values = {
+        Parameter("E1", "coating"): 40e9,
+        Parameter("E2", "coating"): 10e9,
+        Parameter("G12", "coating"): 4e9,
+    }
     return model.with_values(values)
 
 
@@ -165,12 +189,18 @@ def test_a_layer_angle_enters_to_second_order(orthotropic):
     first, second = names.index("layer2.angle"), names.index("layer2.angle, second order")
     u = np.radians(ANGLE_STD_DEG)
     angle = Parameter("angle", "layer2")
-    moved = [fit_layers(orthotropic.with_values({angle: s * u}), data).values - nominal.values for s in (1, -1)]
+    moved = [
+        fit_layers(orthotropic.with_values({angle: s * u}), data).values - nominal.values for s in (1, -1)
+    ]
     odd, even = (moved[0] - moved[1]) / 2, (moved[0] + moved[1]) / 2
-    assert np.abs(even).max() > 0 and np.abs(odd).max() < 1e-3 * np.abs(even).max(), "even in the angle at 0 deg"
+    assert np.abs(even).max() > 0 and np.abs(odd).max() < 1e-3 * np.abs(even).max(), (
+        "even in the angle at 0 deg"
+    )
     np.testing.assert_allclose(budget.contributions[:, second], np.sqrt(3) * np.abs(even), rtol=0.08)
     assert np.all(budget.contributions[:, first] < 1e-3 * budget.contributions[:, second])
-    assert np.all(budget.contributions[:, second] > budget.measurement_std), "3 deg matters more than 0.001 % scatter"
+    assert np.all(budget.contributions[:, second] > budget.measurement_std), (
+        "3 deg matters more than 0.001 % scatter"
+    )
 
 
 def test_an_angle_the_fit_identifies_is_not_an_input(orthotropic):
@@ -178,7 +208,9 @@ def test_an_angle_the_fit_identifies_is_not_an_input(orthotropic):
     gives the angle's own std)."""
     data = synthetic_measurements(orthotropic, modes=6, noise_rel=1e-5, seed=0, labels="all")
     free = list(orthotropic.specimen.material_parameters()) + [Parameter("angle", "layer2")]
-    result = with_budget(fit_layers(orthotropic.with_values({Parameter("angle", "layer2"): 0.05}), data, free))
+    result = with_budget(
+        fit_layers(orthotropic.with_values({Parameter("angle", "layer2"): 0.05}), data, free)
+    )
     assert not any("angle" in u.name for u in result.budget.inputs)
 
 

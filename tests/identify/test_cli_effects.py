@@ -1,4 +1,5 @@
 """identify-layers fit --effect, compare and diagnose on data with a hidden sensor mass."""
+
 import json
 
 import pytest
@@ -22,8 +23,9 @@ def sensor_csv(tmp_path_factory):
 def test_fit_with_free_point_mass(sensor_csv, capsys, tmp_path):
     """The fit JSON: the effect's parameters are reported under "effects"; the report shows
     the error per mode before and after."""
-    code = main(["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json",
-                 "--report", str(tmp_path)])
+    code = main(
+        ["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json", "--report", str(tmp_path)]
+    )
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["converged"]
     mass = out["effects"]["point_mass"]
@@ -48,7 +50,10 @@ def test_compare_flags_the_point_signature(sensor_csv, capsys, tmp_path):
 
 
 def test_diagnose_json_shape(sensor_csv, capsys):
-    assert main(["diagnose", str(COATED_PLATE), sensor_csv, "--effects", "point_mass,rotary_inertia", "--json"]) == 0
+    assert (
+        main(["diagnose", str(COATED_PLATE), sensor_csv, "--effects", "point_mass,rotary_inertia", "--json"])
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["ranking"][0]["effect"] == "point_mass"
     assert out["ranking"][0]["rms_rel_error_after"] < out["rms_rel_error"] / 5

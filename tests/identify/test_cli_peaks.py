@@ -1,4 +1,5 @@
 """identify-layers peaks: recordings in, the peak list out, and fit takes it."""
+
 import json
 
 import numpy as np
@@ -22,8 +23,19 @@ def test_peaks_writes_the_peak_list_and_fit_reads_it(tmp_path, capsys):
         paths.append(tmp_path / f"hit{i + 1}.csv")
         write_csv(hit, paths[-1])
     out_csv = tmp_path / "peaks.csv"
-    code = main(["peaks", *map(str, paths), "--configuration", "brass_top", "--out", str(out_csv), "--json",
-                 "--report", str(tmp_path / "report")])
+    code = main(
+        [
+            "peaks",
+            *map(str, paths),
+            "--configuration",
+            "brass_top",
+            "--out",
+            str(out_csv),
+            "--json",
+            "--report",
+            str(tmp_path / "report"),
+        ]
+    )
     data = json.loads(capsys.readouterr().out)
     assert code == 0 and data["configuration"] == "brass_top"
     found = [p["frequency_hz"] for p in data["peaks"]]
@@ -39,6 +51,8 @@ def test_peaks_writes_the_peak_list_and_fit_reads_it(tmp_path, capsys):
 def test_unknown_configuration_with_a_spec_is_a_one_line_error(tmp_path, capsys):
     hit = Session(MODES, n_hits=1, seed=1).hits()[0]
     write_csv(hit, tmp_path / "hit.csv")
-    code = main(["peaks", str(tmp_path / "hit.csv"), "--configuration", "brass_tpo", "--spec", str(COATED_PLATE)])
+    code = main(
+        ["peaks", str(tmp_path / "hit.csv"), "--configuration", "brass_tpo", "--spec", str(COATED_PLATE)]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "brass_tpo" in err and err.count("\n") == 1

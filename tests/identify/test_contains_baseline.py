@@ -2,6 +2,7 @@
 refit of an effect that vanishes at a value of its parameters (a suspension's stiffness
 or a point mass going to zero) falls back on a start there, from where it can only
 descend."""
+
 import tomllib
 
 import pytest
@@ -26,7 +27,9 @@ def heavy_sensor_baseline():
     scatter, fitted without it (RMS 0.32 %)."""
     spec = tomllib.loads(SPEC)
     model = parse_spec(spec)
-    truth = parse_spec({**spec, "effects": [{"kind": "point_mass", "mass_g": 15.0, "x_mm": 120.0, "y_mm": 95.0}]})
+    truth = parse_spec(
+        {**spec, "effects": [{"kind": "point_mass", "mass_g": 15.0, "x_mm": 120.0, "y_mm": 95.0}]}
+    )
     data = parse_measurements(synthetic_measurements(truth, modes=6, noise_rel=2e-4, seed=4).table, model)
     return model, data, compare(model, data).fitted
 
@@ -41,8 +44,9 @@ def test_a_suspension_refit_ends_no_worse_than_its_baseline(heavy_sensor_baselin
     assert added.result.statistics.sum_squares <= baseline.statistics.sum_squares + NOT_WORSE_CHI2
 
 
-def test_a_point_mass_whose_starts_all_end_worse_is_refitted_from_a_vanishing_mass(heavy_sensor_baseline,
-                                                                                     monkeypatch):
+def test_a_point_mass_whose_starts_all_end_worse_is_refitted_from_a_vanishing_mass(
+    heavy_sensor_baseline, monkeypatch
+):
     """Where every start ends above the baseline (forced here: each counts as worse), the
     refit runs once more from a mass of ``VANISHING_MASS`` of the plate's at the best
     start's position; from there it descends, and the lowest misfit is kept."""

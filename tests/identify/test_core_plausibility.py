@@ -1,6 +1,7 @@
 """Plausibility by what a layer is: a core whose cells or grain run through its thickness
 (end-grain balsa, a honeycomb: the spec gives E3 well above its in-plane moduli) may
 carry transverse shear moduli many times its in-plane G12; a ply or a foam may not."""
+
 import numpy as np
 import pytest
 
@@ -16,28 +17,58 @@ from identify.recordings.synthetic import synthetic_measurements
 
 def sandwich(skin, core, core_shear=None, e3_gpa=3.0) -> dict:
     """A 300 x 200 mm panel: 0.8 mm fabric skins on a 10 mm core (GPa, GPa, GPa, nu)."""
-    balsa = {"E1_GPa": core[0], "E2_GPa": core[1], "G12_GPa": core[2], "nu12": core[3], "density_kg_m3": 160,
-             "identify": True}
+    balsa = {
+        "E1_GPa": core[0],
+        "E2_GPa": core[1],
+        "G12_GPa": core[2],
+        "nu12": core[3],
+        "density_kg_m3": 160,
+        "identify": True,
+    }
     if e3_gpa is not None:
         balsa["E3_GPa"] = e3_gpa
     if core_shear is not None:
         balsa["G13_GPa"], balsa["G23_GPa"] = core_shear
-    return {"specimen": {"name": "end-grain balsa sandwich", "length_mm": 300.0, "width_mm": 200.0,
-                         "layers": [{"material": "fabric", "thickness_mm": 0.8},
-                                    {"material": "balsa", "thickness_mm": 10.0},
-                                    {"material": "fabric", "thickness_mm": 0.8}]},
-            "materials": {"fabric": {"E1_GPa": skin[0], "E2_GPa": skin[1], "G12_GPa": skin[2], "nu12": skin[3],
-                                     "density_kg_m3": 1500, "identify": True},
-                          "balsa": balsa},
-            "configurations": [{"name": "original"}], "model": {"modes": 10}}
+    return {
+        "specimen": {
+            "name": "end-grain balsa sandwich",
+            "length_mm": 300.0,
+            "width_mm": 200.0,
+            "layers": [
+                {"material": "fabric", "thickness_mm": 0.8},
+                {"material": "balsa", "thickness_mm": 10.0},
+                {"material": "fabric", "thickness_mm": 0.8},
+            ],
+        },
+        "materials": {
+            "fabric": {
+                "E1_GPa": skin[0],
+                "E2_GPa": skin[1],
+                "G12_GPa": skin[2],
+                "nu12": skin[3],
+                "density_kg_m3": 1500,
+                "identify": True,
+            },
+            "balsa": balsa,
+        },
+        "configurations": [{"name": "original"}],
+        "model": {"modes": 10},
+    }
 
 
 TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR = (22.0, 21.0, 3.0, 0.12), (0.15, 0.14, 0.06, 0.3), (0.18, 0.15)
 
 
-@pytest.mark.parametrize("e3_gpa,ratio,plausible", [(3.0, 3.0, True), (3.0, 0.8 * CORE_MAX_SHEAR_RATIO, True),
-                                                    (3.0, 1.2 * CORE_MAX_SHEAR_RATIO, False),
-                                                    (None, 3.0, False), (0.15, 3.0, False)])
+@pytest.mark.parametrize(
+    "e3_gpa,ratio,plausible",
+    [
+        (3.0, 3.0, True),
+        (3.0, 0.8 * CORE_MAX_SHEAR_RATIO, True),
+        (3.0, 1.2 * CORE_MAX_SHEAR_RATIO, False),
+        (None, 3.0, False),
+        (0.15, 3.0, False),
+    ],
+)
 def test_the_shear_limit_follows_the_layers_class(e3_gpa, ratio, plausible):
     """G13 = G23 = ratio x G12 of the core: within the core limit where the spec gives E3 =
     20 x its in-plane moduli; beyond the ply limit (2.5) where it gives none, or an E3
@@ -95,17 +126,32 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
 
     monkeypatch.setattr(driver, "fit_layers", recording)
     model, reached = shear_continuation(baseline, model, shear, factor, data, parameters, {}, FitOptions())
-    kept = misfits[:-1] if len(misfits) > 1 and misfits[-1] >= misfits[-2] else misfits  # the last step may fail
+    # the last step may fail
+    kept = misfits[:-1] if len(misfits) > 1 and misfits[-1] >= misfits[-2] else misfits
     assert abs(misfits[0] / baseline.statistics.sum_squares - 1) < 0.01 and reached < factor
     assert np.all(np.diff(kept) < 0)
-    refit = fit_layers(model, data, parameters, FitOptions(max_iterations=40), like=baseline, explain=False,
-                       settle=False, pairings=baseline.pairings)
+    refit = fit_layers(
+        model,
+        data,
+        parameters,
+        FitOptions(max_iterations=40),
+        like=baseline,
+        explain=False,
+        settle=False,
+        pairings=baseline.pairings,
+    )
     assert np.all(np.diff([it.cost for it in refit.history]) <= 0)
     assert refit.statistics.sum_squares < 0.01 * baseline.statistics.sum_squares
-    at_eight = fit_layers(prepared.model.with_values({p: 8 * baseline.model.specimen.materials[p.target].G12
-                                                      for p in shear}),
-                          data, parameters, FitOptions(max_iterations=0), like=baseline, explain=False, settle=False,
-                          pairings=baseline.pairings)
+    at_eight = fit_layers(
+        prepared.model.with_values({p: 8 * baseline.model.specimen.materials[p.target].G12 for p in shear}),
+        data,
+        parameters,
+        FitOptions(max_iterations=0),
+        like=baseline,
+        explain=False,
+        settle=False,
+        pairings=baseline.pairings,
+    )
     assert np.max(np.abs(at_eight.model_hz / baseline.model_hz - 1)) > 0.01
 
 
@@ -129,8 +175,10 @@ def test_a_failed_shear_refit_tries_every_start_then_the_continuation(monkeypatc
     added = add_effect(baseline, "transverse_shear", data, start.specimen)
     assert continued == [True]
     # The core is no unidirectional ply: its other starts are (1, 1) and (0.25, 0.25) x G12.
-    assert any(note.startswith("the refit from the screened start ended worse") and "restarted 3 time(s)" in note
-               for note in added.notes), added.notes
+    assert any(
+        note.startswith("the refit from the screened start ended worse") and "restarted 3 time(s)" in note
+        for note in added.notes
+    ), added.notes
     assert added.result.statistics.sum_squares < baseline.statistics.sum_squares
 
 

@@ -1,6 +1,7 @@
 """Layer loss factors from modal damping: the paper's plate with damping coatings
 (studies.damping), one plate alone, a misfit the layers cannot explain, the outputs and
 the Oberst beam against ASTM E756."""
+
 import json
 
 import numpy as np
@@ -83,15 +84,24 @@ def test_outputs(fitted):
     assert document["materials"]["brass"]["eta_E1"] == 0.001
     block = document["damping"]
     assert block["status"] == "converged" and block["condition_number"] > 1 and block["rms_rel_error"] > 0
-    assert {"configuration", "mode", "measured_damping_ratio", "model_damping_ratio"} <= set(block["residuals"][0])
+    assert {"configuration", "mode", "measured_damping_ratio", "model_damping_ratio"} <= set(
+        block["residuals"][0]
+    )
     rows = parameter_table(fitted)
     assert "top_coating.eta_G12" in set(rows["parameter"])
     assert "== damping: converged" in report_text(fitted)
 
 
 def test_damping_std_column_validated(example_spec):
-    frame = pd.DataFrame({"configuration": ["original"] * 2, "mode": [1, 2], "frequency_hz": [129.0, 190.0],
-                          "damping_ratio": [0.01, np.nan], "damping_std": [-1e-4, 1e-4]})
+    frame = pd.DataFrame(
+        {
+            "configuration": ["original"] * 2,
+            "mode": [1, 2],
+            "frequency_hz": [129.0, 190.0],
+            "damping_ratio": [0.01, np.nan],
+            "damping_std": [-1e-4, 1e-4],
+        }
+    )
     with pytest.raises(MeasurementError, match="line 2: damping_std = -0.0001"):
         parse_measurements(frame, example_spec)
     frame.loc[0, "damping_std"] = 1e-4
@@ -120,12 +130,16 @@ def test_without_damping_std_the_assumed_scatter(fitted):
     with 3x the noise the std are scaled up by the misfit and the fit is a poor one."""
     table = fitted.measurements.table
     stated = fitted.damping
-    d = identify_damping(fitted.model, Measurements(table.assign(damping_std=np.nan), "<no std>"), fitted.pairings)
+    d = identify_damping(
+        fitted.model, Measurements(table.assign(damping_std=np.nan), "<no std>"), fitted.pairings
+    )
     assert not d.scatter_stated and "assumed 3 %" in d.to_dict()["scatter"]
     assert d.std == pytest.approx(stated.std, rel=0.15)
     rng = np.random.default_rng(5)
-    noisy = table.assign(damping_std=np.nan, damping_ratio=table["damping_ratio"] * (1 + 0.09 * rng.standard_normal(
-        len(table))))
+    noisy = table.assign(
+        damping_std=np.nan,
+        damping_ratio=table["damping_ratio"] * (1 + 0.09 * rng.standard_normal(len(table))),
+    )
     d = identify_damping(fitted.model, Measurements(noisy, "<noisy>"), fitted.pairings)
     assert d.status == "poor_fit" and any("scaled by the misfit" in n for n in d.notes)
     assert np.mean(d.std / stated.std) > 1.5

@@ -9,6 +9,7 @@ cases it was not tuned on, rebuilt with the blind generator (``tests/data/solid3
 - A foam-core sandwich: ``layerwise`` was rejected because it freed the skins' G13/G23,
   which the data cannot see, and they ran to the bound.
 """
+
 import os
 
 import pytest
@@ -18,19 +19,33 @@ from studies import blind_diagnosis as study
 NOISE = 5e-4
 GPA = 1e9
 #: The issue's woven-fabric handbook guess, for both ply materials of the laminate.
-FABRIC_GUESS = {("cfrp_ud", "E1"): 45 * GPA, ("cfrp_ud", "E2"): 45 * GPA, ("cfrp_ud", "G12"): 4.5 * GPA,
-                ("cfrp_ud", "nu12"): 0.1, ("gfrp_ud", "E1"): 45 * GPA, ("gfrp_ud", "E2"): 45 * GPA,
-                ("gfrp_ud", "G12"): 4.5 * GPA, ("gfrp_ud", "nu12"): 0.1}
+FABRIC_GUESS = {
+    ("cfrp_ud", "E1"): 45 * GPA,
+    ("cfrp_ud", "E2"): 45 * GPA,
+    ("cfrp_ud", "G12"): 4.5 * GPA,
+    ("cfrp_ud", "nu12"): 0.1,
+    ("gfrp_ud", "E1"): 45 * GPA,
+    ("gfrp_ud", "E2"): 45 * GPA,
+    ("gfrp_ud", "G12"): 4.5 * GPA,
+    ("gfrp_ud", "nu12"): 0.1,
+}
 #: A glass-fabric handbook guess for the skins, a data-sheet foam (35 MPa) for the core.
-SANDWICH_GUESS = {("gfrp_fabric", "E1"): 20 * GPA, ("gfrp_fabric", "E2"): 20 * GPA,
-                  ("gfrp_fabric", "G12"): 3.5 * GPA, ("gfrp_fabric", "nu12"): 0.15,
-                  ("foam_core", "G13"): 0.035 * GPA, ("foam_core", "G23"): 0.035 * GPA}
+SANDWICH_GUESS = {
+    ("gfrp_fabric", "E1"): 20 * GPA,
+    ("gfrp_fabric", "E2"): 20 * GPA,
+    ("gfrp_fabric", "G12"): 3.5 * GPA,
+    ("gfrp_fabric", "nu12"): 0.15,
+    ("foam_core", "G13"): 0.035 * GPA,
+    ("foam_core", "G23"): 0.035 * GPA,
+}
 
 #: Each case is a whole diagnosis of a 3-D case (tens of minutes on a loaded 2-core
 #: machine, the layerwise candidate most of it): run with LAYER_ID_LONG_TESTS=1.
 needs_data = pytest.mark.skipif(
-    not (study.REGRESSION / "regression_foam_sandwich.json").exists() or not os.environ.get("LAYER_ID_LONG_TESTS"),
-    reason="long: set LAYER_ID_LONG_TESTS=1 (cases from python tests/data/solid3d/blind.py --regression)")
+    not (study.REGRESSION / "regression_foam_sandwich.json").exists()
+    or not os.environ.get("LAYER_ID_LONG_TESTS"),
+    reason="long: set LAYER_ID_LONG_TESTS=1 (cases from python tests/data/solid3d/blind.py --regression)",
+)
 
 
 def _physics(selected) -> set:
@@ -38,9 +53,12 @@ def _physics(selected) -> set:
 
 
 @needs_data
-@pytest.mark.xfail(strict=True, reason="measured: from the fabric guess the baseline runs to its bounds (11.8 % RMS, "
-                   "carbon E1 and glass G12 at 0.5 MPa) and the global stage does not leave it; shear is pruned, "
-                   "the implausible point mass and thickness are no longer selected: nothing is")
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured: from the fabric guess the baseline runs to its bounds (11.8 % RMS, "
+    "carbon E1 and glass G12 at 0.5 MPa) and the global stage does not leave it; shear is pruned, "
+    "the implausible point mass and thickness are no longer selected: nothing is",
+)
 def test_sensor_on_a_thick_hybrid():
     """Shear and the sensor are both selected (never the thickness), every selected
     estimate plausible, the refit within 1.5x the oracle floor."""

@@ -1,6 +1,7 @@
 """A diagnosis whose best candidate has not converged within its iteration budget
 continues it (it once failed there with an UnboundLocalError: a local named like the
 ``continued`` it called)."""
+
 import importlib
 import tomllib
 
@@ -11,7 +12,8 @@ from identify.recordings.synthetic import synthetic_measurements
 
 from ..walk import SPEC
 
-diagnosis = importlib.import_module("identify.diagnosis.diagnose")  # the module (the package exports its function)
+# the module (the package exports its function)
+diagnosis = importlib.import_module("identify.diagnosis.diagnose")
 
 #: The truth the data come from: the walk plate with a 6 g sensor the spec leaves out.
 SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}
@@ -45,5 +47,7 @@ def test_every_round_and_refit_reports_its_time():
     assert sum(r["seconds"] for r in timed) <= result.seconds
     report = result.report()
     assert "refit s" in report
-    assert f"round 1: from the baseline (RMS {100 * result.baseline.rms_rel_error:.4f} %, " \
-           f"{path[0]['seconds']:.0f} s)" in report
+    assert (
+        f"round 1: from the baseline (RMS {100 * result.baseline.rms_rel_error:.4f} %, "
+        f"{path[0]['seconds']:.0f} s)" in report
+    )

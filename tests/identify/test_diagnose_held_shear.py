@@ -2,12 +2,19 @@
 freed again by the next effect's refit (``fitting.held_shear_moduli``): a point mass
 combines with the shear instead of competing with it.  In a file of its own: one point-mass
 refit on a thick shear model is about a minute, run beside the other diagnosis tests."""
+
 from dataclasses import replace
 
 from fem.solver.attachments import PointMass
 from fem.specimen import Parameter
 from identify import fit
-from identify.fitting.driver import AddedEffect, add_effect, held_shear_moduli, point_mass_hints, prepare_effect
+from identify.fitting.driver import (
+    AddedEffect,
+    add_effect,
+    held_shear_moduli,
+    point_mass_hints,
+    prepare_effect,
+)
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
@@ -24,8 +31,11 @@ def test_a_point_mass_frees_the_shear_moduli_the_state_holds():
     scatter (0.25) and the mass is within 3 of its std of the truth (3.9 +- 0.9 g).  On a
     coarser mesh (12 divisions) the point mass started at a mirrored corner and the freed
     moduli ran out again: freeing is no guarantee, the starts still decide."""
-    truth = thick(true_model()).with_attachments([PointMass(3e-3, 0.125, 0.110)]).with_options(
-        modes=8, transverse_shear=True)
+    truth = (
+        thick(true_model())
+        .with_attachments([PointMass(3e-3, 0.125, 0.110)])
+        .with_options(modes=8, transverse_shear=True)
+    )
     data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=8, labels="close")
     g13 = Parameter("G13", "steel")
     model = thick(start_model()).with_options(modes=8, transverse_shear=True)
@@ -36,7 +46,8 @@ def test_a_point_mass_frees_the_shear_moduli_the_state_holds():
     assert held == steel
     assert held_shear_moduli(state, [AddedEffect("transverse_shear", state)]) == ()  # none ran out: none held
     freed = replace(state, parameters=state.parameters + (g13,))
-    assert held_shear_moduli(freed, [AddedEffect("transverse_shear", state, held=steel)]) == steel[1:]  # free: not held
+    # free: not held
+    assert held_shear_moduli(freed, [AddedEffect("transverse_shear", state, held=steel)]) == steel[1:]
     hints = point_mass_hints(state)
     prepared = prepare_effect(state, "point_mass", hints, free_again=held)
     assert g13 in prepared.added and any("free again with point_mass" in n for n in prepared.notes)

@@ -2,6 +2,7 @@
 shear-modulus scale and its derivative, the thick_plate effect, the plausibility limits,
 the conditioning pre-check that keeps singular candidates from being iterated, and the
 short-circuit when the baseline is at the noise level."""
+
 import math
 from dataclasses import replace
 
@@ -76,12 +77,16 @@ def test_thick_plate_is_shear_and_rotary_inertia_with_free_shear_moduli():
 
 def test_plausibility_limits():
     """Acceptance: a point mass of 8 % of the plate (11.9 g) is flagged; a 2 % sensor is
-    not; on a plate of a third the density an 8 g sensor (16 %) is not, 12 g is.  A suspension holding the plate at half its first frequency is flagged, one at
-    1 % is not; an angle turned 12 degrees is flagged."""
+    not; on a plate of a third the density an 8 g sensor (16 %) is not, 12 g is.  A
+    suspension holding the plate at half its first frequency is flagged, one at 1 % is
+    not; an angle turned 12 degrees is flagged."""
     specimen = true_model().specimen
     plate = plate_mass(specimen)
-    assert plate == pytest.approx(specimen.length * specimen.width
-                                  * sum(layer.material.density * layer.thickness for layer in specimen.layers))
+    assert plate == pytest.approx(
+        specimen.length
+        * specimen.width
+        * sum(layer.material.density * layer.thickness for layer in specimen.layers)
+    )
     mass = Parameter("mass", "point_mass")
 
     def reasons(fitted, parameter, first_hz=None):
@@ -93,11 +98,15 @@ def test_plausibility_limits():
     assert reasons(heavy, mass) and "8 %" in reasons(heavy, mass)[0]
     assert reasons(light, mass) == ()
     assert 0.08 * plate > SENSOR_MASS_MAX, "the heavy mass must exceed the absolute sensor limit too"
-    light_plate = specimen.with_materials([replace(layer.material, density=layer.material.density / 3)
-                                           for layer in specimen.layers])
+    light_plate = specimen.with_materials(
+        [replace(layer.material, density=layer.material.density / 3) for layer in specimen.layers]
+    )
     assert plate_mass(light_plate) == pytest.approx(plate / 3)
     assert implausible([mass], light_plate.with_attachments([PointMass(0.008, 0.1, 0.1)]), light_plate) == ()
-    assert "12 g" in implausible([mass], light_plate.with_attachments([PointMass(0.012, 0.1, 0.1)]), light_plate)[0]
+    assert (
+        "12 g"
+        in implausible([mass], light_plate.with_attachments([PointMass(0.012, 0.1, 0.1)]), light_plate)[0]
+    )
 
     corners = ((0.02, 0.02), (0.13, 0.02), (0.02, 0.13), (0.13, 0.13))
     total = plate  # no point mass: the bounce frequency is sqrt(4 k / m) / 2 pi
@@ -198,7 +207,9 @@ def test_a_pair_tied_again_at_the_solution_is_named_with_the_ratio_it_keeps(thic
         return shear_moduli.ShearChoice((tied_reached,), (), ("steel",), (), {tied_reached.name: 0.05})
 
     monkeypatch.setattr(shear_moduli, "choose_shear_moduli", chooser)
-    result = SimpleNamespace(parameters=[g13, g23], jacobian=np.ones((4, 2)), model=thick_shear.with_specimen(reached))
+    result = SimpleNamespace(
+        parameters=[g13, g23], jacobian=np.ones((4, 2)), model=thick_shear.with_specimen(reached)
+    )
     parameters, model, note = shear_moduli.reconsidered(result, specimen, 1e-3)
     (tied,) = parameters
     assert tied.followers[0][1] == pytest.approx(1.0)

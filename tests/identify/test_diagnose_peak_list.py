@@ -2,6 +2,7 @@
 every candidate on the peaks the baseline matched, so that a model containing the
 baseline can only descend from it, and matches the peaks again once, in the final
 refit."""
+
 import importlib
 import tomllib
 
@@ -16,7 +17,8 @@ from identify.recordings.synthetic import synthetic_measurements
 
 from ..walk import SPEC
 
-diagnosis = importlib.import_module("identify.diagnosis.diagnose")  # the module (the package exports its function)
+# the module (the package exports its function)
+diagnosis = importlib.import_module("identify.diagnosis.diagnose")
 
 #: The truth the peaks come from: the walk plate with a 6 g sensor the spec leaves out.
 SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}
@@ -31,8 +33,9 @@ def sensor_peaks():
     truth = parse_spec({**spec, "effects": [SENSOR]})
     table = synthetic_measurements(truth, modes=6, noise_rel=2e-4, seed=4).table
     kept = table[table["mode"] != 4][["configuration", "frequency_hz", "std_hz"]]
-    bounce = pd.DataFrame({"configuration": [kept["configuration"].iloc[0]], "frequency_hz": [9.0],
-                           "std_hz": [0.01]})
+    bounce = pd.DataFrame(
+        {"configuration": [kept["configuration"].iloc[0]], "frequency_hz": [9.0], "std_hz": [0.01]}
+    )
     peaks = parse_measurements(pd.concat([kept, bounce], ignore_index=True), model)
     assert not peaks.ranked
     return model, peaks
@@ -50,8 +53,9 @@ def test_candidates_are_judged_on_the_baselines_peaks_and_descend(sensor_peaks):
     assert refitted
     first = [c for c in result.steps[0].candidates if c.fit is not None]
     assert all(c.fit.statistics.n == base.n for c in first), [(c.kind, c.fit.statistics.n) for c in first]
-    assert all(c.fit.statistics.sum_squares <= base.sum_squares for c in first), \
-        [(c.kind, c.fit.statistics.sum_squares, base.sum_squares) for c in first]
+    assert all(c.fit.statistics.sum_squares <= base.sum_squares for c in first), [
+        (c.kind, c.fit.statistics.sum_squares, base.sum_squares) for c in first
+    ]
     assert result.above_start == ()
     assert [c.kind for c in result.selected][:1] == ["point_mass"]
     final = result.final
@@ -92,6 +96,7 @@ def test_held_properties_are_freed_only_in_the_final_refit_of_a_peak_list(sensor
     diagnosis.diagnose(model, peaks, ["point_mass"])
     assert calls == [(False, True)]
     calls.clear()
-    ranked = diagnosis.diagnose(model, diagnosis.diagnose(model, peaks, ["point_mass"]).final.measurements,
-                                ["point_mass"])
+    ranked = diagnosis.diagnose(
+        model, diagnosis.diagnose(model, peaks, ["point_mass"]).final.measurements, ["point_mass"]
+    )
     assert ranked.selected and (True, "quick") in calls

@@ -9,6 +9,7 @@ Every registered effect is a candidate.  The frequencies carry 0.05 % Gaussian s
 itself differs from the converged plate model with the true properties by 0.08 % RMS
 (tests/data/solid3d/README.md), which the refit absorbs into the moduli.
 """
+
 import math
 
 import pytest
@@ -26,7 +27,9 @@ def outcome():
 
 def test_transverse_shear_is_selected_and_explains_the_data(outcome):
     d = outcome.diagnosis
-    assert d.baseline.rms_rel_error > 5 * hidden_effect.NOISE, "the baseline (no shear) is far from the 3-D model"
+    assert d.baseline.rms_rel_error > 5 * hidden_effect.NOISE, (
+        "the baseline (no shear) is far from the 3-D model"
+    )
     assert outcome.selected and outcome.selected[0] in SHEAR, d.report()
     assert d.final.converged and d.explained, d.report()
     assert outcome.rms_after <= 2 * hidden_effect.NOISE
@@ -55,7 +58,10 @@ def test_shear_moduli_are_estimated_with_their_std(outcome):
         assert entry[f"{p.kind}_GPa"] == pytest.approx(final.value(p) / 1e9)
         for follower, ratio in getattr(p, "followers", ()):
             assert entry[f"{follower.kind}_GPa"] == pytest.approx(ratio * final.value(p) / 1e9)
-            assert entry["std"][f"{follower.kind}_GPa"] > 0 and "tied" in entry["flags"][f"{follower.kind}_GPa"][0]
+            assert (
+                entry["std"][f"{follower.kind}_GPa"] > 0
+                and "tied" in entry["flags"][f"{follower.kind}_GPa"][0]
+            )
 
 
 def test_layer_properties_come_back_within_their_uncertainty(outcome):
@@ -63,4 +69,3 @@ def test_layer_properties_come_back_within_their_uncertainty(outcome):
     1.8 std with the layerwise model; 2.6 with the Mindlin plate, whose one bond-line shear
     correction the moduli absorb)."""
     assert outcome.max_z < 3
-

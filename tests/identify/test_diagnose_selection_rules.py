@@ -2,6 +2,7 @@
 implausible or singular estimate is never selected, whatever its criterion (it is
 reported as a sign), and only an answer (one that pays for itself) may keep another
 candidate from being refitted."""
+
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -72,8 +73,11 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     from identify.diagnosis.diagnose import _held_back, _margins
 
     def fitted(kind, sum_squares, selectable=True):
-        return SimpleNamespace(kind=kind, selectable=selectable,
-                               fit=SimpleNamespace(statistics=SimpleNamespace(sum_squares=sum_squares)))
+        return SimpleNamespace(
+            kind=kind,
+            selectable=selectable,
+            fit=SimpleNamespace(statistics=SimpleNamespace(sum_squares=sum_squares)),
+        )
 
     round1 = [fitted("transverse_shear", 1000.0), fitted("thick_plate", 1100.0), fitted("layerwise", 644.0)]
     margins = _margins(["layerwise"], round1, 1)
@@ -81,8 +85,10 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0))
     point_mass = [fitted("point_mass", 1000.0 - 2062.0 / 2 - 1000.0 / 2)]  # explains 1531 > 2 x 356
     held = _held_back(["layerwise"], margins, state, point_mass)
-    assert "layerwise not refitted again: in round 1 it explained a chi^2 of 356 beyond transverse_shear" in held[
-        "layerwise"]
+    assert (
+        "layerwise not refitted again: in round 1 it explained a chi^2 of 356 beyond transverse_shear"
+        in held["layerwise"]
+    )
     assert _held_back(["layerwise"], margins, state, [fitted("point_mass", 400.0)]) == {}  # 600 < 712: refit
     assert _held_back(["layerwise"], {}, state, point_mass) == {}  # never refitted: no margin known
     assert _held_back(["layerwise"], margins, state, [fitted("point_mass", -5000.0, selectable=False)]) == {}
@@ -99,13 +105,18 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
     from identify.diagnosis.diagnose import FAR_FROM_NOISE, MIN_GAIN, _refine
 
     def tried(kind, scaled_gain, gain, selectable=True):
-        return SimpleNamespace(kind=kind, scaled_gain=scaled_gain, gain=gain, eligible=True, selectable=selectable)
+        return SimpleNamespace(
+            kind=kind, scaled_gain=scaled_gain, gain=gain, eligible=True, selectable=selectable
+        )
 
     kinds = ["transverse_shear", "thick_plate", "layerwise", "point_mass"]
     far = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=30 * FAR_FROM_NOISE))
     near = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=FAR_FROM_NOISE / 2))
-    stalled = [tried("transverse_shear", 8.4, 4564.6), tried("thick_plate", 3.0, 1953.7),
-               tried("point_mass", -2.2, 4846.4)]  # blind13's first round: nothing pays
+    stalled = [
+        tried("transverse_shear", 8.4, 4564.6),
+        tried("thick_plate", 3.0, 1953.7),
+        tried("point_mass", -2.2, 4846.4),
+    ]  # blind13's first round: nothing pays
     assert _refine("layerwise", kinds, [], stalled, far)
     assert not _refine("layerwise", kinds, [], stalled, near)
     nothing = [tried("transverse_shear", -3.0, -50.0), tried("thick_plate", -4.0, -80.0)]
@@ -155,8 +166,9 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
         if below is not None and 2.0 * bounds[kind] < below:
             return AddedEffect(kind, None, pruned=True)
         refitted.append(kind)
-        statistics = SimpleNamespace(sum_squares=923.0, bic=thickness_bic if kind == "thickness" else 990.0,
-                                     scatter_known=False)
+        statistics = SimpleNamespace(
+            sum_squares=923.0, bic=thickness_bic if kind == "thickness" else 990.0, scatter_known=False
+        )
         return AddedEffect(kind, SimpleNamespace(statistics=statistics, finished=True))
 
     monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
@@ -169,22 +181,30 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 def _fit(status, rms=1e-3, condition=1e3):
     """A refit as ``_determined_final`` reads it: status, misfit and conditioning."""
     verdict = condition_verdict(condition)
-    return SimpleNamespace(status=status, rms_rel_error=rms, converged=status is FitStatus.CONVERGED,
-                           uncertainty=SimpleNamespace(condition_number=condition, verdict=verdict))
+    return SimpleNamespace(
+        status=status,
+        rms_rel_error=rms,
+        converged=status is FitStatus.CONVERGED,
+        uncertainty=SimpleNamespace(condition_number=condition, verdict=verdict),
+    )
 
 
 def _chosen(kind):
     return Candidate(kind, "", AddedEffect(kind, None), 100.0, 100.0)
 
 
-@pytest.mark.parametrize("final_status, n_selected, again_condition, dropped", [
-    (FitStatus.NOT_IDENTIFIABLE, 2, 1e4, True),     # blind22: the point mass taken out
-    (FitStatus.NOT_IDENTIFIABLE, 2, 1e9, False),    # without it no better determined: kept
-    (FitStatus.NOT_IDENTIFIABLE, 1, 1e4, False),    # the only effect: the baseline would be the answer
-    (FitStatus.CONVERGED, 2, 1e4, False),           # determined: nothing to do
-])
-def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(monkeypatch, final_status, n_selected,
-                                                                         again_condition, dropped):
+@pytest.mark.parametrize(
+    "final_status, n_selected, again_condition, dropped",
+    [
+        (FitStatus.NOT_IDENTIFIABLE, 2, 1e4, True),  # blind22: the point mass taken out
+        (FitStatus.NOT_IDENTIFIABLE, 2, 1e9, False),  # without it no better determined: kept
+        (FitStatus.NOT_IDENTIFIABLE, 1, 1e4, False),  # the only effect: the baseline would be the answer
+        (FitStatus.CONVERGED, 2, 1e4, False),  # determined: nothing to do
+    ],
+)
+def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
+    monkeypatch, final_status, n_selected, again_condition, dropped
+):
     """The final refit fits the frequencies but its sensitivity matrix is singular: the
     last selected effect is taken out and the selection before it refitted from the state
     it was chosen on; the new final is kept only when it is determined, and only when an
@@ -209,8 +229,14 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(monkeyp
     assert calls == [(starts["point_mass"], ["layerwise"])]  # from the state point_mass was chosen on
     assert step.chosen is None and step.candidates == (mass,) and step.reason.startswith("drop point_mass")
     comparison = SimpleNamespace(at_noise_level=False)
-    diagnosis = Diagnosis(_fit(FitStatus.POOR_FIT, rms=1e-2), comparison, (), tuple(steps) + (step,), again,
-                          dropped=("point_mass",))
+    diagnosis = Diagnosis(
+        _fit(FitStatus.POOR_FIT, rms=1e-2),
+        comparison,
+        (),
+        tuple(steps) + (step,),
+        again,
+        dropped=("point_mass",),
+    )
     assert [c.kind for c in diagnosis.selected] == ["layerwise"]
     assert "point_mass taken out" in diagnosis.verdict
 
@@ -227,11 +253,28 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     from fem.spec import parse_spec
     from identify.diagnosis.diagnose import _completed
 
-    single = parse_spec({"specimen": {"name": "board", "length_mm": 580.0, "width_mm": 213.0,
-                                      "layers": [{"material": "spruce", "thickness_mm": 5.0}]},
-                         "materials": {"spruce": {"E1_GPa": 10.0, "E2_GPa": 0.8, "G12_GPa": 0.62, "nu12": 0.4,
-                                                  "density_kg_m3": 440, "identify": True}},
-                         "configurations": [{"name": "original"}]}, "<test>")
+    single = parse_spec(
+        {
+            "specimen": {
+                "name": "board",
+                "length_mm": 580.0,
+                "width_mm": 213.0,
+                "layers": [{"material": "spruce", "thickness_mm": 5.0}],
+            },
+            "materials": {
+                "spruce": {
+                    "E1_GPa": 10.0,
+                    "E2_GPa": 0.8,
+                    "G12_GPa": 0.62,
+                    "nu12": 0.4,
+                    "density_kg_m3": 440,
+                    "identify": True,
+                }
+            },
+            "configurations": [{"name": "original"}],
+        },
+        "<test>",
+    )
     layerwise = effect("layerwise")
     assert layerwise.single_shear_layer(single)
     assert not layerwise.single_shear_layer(example_spec)

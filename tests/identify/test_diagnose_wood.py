@@ -24,6 +24,7 @@ to absorb the rest); round 1 selects ``layerwise`` (RMS 0.0495 %; FSDT+RI 0.22 %
 0.30 %), round 2 stops at the noise level; G23 = 0.04009 +- 0.00005 GPa, G13 = 0.647 +-
 0.007 GPa, E1, E2, G12 within 1.8 std of the truth.
 """
+
 import math
 
 import pytest

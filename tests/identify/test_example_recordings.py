@@ -1,5 +1,6 @@
 """The example recording of every supported format (identify/examples/recordings) gives
 the example plate's two modes, and the files are those the generator writes."""
+
 import numpy as np
 import pytest
 

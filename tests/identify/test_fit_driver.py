@@ -1,5 +1,6 @@
 """The fit driver's boundary: every argument of ``fit`` is honoured or refused with a
 clear error (with effects too), and the stop reason is kept on the result and in the JSON."""
+
 import pytest
 
 from fem.errors import LayerIdError

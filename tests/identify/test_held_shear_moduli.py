@@ -2,6 +2,7 @@
 reported (``fitting.driver._held_shear``): the set it returns is what ``AddedEffect.held``
 carries and what the next round's leading candidate frees again
 (``diagnose._leader_freed_again``)."""
+
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -34,10 +35,14 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
     steel = (Parameter("G13", "steel"), Parameter("G23", "steel"))
     assert any(p.target == "steel" for p in prepared.added)
     g12 = state.model.value(Parameter("G12", "steel"))
-    prepared = replace(prepared, model=prepared.model.with_values({steel[0]: 0.25 * g12, steel[1]: 0.25 * g12}))
+    prepared = replace(
+        prepared, model=prepared.model.with_values({steel[0]: 0.25 * g12, steel[1]: 0.25 * g12})
+    )
     ran_out = replace(state, model=prepared.model.with_values({steel[0]: 100 * g12}))
     refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
-    result, new, notes, held = _held_shear(refit, prepared, ran_out, list(prepared.added), list(prepared.base))
+    result, new, notes, held = _held_shear(
+        refit, prepared, ran_out, list(prepared.added), list(prepared.base)
+    )
     assert held == steel
     assert not any(p.target == "steel" for p in new if p.kind in ("G13", "G23"))
     assert len(notes) == 1 and "steel" in notes[0] and "the ply class's relation" in notes[0]
@@ -48,13 +53,17 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
 
 def _candidate(kind: str, sum_squares: float, added=()):
     """A refitted candidate as the selection sees it: its misfit and criterion only."""
-    statistics = SimpleNamespace(sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3, scatter_known=False)
+    statistics = SimpleNamespace(
+        sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3, scatter_known=False
+    )
     fit = SimpleNamespace(statistics=statistics, rms_rel_error=1e-3, finished=True)
     return Candidate(kind, "", AddedEffect(kind, fit, tuple(added)), 0.0, 0.0)
 
 
 @pytest.mark.parametrize("again_sum_squares, kept", [(10.0, "again"), (500.0, "leader")])
-def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkeypatch, again_sum_squares, kept):
+def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
+    monkeypatch, again_sum_squares, kept
+):
     """Of a round's candidates, only the one with the lowest criterion that frees no shear
     moduli itself is refitted with the held ones free (the layerwise candidate, lower but
     freeing its own, is passed over); its refit replaces it only when the misfit falls,
@@ -74,8 +83,11 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkey
 
     monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
-    state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))  # the round's start: only its criterion is read
-    out = diagnose_module._leader_freed_again([layerwise, leader, other], steel, state, None, None, (), lambda t: None)
+    # the round's start: only its criterion is read
+    state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))
+    out = diagnose_module._leader_freed_again(
+        [layerwise, leader, other], steel, state, None, None, (), lambda t: None
+    )
     assert calls == [(("point_mass",), steel)]
     assert out[0] is layerwise and out[2] is other
     if kept == "again":
@@ -84,6 +96,10 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(monkey
         assert out[1].fit is leader.fit and "not lower: kept without them" in out[1].note
     assert diagnose_module._leader_freed_again([leader], (), None, None, None, (), lambda t: None) == [leader]
     # The data do not see them at this state (nothing of them freed): no refit that would repeat the leader's.
-    monkeypatch.setattr(diagnose_module, "prepare_effect", lambda *a, **k: SimpleNamespace(kind="point_mass", added=()))
+    monkeypatch.setattr(
+        diagnose_module, "prepare_effect", lambda *a, **k: SimpleNamespace(kind="point_mass", added=())
+    )
     monkeypatch.setattr(diagnose_module, "_add", lambda job: pytest.fail("refitted without freeing anything"))
-    assert diagnose_module._leader_freed_again([leader], steel, state, None, None, (), lambda t: None) == [leader]
+    assert diagnose_module._leader_freed_again([leader], steel, state, None, None, (), lambda t: None) == [
+        leader
+    ]

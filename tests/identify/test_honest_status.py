@@ -1,5 +1,6 @@
 """Results never claim more than the data show: a misfit the scatter cannot
 explain is a poor fit with its likely cause, never 'converged', and exits non-zero."""
+
 import json
 
 import numpy as np
@@ -26,18 +27,25 @@ def fit_cli(capsys, tmp_path, frame) -> tuple[int, dict]:
 def test_frequencies_in_the_wrong_unit(capsys, tmp_path):
     """x 1000 (kHz read as Hz): the moduli run to their 2000 GPa bound and cannot follow;
     the cause named is the units, with the factor."""
-    code, out = fit_cli(capsys, tmp_path, GOOD.assign(frequency_hz=1000 * GOOD.frequency_hz,
-                                                      std_hz=1000 * GOOD.std_hz))
+    code, out = fit_cli(
+        capsys, tmp_path, GOOD.assign(frequency_hz=1000 * GOOD.frequency_hz, std_hz=1000 * GOOD.std_hz)
+    )
     assert code == 1 and out["status"] == "poor_fit" and not out["converged"]
     assert out["causes"][0]["cause"] == "units" and "x the model's" in out["causes"][0]["text"]
 
 
 def test_configurations_mixed_up(capsys, tmp_path):
-    mixed = GOOD.assign(configuration=GOOD.configuration.replace({"original": "brass_top", "brass_top": "original"}))
+    mixed = GOOD.assign(
+        configuration=GOOD.configuration.replace({"original": "brass_top", "brass_top": "original"})
+    )
     code, out = fit_cli(capsys, tmp_path, mixed)
     assert code == 1 and out["status"] == "poor_fit"
     cause = out["causes"][0]
-    assert cause["cause"] == "configurations" and "'original'" in cause["text"] and "'brass_top'" in cause["text"]
+    assert (
+        cause["cause"] == "configurations"
+        and "'original'" in cause["text"]
+        and "'brass_top'" in cause["text"]
+    )
 
 
 def test_random_frequencies(capsys, tmp_path):
@@ -60,8 +68,12 @@ def test_another_plates_data(example_spec, capsys, tmp_path):
     other = copy.deepcopy(data)
     other["specimen"].update(length_mm=200.0, width_mm=120.0)
     other["specimen"]["layers"][1]["thickness_mm"] = 1.5
-    other["materials"]["steel"].update(E1_GPa=70.0, E2_GPa=70.0, G12_GPa=26.3, nu12=0.33, density_kg_m3=2700.0)
-    frame = synthetic_measurements(parse_spec(other), noise_rel=5e-4, seed=3).table.drop(columns="damping_ratio")
+    other["materials"]["steel"].update(
+        E1_GPa=70.0, E2_GPa=70.0, G12_GPa=26.3, nu12=0.33, density_kg_m3=2700.0
+    )
+    frame = synthetic_measurements(parse_spec(other), noise_rel=5e-4, seed=3).table.drop(
+        columns="damping_ratio"
+    )
     code, out = fit_cli(capsys, tmp_path, frame)
     assert code == 1 and out["status"] == "poor_fit" and out["causes"]
 
@@ -70,7 +82,9 @@ def test_without_std_no_chi2_is_printed_and_the_assumed_scatter_judges(example_s
     """No std_hz: a 2 % error everywhere is far beyond the assumed 0.1 % scatter, so it is
     a poor fit; the report states the misfit against that assumed scatter and prints no
     'reduced chi^2' (there is no stated scatter to take it against)."""
-    frame = GOOD.drop(columns=["std_hz"]).assign(frequency_hz=GOOD.frequency_hz * np.tile([1.02, 0.98, 1.0, 1.02, 1.02], 3))
+    frame = GOOD.drop(columns=["std_hz"]).assign(
+        frequency_hz=GOOD.frequency_hz * np.tile([1.02, 0.98, 1.0, 1.02, 1.02], 3)
+    )
     result = fit(example_spec, parse_measurements(frame, example_spec))
     assert result.status.value == "poor_fit"
     text = result.report()

@@ -1,5 +1,6 @@
 """The self-contained HTML report: its parts found by parsing it, values rounded to their
 uncertainty, one status line, and the page rendered in a real headless browser."""
+
 import re
 import shutil
 import subprocess
@@ -90,7 +91,9 @@ def test_values_rounded_to_their_uncertainty_and_one_status_line(report):
         value, std = re.fullmatch(r"(\S+) ± (\S+) .*\(.* %\)", cell).groups()
         significant = std.lstrip("0.").replace(".", "")
         assert len(significant) == 2, f"std {std} not to two significant digits"
-        assert len(value.partition(".")[2]) == len(std.partition(".")[2]), f"{cell}: value and std decimals differ"
+        assert len(value.partition(".")[2]) == len(std.partition(".")[2]), (
+            f"{cell}: value and std decimals differ"
+        )
     residuals = next(t for t in page.tables if t and "error_%" in t[0])
     assert all("e-" not in cell for row in residuals for cell in row), "relative errors in %, not 1e-05"
     status = re.search(r'<div class="status[^"]*">(.*?)</div>', text, re.S).group(1)
@@ -100,15 +103,33 @@ def test_values_rounded_to_their_uncertainty_and_one_status_line(report):
     assert csv["value"].map(lambda v: len(repr(v))).max() > 8, "the CSV keeps full precision"
 
 
-@pytest.mark.skipif(shutil.which("chromium") is None, reason="needs Debian's chromium (apt-get install chromium)")
+@pytest.mark.skipif(
+    shutil.which("chromium") is None, reason="needs Debian's chromium (apt-get install chromium)"
+)
 def test_report_renders_in_a_headless_browser(report, tmp_path):
     """Chromium renders the page offline to a screenshot: a real image, mostly white
     page with content (not blank, not an error page)."""
     shot = tmp_path / "shot.png"
-    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", f"--screenshot={shot}", "--window-size=1200,2400",
-                    (report / "report.html").as_uri()], check=True, timeout=120, capture_output=True)
+    subprocess.run(
+        [
+            "chromium",
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}",
+            f"--screenshot={shot}",
+            "--window-size=1200,2400",
+            (report / "report.html").as_uri(),
+        ],
+        check=True,
+        timeout=120,
+        capture_output=True,
+    )
     from matplotlib.image import imread
 
     pixels = imread(shot)[..., :3]

@@ -1,6 +1,7 @@
 """Recordings as labs export them: a time column printed with 7 significant digits, or
 no time column and integer ADC counts on an offset, give the peaks of the full-precision
 file; a real gap (dropped samples) is refused at its line."""
+
 import re
 
 import numpy as np
@@ -14,7 +15,9 @@ from identify.recordings.tap_quirks import clipped, with_hum, write_counts_csv, 
 from identify.recordings.tap_simulation import Modes, Session, write_csv
 
 #: The test plate's separated modes at 48 kHz, 2-s hits (a full lab recording).
-MODES = Modes([129.2, 191.6, 238.8, 383.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.003], [1.0, -0.8, 0.6, 1.2, 0.9])
+MODES = Modes(
+    [129.2, 191.6, 238.8, 383.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.003], [1.0, -0.8, 0.6, 1.2, 0.9]
+)
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +26,11 @@ def exports(tmp_path_factory):
     hits = Session(MODES, n_hits=3, seed=11).hits()
     files = {"full": [], "rounded": [], "counts": []}
     for hit in hits:
-        for kind, write in (("full", write_csv), ("rounded", write_rounded_csv), ("counts", write_counts_csv)):
+        for kind, write in (
+            ("full", write_csv),
+            ("rounded", write_rounded_csv),
+            ("counts", write_counts_csv),
+        ):
             path = folder / f"{kind}_{hit.source}.csv"
             write(hit, path)
             files[kind].append(path)
@@ -57,14 +64,19 @@ def test_counts_need_the_sample_rate(exports):
 
 def _series(n=2000, rate=48000.0):
     t = np.arange(n) / rate
-    return pd.DataFrame({"time_s": t, "force": np.exp(-((t - 1e-3) / 2e-4) ** 2), "acceleration": np.sin(t * 2000)})
+    return pd.DataFrame(
+        {"time_s": t, "force": np.exp(-(((t - 1e-3) / 2e-4) ** 2)), "acceleration": np.sin(t * 2000)}
+    )
 
 
 def test_dropped_sample_is_refused_at_its_line(tmp_path):
     """One sample dropped after file line 1001: the step to line 1002 is 2 dt."""
     path = tmp_path / "gap.csv"
     path.write_text(_series().drop(index=1000).to_csv(index=False, float_format="%.7g"))
-    with pytest.raises(MeasurementError, match=r"gap.csv: line 1002: time step 4.167e-05 s differs from the least-squares step"):
+    with pytest.raises(
+        MeasurementError,
+        match=r"gap.csv: line 1002: time step 4.167e-05 s differs from the least-squares step",
+    ):
         read_csv(path)
 
 
@@ -74,9 +86,15 @@ def test_jitter_within_printed_precision_and_a_thousandth_of_a_step(tmp_path):
     frame = _series()
     dt = 1 / 48000
     ok, bad = tmp_path / "ok.csv", tmp_path / "bad.csv"
-    ok.write_text(frame.assign(time_s=frame["time_s"] + 0.2e-3 * dt * rng.uniform(-1, 1, len(frame))).to_csv(index=False))
+    ok.write_text(
+        frame.assign(time_s=frame["time_s"] + 0.2e-3 * dt * rng.uniform(-1, 1, len(frame))).to_csv(
+            index=False
+        )
+    )
     assert read_csv(ok).sample_rate == 48000.0
-    bad.write_text(frame.assign(time_s=frame["time_s"] + 1e-2 * dt * rng.uniform(-1, 1, len(frame))).to_csv(index=False))
+    bad.write_text(
+        frame.assign(time_s=frame["time_s"] + 1e-2 * dt * rng.uniform(-1, 1, len(frame))).to_csv(index=False)
+    )
     with pytest.raises(MeasurementError, match=r"bad.csv: line \d+: time step .* printed precision"):
         read_csv(bad)
 
@@ -84,7 +102,9 @@ def test_jitter_within_printed_precision_and_a_thousandth_of_a_step(tmp_path):
 def test_time_printed_too_coarsely_is_refused(tmp_path):
     path = tmp_path / "coarse.csv"
     path.write_text(_series().to_csv(index=False, float_format="%.3f"))
-    with pytest.raises(MeasurementError, match=r"coarse.csv: time_s does not resolve the samples.*--sample-rate"):
+    with pytest.raises(
+        MeasurementError, match=r"coarse.csv: time_s does not resolve the samples.*--sample-rate"
+    ):
         read_csv(path)
 
 
@@ -164,13 +184,23 @@ def test_every_format_gives_the_csv_peaks(tmp_path, hits, kind):
         elif kind == "mat":
             savemat(path, {"force": hit.force, "acceleration": hit.response, "sample_rate": 48000.0})
         elif kind == "mat_time":
-            savemat(path, {"force": hit.force, "acceleration": hit.response,
-                           "time_s": np.arange(len(hit.force)) / 48000.0})
+            savemat(
+                path,
+                {
+                    "force": hit.force,
+                    "acceleration": hit.response,
+                    "time_s": np.arange(len(hit.force)) / 48000.0,
+                },
+            )
         else:
             props = {"wf_increment": 1 / 48000.0}
             with TdmsWriter(path) as writer:
-                writer.write_segment([ChannelObject("hit", "force", hit.force, properties=props),
-                                      ChannelObject("hit", "acceleration", hit.response, properties=props)])
+                writer.write_segment(
+                    [
+                        ChannelObject("hit", "force", hit.force, properties=props),
+                        ChannelObject("hit", "acceleration", hit.response, properties=props),
+                    ]
+                )
         paths.append(path)
     reference = extract_peaks(hits).table["frequency_hz"].to_numpy()
     np.testing.assert_allclose(extract_peaks(paths).table["frequency_hz"], reference, rtol=1e-4)
@@ -181,7 +211,9 @@ def test_mat_and_tdms_errors_name_the_file_and_the_fix(tmp_path):
 
     path = tmp_path / "hit.mat"
     savemat(path, {"force": np.ones(300), "acc": np.ones(300)})
-    with pytest.raises(MeasurementError, match=r"hit.mat: MAT file holds acc, force; need 'force' and exactly one"):
+    with pytest.raises(
+        MeasurementError, match=r"hit.mat: MAT file holds acc, force; need 'force' and exactly one"
+    ):
         read_recordings([path])
     savemat(path, {"force": np.ones(300), "response": np.ones(300)})
     with pytest.raises(MeasurementError, match=r"hit.mat: no time_s and no sample rate .*--sample-rate"):
@@ -196,10 +228,22 @@ def _uff58(func_type, data, x, binary, spacing, ordinate, denominator, name):
     import pyuff
 
     return pyuff.prepare_58(
-        binary=binary, func_type=func_type, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3, data=data, x=x,
-        abscissa_spacing=spacing, abscissa_min=float(x[0]), abscissa_inc=float(x[1] - x[0]),
-        abscissa_spec_data_type=17 if func_type == 1 else 18, ordinate_spec_data_type=ordinate,
-        orddenom_spec_data_type=denominator)
+        binary=binary,
+        func_type=func_type,
+        id1=name,
+        rsp_node=1,
+        rsp_dir=3,
+        ref_node=1,
+        ref_dir=3,
+        data=data,
+        x=x,
+        abscissa_spacing=spacing,
+        abscissa_min=float(x[0]),
+        abscissa_inc=float(x[1] - x[0]),
+        abscissa_spec_data_type=17 if func_type == 1 else 18,
+        ordinate_spec_data_type=ordinate,
+        orddenom_spec_data_type=denominator,
+    )
 
 
 @pytest.mark.parametrize("spacing", [1, 0])
@@ -215,9 +259,13 @@ def test_uff58_variants_give_the_csv_peaks(tmp_path, hits, spacing):
     for hit in hits:
         t = np.arange(len(hit.force)) / hit.sample_rate
         path = tmp_path / f"{hit.source}.uff"
-        pyuff.UFF(str(path)).write_sets([_uff58(1, hit.force, t, binary, spacing, 13, 0, "force"),
-                                         _uff58(1, hit.response, t, binary, spacing, 12, 0, "acceleration")],
-                                        mode="overwrite")
+        pyuff.UFF(str(path)).write_sets(
+            [
+                _uff58(1, hit.force, t, binary, spacing, 13, 0, "force"),
+                _uff58(1, hit.response, t, binary, spacing, 12, 0, "acceleration"),
+            ],
+            mode="overwrite",
+        )
         paths.append(path)
     reference = extract_peaks(hits).table["frequency_hz"].to_numpy()
     np.testing.assert_allclose(extract_peaks(paths).table["frequency_hz"], reference, rtol=1e-4)
@@ -230,6 +278,9 @@ def test_uff58_uneven_listed_abscissa_is_refused(tmp_path, hits):
     f[200:] += 0.25  # a jump of half a line
     path = tmp_path / "frf.uff"
     pyuff.UFF(str(path)).write_sets([_uff58(4, np.ones(400) + 0j, f, 0, 0, 12, 13, "frf")], mode="overwrite")
-    with pytest.raises(MeasurementError, match=r"frf.uff: record 'frf': abscissa_spacing = 0 and the listed abscissa "
-                                               r"is uneven \(line 202: .*\); export the record on evenly spaced"):
+    with pytest.raises(
+        MeasurementError,
+        match=r"frf.uff: record 'frf': abscissa_spacing = 0 and the listed abscissa "
+        r"is uneven \(line 202: .*\); export the record on evenly spaced",
+    ):
         read_recordings([path])

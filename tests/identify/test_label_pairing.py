@@ -1,6 +1,7 @@
 """Pairing labelled measured modes with model modes at the start (``ModePairing.initial``,
 ``permits``): a label goes to the nearest-ranked model mode that holds its pattern,
 a member of a mixed pair included."""
+
 from types import SimpleNamespace
 
 import numpy as np
@@ -26,7 +27,11 @@ def _solution(patterns: list[dict], in_plane=()) -> SimpleNamespace:
 
 #: Ten modes of distinct pure patterns, then a sensor-mixed pair at ranks 10 and 12.
 _PURE = [(1, 1), (2, 0), (2, 1), (0, 2), (1, 2), (3, 0), (2, 2), (3, 1), (0, 3)]
-_MIXED_PAIR = [{t: 1.0} for t in _PURE] + [{(3, 2): 0.35, (4, 0): 0.65}, {(1, 3): 1.0}, {(3, 2): 0.63, (4, 0): 0.37}]
+_MIXED_PAIR = [{t: 1.0} for t in _PURE] + [
+    {(3, 2): 0.35, (4, 0): 0.65},
+    {(1, 3): 1.0},
+    {(3, 2): 0.63, (4, 0): 0.37},
+]
 
 
 def test_mixed_member_at_its_rank_wins_over_a_purer_partner_further_away():

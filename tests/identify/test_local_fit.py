@@ -1,6 +1,7 @@
 """The local pole-residue fit behind every peak: its exact (variable-projection)
 Jacobian against central differences, and exact poles recovered from a noise-free FRF
 of two close modes with a neighbour outside the window."""
+
 import numpy as np
 
 from identify.recordings.peaks import _Projection, local_fit
@@ -22,17 +23,21 @@ def test_jacobian_matches_central_differences():
     residual does not move with the other's parameters."""
     f = np.arange(90, 115, 0.25)
     rng = np.random.default_rng(0)
-    h = MODES.accelerance(f) + 1e-3 * (rng.standard_normal((2, len(f))) + 1j * rng.standard_normal((2, len(f))))
+    h = MODES.accelerance(f) + 1e-3 * (
+        rng.standard_normal((2, len(f))) + 1j * rng.standard_normal((2, len(f)))
+    )
     problem = _Projection(f, h, _pole([100.3, 103.8], [0.011, 0.009]), _pole([120.0], [0.01]))
     x = np.array([[0.3, 0.1, -0.2, -0.05], [-0.1, 0.2, 0.1, 0.05]])
     step = 1e-6
     jacobian = problem.jacobian(x)
     for j in range(2):
-        moved = [(problem.residual(x + step * e) - problem.residual(x - step * e)) / (2 * step)
-                 for e in (np.eye(8)[k].reshape(2, 4) for k in range(8))]
-        numeric = np.column_stack([m[j] for m in moved[4 * j:4 * j + 4]])
+        moved = [
+            (problem.residual(x + step * e) - problem.residual(x - step * e)) / (2 * step)
+            for e in (np.eye(8)[k].reshape(2, 4) for k in range(8))
+        ]
+        numeric = np.column_stack([m[j] for m in moved[4 * j : 4 * j + 4]])
         assert np.abs(jacobian[j] - numeric).max() < 1e-6 * np.abs(numeric).max()
-        other = np.column_stack([m[j] for m in moved[4 * (1 - j):4 * (1 - j) + 4]])
+        other = np.column_stack([m[j] for m in moved[4 * (1 - j) : 4 * (1 - j) + 4]])
         assert np.abs(other).max() == 0.0
 
 

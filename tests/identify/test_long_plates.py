@@ -1,6 +1,7 @@
 """Peak lists of long orthotropic plates as real recordings give them (30-40 peaks, no
 mode numbers): no traceback whatever the peaks, and the screened start
 (``identify.engine.peak_screen``) that lets a handbook start reach the right pairing."""
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -33,8 +34,9 @@ def test_a_fit_whose_matching_never_settles_ends_with_a_status(thin_truth, monke
     monkeypatch.setattr(peak_lists, "TIGHTENING", ())
     monkeypatch.setattr(peak_lists, "MAX_ROUNDS", 0)
     f = thin_truth.solve("original").frequencies_hz[:20]
-    peaks = parse_measurements(pd.DataFrame({"configuration": "original", "frequency_hz": f}),
-                               long_plates.handbook_model())
+    peaks = parse_measurements(
+        pd.DataFrame({"configuration": "original", "frequency_hz": f}), long_plates.handbook_model()
+    )
     result = fit(long_plates.handbook_model(), peaks)
     assert result.status in set(FitStatus)
     assert any("had not settled" in w for w in result.warnings)
@@ -48,12 +50,18 @@ def test_handbook_start_reaches_the_right_pairing(thin_truth):
     0.05 % scatter) and the screen says what it moved."""
     f = thin_truth.solve("original").frequencies_hz
     kept = np.delete(f[:30], [4, 13, 22])
-    peaks_hz = np.sort(np.concatenate([kept * (1 + 5e-4 * np.random.default_rng(3).standard_normal(len(kept))),
-                                       [97.0, 333.3]]))
+    peaks_hz = np.sort(
+        np.concatenate(
+            [kept * (1 + 5e-4 * np.random.default_rng(3).standard_normal(len(kept))), [97.0, 333.3]]
+        )
+    )
     table = pd.DataFrame({"configuration": "original", "frequency_hz": peaks_hz, "std_hz": 5e-4 * peaks_hz})
     model = long_plates.handbook_model()
     result = fit(model, parse_measurements(table, model))
-    z = {p.kind: (v - TRUTH[p.kind]) / s for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)}
+    z = {
+        p.kind: (v - TRUTH[p.kind]) / s
+        for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+    }
     assert max(abs(v) for v in z.values()) < 3, (z, result.report())
     assert any(w.startswith("start screened") for w in result.warnings), result.warnings
     left_out = result.peaks.measurements.table["frequency_hz"].to_numpy()[~result.peaks.matched]
@@ -76,12 +84,17 @@ def peak_lists_of(draw, frequencies):
         if i in missing or (i - 1) in merged:
             continue
         peaks.append(0.5 * (f + frequencies[i + 1]) if i in merged and i + 1 < n else f)
-    peaks = np.array(peaks + spurious) * (1 + scatter * np.random.default_rng(seed).standard_normal(len(peaks) + len(spurious)))
+    peaks = np.array(peaks + spurious) * (
+        1 + scatter * np.random.default_rng(seed).standard_normal(len(peaks) + len(spurious))
+    )
     return np.sort(peaks)
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                                  HealthCheck.too_slow])
+@settings(
+    max_examples=6,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(data=st.data())
 def test_any_peak_list_ends_with_a_status(thin_truth, data):
     """Whatever peaks a recording gives (missing, merged, spurious, scatter up to 0.3 %),
@@ -102,11 +115,20 @@ def test_a_property_on_its_bound_is_never_converged(thin_truth):
     misfit stays near the scatter (nu12 is weakly determined) but the estimate sits on
     its bound, so the status is poor_fit and the message names nu12 and the causes."""
     f = thin_truth.solve("original").frequencies_hz[:20]
-    spec = {**long_plates.HANDBOOK, "materials": {"spruce": {**long_plates.HANDBOOK["materials"]["spruce"],
-                                                             "nu12": 0.45, "bounds": {"nu12": [0.40, 0.5]}}}}
+    spec = {
+        **long_plates.HANDBOOK,
+        "materials": {
+            "spruce": {
+                **long_plates.HANDBOOK["materials"]["spruce"],
+                "nu12": 0.45,
+                "bounds": {"nu12": [0.40, 0.5]},
+            }
+        },
+    }
     model = parse_spec(spec)
-    table = pd.DataFrame({"configuration": "original", "mode": np.arange(1, 21), "frequency_hz": f,
-                          "std_hz": 5e-4 * f})
+    table = pd.DataFrame(
+        {"configuration": "original", "mode": np.arange(1, 21), "frequency_hz": f, "std_hz": 5e-4 * f}
+    )
     result = fit(model, parse_measurements(table, model))
     assert result.status is FitStatus.POOR_FIT, result.message
     assert "spruce.nu12 = 0.4 ended on its bound" in result.message

@@ -1,13 +1,20 @@
 """The sub-band LSCF estimator (``identify.recordings.lscf``) against closed forms and
 against sdypy-EMA's full-band LSCF, the field library's implementation of the same
 estimator."""
+
 import numpy as np
 import pytest
 
 from identify.recordings.lscf import lscf_poles
 
 #: Five modes of the paper's plate: natural frequency [Hz], damping ratio, residue.
-MODES = [(129.2, 0.006, 1.0), (191.6, 0.005, -0.8), (238.8, 0.004, 0.6), (383.0, 0.005, 1.2), (440.0, 0.011, -0.7)]
+MODES = [
+    (129.2, 0.006, 1.0),
+    (191.6, 0.005, -0.8),
+    (238.8, 0.004, 0.6),
+    (383.0, 0.005, 1.2),
+    (440.0, 0.011, -0.7),
+]
 RESOLUTION_HZ = 0.5
 
 

@@ -1,6 +1,7 @@
 """identify.recordings.maxima against the scipy.signal functions it stands in for
 (find_peaks, peak_prominences): the same peaks and the same prominences, bit for bit, on
 any curve, flat runs and ties included (hypothesis)."""
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -27,8 +28,11 @@ def test_local_maxima_and_prominences_match_scipy(x):
 @settings(max_examples=200, deadline=None)
 @given(curves, st.sampled_from([0.0, 0.5, 1.0, 2.5]))
 def test_find_peaks_with_a_prominence_matches_scipy(x, minimum):
-    expected, props = signal.find_peaks(x, prominence=minimum) if len(x) else (np.array([], dtype=int),
-                                                                              {"prominences": np.zeros(0)})
+    expected, props = (
+        signal.find_peaks(x, prominence=minimum)
+        if len(x)
+        else (np.array([], dtype=int), {"prominences": np.zeros(0)})
+    )
     found, prominent = find_peaks(x, minimum)
     assert np.array_equal(found, expected)
     assert np.array_equal(prominent, props["prominences"])

@@ -1,5 +1,6 @@
 """Measured mode shapes: the shape CSV's validation, MAC at the measured points, pairing
 by shape, the maps of where the shapes disagree, and a hidden sensor placed by them."""
+
 import json
 
 import numpy as np
@@ -46,18 +47,21 @@ def test_bundled_shapes_load_and_name_every_peak(example_spec, bundled):
     assert loaded.pinned.all()
 
 
-@pytest.mark.parametrize("change, field", [
-    (lambda f: f.rename(columns={"amplitude": "amp"}), "amp"),
-    (lambda f: f.drop(columns="y_mm"), "y_mm"),
-    (lambda f: f.assign(frequency_hz=f["frequency_hz"] * 1.01), "frequency_hz"),
-    (lambda f: f.assign(x_mm=f["x_mm"] + 200), "outside"),
-    (lambda f: f.assign(x_mm=f["x_mm"] / 1000, y_mm=f["y_mm"] / 1000), "metres"),
-    (lambda f: f.assign(configuration="brass_middle"), "brass_middle"),
-    (lambda f: f.assign(amplitude=np.where(f.index == 3, np.nan, f["amplitude"])), "amplitude"),
-    (lambda f: f[f["configuration"] == "original"].groupby("frequency_hz").head(3), "at least 4"),
-    (lambda f: pd.concat([f.iloc[:20], f.iloc[:1]]), "given twice"),
-    (lambda f: f.assign(amplitude=0.0, amplitude_imag=0.0), "zero"),
-])
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        (lambda f: f.rename(columns={"amplitude": "amp"}), "amp"),
+        (lambda f: f.drop(columns="y_mm"), "y_mm"),
+        (lambda f: f.assign(frequency_hz=f["frequency_hz"] * 1.01), "frequency_hz"),
+        (lambda f: f.assign(x_mm=f["x_mm"] + 200), "outside"),
+        (lambda f: f.assign(x_mm=f["x_mm"] / 1000, y_mm=f["y_mm"] / 1000), "metres"),
+        (lambda f: f.assign(configuration="brass_middle"), "brass_middle"),
+        (lambda f: f.assign(amplitude=np.where(f.index == 3, np.nan, f["amplitude"])), "amplitude"),
+        (lambda f: f[f["configuration"] == "original"].groupby("frequency_hz").head(3), "at least 4"),
+        (lambda f: pd.concat([f.iloc[:20], f.iloc[:1]]), "given twice"),
+        (lambda f: f.assign(amplitude=0.0, amplitude_imag=0.0), "zero"),
+    ],
+)
 def test_bad_shape_files_name_the_field(example_spec, bundled, shape_rows, change, field):
     """Every slip is refused at the entry point with a message naming what is wrong."""
     assert field in _error(example_spec, bundled, change(shape_rows))
@@ -70,8 +74,10 @@ def test_two_shapes_naming_one_peak_are_refused(example_spec, bundled, shape_row
 
 
 @settings(max_examples=30, deadline=None)
-@given(scale=st.complex_numbers(min_magnitude=1e-3, max_magnitude=1e3, allow_nan=False, allow_infinity=False),
-       seed=st.integers(0, 2**16))
+@given(
+    scale=st.complex_numbers(min_magnitude=1e-3, max_magnitude=1e3, allow_nan=False, allow_infinity=False),
+    seed=st.integers(0, 2**16),
+)
 def test_point_mac_ignores_scale_and_phase(scale, seed):
     """MAC is 1 for a shape against itself times any complex factor, symmetric in its
     arguments' roles, and 0 against an orthogonal one (closed form)."""
@@ -91,7 +97,9 @@ def test_synthetic_shapes_are_the_model_s_at_the_grid(paper_model):
     data = synthetic_measurements(paper_model, modes=5, seed=1, shape_grid=(5, 4))
     solution = paper_model.solve("original")
     for k, shape in enumerate(data.shapes_of(data.of("original"))):
-        assert point_mac(shape_at_points(solution, shape), shape.amplitude)[k] == pytest.approx(1.0, abs=1e-12)
+        assert point_mac(shape_at_points(solution, shape), shape.amplitude)[k] == pytest.approx(
+            1.0, abs=1e-12
+        )
 
 
 def test_shapes_decide_the_pairing_a_hidden_sensor_confuses(example_spec):
@@ -107,8 +115,9 @@ def test_shapes_decide_the_pairing_a_hidden_sensor_confuses(example_spec):
     rows = frequency_only.measurements.of("original")
     assert len(rows) == 7
     solver = frequency_only.model.with_options(modes=11)
-    blind = shape_correlation(solver.solve("original"), data.shapes_of(rows),
-                              frequency_only.pairings["original"].indices)
+    blind = shape_correlation(
+        solver.solve("original"), data.shapes_of(rows), frequency_only.pairings["original"].indices
+    )
     assert blind.paired_mac.min() < 0.2
     comparison = compare(model, data)
     assert len(comparison.fitted.measurements.of("original")) == 8
@@ -139,13 +148,23 @@ def test_mac_paired_fit_of_a_peak_list_with_the_sensor_known(example_spec, paper
     5 x 4 grid, the 3 g sensor in the spec: every property within 3 std, every peak used,
     every shape's MAC with its paired mode above 0.95 (the close pairs included: the
     model holds the sensor)."""
-    data = synthetic_measurements(paper_model.with_attachments([SENSOR]), modes=8, noise_rel=5e-4, seed=4,
-                                  shape_grid=(5, 4), shape_noise_rel=0.01, hammer_std_mm=1.0)
+    data = synthetic_measurements(
+        paper_model.with_attachments([SENSOR]),
+        modes=8,
+        noise_rel=5e-4,
+        seed=4,
+        shape_grid=(5, 4),
+        shape_noise_rel=0.01,
+        hammer_std_mm=1.0,
+    )
     peaks = Measurements(data.table.assign(mode=0), data.source, data.shapes)
     result = fit(example_spec.with_attachments([SENSOR]), peaks)
     assert result.converged, result.message
     assert result.peaks.matched.all()
-    z = [(v - paper_model.value(p)) / s for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)]
+    z = [
+        (v - paper_model.value(p)) / s
+        for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+    ]
     assert np.max(np.abs(z)) < 3
     solver = result.model.with_options(modes=11)
     for name, pairing in result.pairings.items():
@@ -156,8 +175,18 @@ def test_mac_paired_fit_of_a_peak_list_with_the_sensor_known(example_spec, paper
 def test_fit_json_and_report_carry_the_shapes(tmp_path, capsys):
     """``fit --shapes``: residual rows gain ``mac``, the document ``mac_matrix`` per
     configuration (measured peaks x model modes), and the report the shape figures."""
-    code = identify_layers(["fit", str(COATED_PLATE), str(COATED_PLATE_MEASURED), "--shapes",
-                            str(COATED_PLATE_SHAPES), "--json", "--report", str(tmp_path / "report")])
+    code = identify_layers(
+        [
+            "fit",
+            str(COATED_PLATE),
+            str(COATED_PLATE_MEASURED),
+            "--shapes",
+            str(COATED_PLATE_SHAPES),
+            "--json",
+            "--report",
+            str(tmp_path / "report"),
+        ]
+    )
     document = json.loads(capsys.readouterr().out)
     assert code == 0
     assert all(row["mac"] > 0.95 for row in document["residuals"])
@@ -240,8 +269,9 @@ def wood(tmp_path_factory):
 def _wood_data(truth, seed: int):
     """6 modes at 0.3 % scatter, their shapes on a 5 x 4 roving-hammer grid: 1 % noise,
     each hit 1 mm (std per axis) off its point."""
-    return synthetic_measurements(truth, modes=6, noise_rel=3e-3, seed=seed, shape_grid=(5, 4), shape_noise_rel=0.01,
-                                  hammer_std_mm=1.0)
+    return synthetic_measurements(
+        truth, modes=6, noise_rel=3e-3, seed=seed, shape_grid=(5, 4), shape_noise_rel=0.01, hammer_std_mm=1.0
+    )
 
 
 def test_shapes_in_the_objective_determine_a_weak_poisson_ratio(wood):
@@ -272,8 +302,12 @@ def test_shapes_in_the_objective_state_their_std_honestly(wood):
     z = []
     for seed in range(16):
         result = fit(start, _wood_data(truth, seed), options=FitOptions(use_shapes=True))
-        z.append([(v - truth.value(p)) / s for p, v, s in zip(result.parameters, result.values,
-                                                               result.uncertainty.std)])
+        z.append(
+            [
+                (v - truth.value(p)) / s
+                for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+            ]
+        )
     coverage = np.sqrt(np.mean(np.square(z), axis=0))
     assert np.all((coverage > 0.7) & (coverage < 1.35)), coverage
 
@@ -307,4 +341,6 @@ def test_a_configuration_whose_shaped_peaks_are_all_left_out(paper_model, tmp_pa
     assert correlation.mac.shape[0] == len(shapes)
     assert len(shape_lines({"original": correlation})) == 2
     specimen = paper_model.specimen
-    assert plot_shape_maps({"original": correlation}, specimen.length, specimen.width, tmp_path / "maps.png").exists()
+    assert plot_shape_maps(
+        {"original": correlation}, specimen.length, specimen.width, tmp_path / "maps.png"
+    ).exists()

@@ -1,4 +1,5 @@
 """Measurement CSV validation: bad data gets a clear one-line error naming the line."""
+
 import pandas as pd
 import pytest
 
@@ -29,12 +30,14 @@ def test_without_mode_numbers_a_peak_list(example_spec):
 def set_cell(row, column, value):
     def edit(frame):
         frame.loc[row, column] = value
+
     return edit
 
 
 def rename_column(old, new):
     def edit(frame):
         frame.columns = [new if c == old else c for c in frame.columns]
+
     return edit
 
 
@@ -45,22 +48,38 @@ def edited(edit):
 
 
 CASES = [
-    ("unknown configuration", lambda f: f.__setitem__("configuration", f["configuration"].replace("brass_top", "brass_tpo")),
-     ["line 12", "'brass_tpo'", "did you mean 'brass_top'"]),
-    ("duplicate row", lambda f: f.loc.__setitem__(3, ["original", 3, 238.8, 0.12, ""]),
-     ["lines", "original", "mode 3", "more than once"]),
+    (
+        "unknown configuration",
+        lambda f: f.__setitem__("configuration", f["configuration"].replace("brass_top", "brass_tpo")),
+        ["line 12", "'brass_tpo'", "did you mean 'brass_top'"],
+    ),
+    (
+        "duplicate row",
+        lambda f: f.loc.__setitem__(3, ["original", 3, 238.8, 0.12, ""]),
+        ["lines", "original", "mode 3", "more than once"],
+    ),
     ("NaN frequency", set_cell(2, "frequency_hz", float("nan")), ["line 4", "not a number"]),
     ("zero frequency", set_cell(0, "frequency_hz", 0.0), ["line 2", "must be positive"]),
     ("negative frequency", set_cell(1, "frequency_hz", -191.5), ["line 3", "must be positive"]),
     ("negative std", set_cell(1, "std_hz", -0.1), ["line 3", "std_hz", "positive"]),
     ("missing std in one row", set_cell(1, "std_hz", float("nan")), ["line 3", "every row or for none"]),
     ("mode not a rank", set_cell(1, "mode", 0), ["line 3", "mode"]),
-    ("frequencies not rising with mode", set_cell(1, "frequency_hz", 100.0),
-     ["'original'", "mode 2 (100 Hz) is below mode 1"]),
-    ("misspelt column", rename_column("frequency_hz", "freq_hz"),
-     ["unknown column 'freq_hz'", "did you mean 'frequency_hz'"]),
+    (
+        "frequencies not rising with mode",
+        set_cell(1, "frequency_hz", 100.0),
+        ["'original'", "mode 2 (100 Hz) is below mode 1"],
+    ),
+    (
+        "misspelt column",
+        rename_column("frequency_hz", "freq_hz"),
+        ["unknown column 'freq_hz'", "did you mean 'frequency_hz'"],
+    ),
     ("label not a pattern", set_cell(3, "label", "ring"), ["line 5", "label = 'ring'", "(1,2)"]),
-    ("damping in per cent", lambda f: f.insert(3, "damping_ratio", 0.6), ["damping_ratio = 0.6", "0.01 for 1 %"]),
+    (
+        "damping in per cent",
+        lambda f: f.insert(3, "damping_ratio", 0.6),
+        ["damping_ratio = 0.6", "0.01 for 1 %"],
+    ),
 ]
 
 

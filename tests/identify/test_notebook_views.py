@@ -1,5 +1,6 @@
 """Notebook views (``_repr_html_``) are the HTML report's tables, not a ``<pre>`` of the
 text, and they show the numbers the text report shows."""
+
 import re
 
 import identify

@@ -2,6 +2,7 @@
 ``fitting.driver._best_start``).  The frequencies are even in the angles of all layers
 together only while the plate is mirror-symmetric; a sensor off the mirror lines breaks
 that, and the refit must start on the side the data favour."""
+
 import math
 from dataclasses import replace
 
@@ -69,7 +70,9 @@ def test_a_refit_that_ends_worse_than_its_state_is_refitted_from_the_other_start
     (+3 deg) is refitted, and kept because it is not worse; the note says so."""
     data, model, state = turned_core
     prepared = prepare_effect(state, "orientation")
-    diverged = replace(state, statistics=replace(state.statistics, sum_squares=2 * state.statistics.sum_squares))
+    diverged = replace(
+        state, statistics=replace(state.statistics, sum_squares=2 * state.statistics.sum_squares)
+    )
     refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
     result, notes = _other_starts(refit, prepared, diverged, list(prepared.base + prepared.added))
     assert result.statistics.sum_squares <= state.statistics.sum_squares

@@ -1,5 +1,6 @@
 """The pairing is checked at the solution: a pair the start has the wrong way
 round, and mode labels copied from predict."""
+
 import copy
 import tomllib
 
@@ -22,7 +23,9 @@ def narrow_plate():
     narrow = copy.deepcopy(data)
     narrow["specimen"]["width_mm"] = 140.0
     start = parse_spec(narrow)
-    truth = start.with_values({**table1_values(), Parameter("E1", "steel"): 300e9, Parameter("E2", "steel"): 150e9})
+    truth = start.with_values(
+        {**table1_values(), Parameter("E1", "steel"): 300e9, Parameter("E2", "steel"): 150e9}
+    )
     return start, truth
 
 

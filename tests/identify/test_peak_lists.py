@@ -1,5 +1,6 @@
 """Peak lists as recordings give them: no mode numbers, modes missing, spurious
 peaks; ranks with gaps; the matching itself against hand-worked cases."""
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -13,8 +14,13 @@ from identify.reporting.report import fit_residuals
 #: Peaks a recording adds: a suspension mode below the first elastic one (original), a
 #: peak between modes 3 and 4 (brass_bottom: 458.6 / 644.9 Hz), one above the eighth mode
 #: of brass_top (1182.6 Hz) and 1.3 % off its ninth (1283 Hz), far outside the scatter.
-SPURIOUS = pd.DataFrame({"configuration": ["original", "brass_bottom", "brass_top"],
-                         "frequency_hz": [60.0, 540.0, 1300.0], "std_hz": [0.03, 0.27, 0.65]})
+SPURIOUS = pd.DataFrame(
+    {
+        "configuration": ["original", "brass_bottom", "brass_top"],
+        "frequency_hz": [60.0, 540.0, 1300.0],
+        "std_hz": [0.03, 0.27, 0.65],
+    }
+)
 
 
 @pytest.fixture(scope="module")
@@ -24,8 +30,12 @@ def eight_modes(paper_model):
 
 
 def z_scores(result, truth):
-    return np.array([(v - truth.value(p)) / s for p, v, s in zip(result.parameters, result.values,
-                                                                    result.uncertainty.std)])
+    return np.array(
+        [
+            (v - truth.value(p)) / s
+            for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+        ]
+    )
 
 
 def test_peak_list_with_missing_modes_and_spurious_peaks(example_spec, paper_model, eight_modes):
@@ -63,10 +73,16 @@ def test_match_leaves_out_what_fits_no_mode():
     """Peaks 100, 205, 300 Hz (std 0.1 Hz) against modes 100.1, 200, 300.2, 400 Hz at a 0.1 %
     model tolerance: 205 Hz is 22 sigma from 200 Hz, beyond the gate of 3, so it is left
     out; the others are within 1 sigma and match; the cost is their sum plus GATE^2."""
-    m = match(np.array([100.0, 205.0, 300.0]), np.array([0.1, 0.1, 0.1]), np.array([100.1, 200.0, 300.2, 400.0]),
-              1e-3)
+    m = match(
+        np.array([100.0, 205.0, 300.0]),
+        np.array([0.1, 0.1, 0.1]),
+        np.array([100.1, 200.0, 300.2, 400.0]),
+        1e-3,
+    )
     assert m.modes.tolist() == [0, -1, 2]
-    assert m.cost == pytest.approx(0.1**2 / (0.01 + 0.1001**2) + GATE**2 + 0.2**2 / (0.01 + 0.3002**2), rel=1e-9)
+    assert m.cost == pytest.approx(
+        0.1**2 / (0.01 + 0.1001**2) + GATE**2 + 0.2**2 / (0.01 + 0.3002**2), rel=1e-9
+    )
 
 
 def test_align_finds_the_scale_of_a_far_start():

@@ -15,6 +15,7 @@ of each channel's peak, force amplitudes varying 30 %.  Truth (``TRUE``):
 - an 8 Hz suspension mode: left out of the default band (from 20 Hz) and named in the
   notes; flagged "suspension" when the caller's band reaches down to it.
 """
+
 import json
 import re
 
@@ -28,11 +29,13 @@ from identify.recordings.peaks import CSV_COLUMNS, extract_peaks
 from identify.recordings.readers import Hit
 from identify.recordings.tap_simulation import Modes, Session, TapOptions, hammer_force
 
-TRUE = pd.DataFrame({
-    "frequency_hz": [8.0, 129.2, 191.6, 238.8, 275.0, 337.11, 337.14, 383.0, 440.0, 560.0, 590.0],
-    "damping_ratio": [0.03, 0.006, 0.005, 0.004, 0.005, 0.004, 0.004, 0.005, 0.011, 0.005, 0.003],
-    "residue": [0.05, 1.0, -0.8, 0.6, 1e-4, 0.5, 0.4, 1.2, -0.7, 0.015, 0.9],
-})
+TRUE = pd.DataFrame(
+    {
+        "frequency_hz": [8.0, 129.2, 191.6, 238.8, 275.0, 337.11, 337.14, 383.0, 440.0, 560.0, 590.0],
+        "damping_ratio": [0.03, 0.006, 0.005, 0.004, 0.005, 0.004, 0.004, 0.005, 0.011, 0.005, 0.003],
+        "residue": [0.05, 1.0, -0.8, 0.6, 1e-4, 0.5, 0.4, 1.2, -0.7, 0.015, 0.9],
+    }
+)
 MODES = Modes(TRUE["frequency_hz"], TRUE["damping_ratio"], TRUE["residue"])
 SEPARATED = TRUE.iloc[[1, 2, 3, 7, 8, 10]]
 
@@ -50,7 +53,9 @@ def session():
 def test_double_hit_is_rejected_and_reported(session):
     _, result = session
     assert [r.source for r in result.rejected] == ["hit3"]
-    assert "double hit: a second force pulse of 50% of the first, 3.0 ms after it" in result.rejected[0].reason
+    assert (
+        "double hit: a second force pulse of 50% of the first, 3.0 ms after it" in result.rejected[0].reason
+    )
     assert result.frf.sources == ("hit1", "hit2", "hit4", "hit5")
     assert "hit3: double hit" in result.report()
 
@@ -156,7 +161,9 @@ def test_guide_finds_a_weak_mode_the_diagram_lost():
     of its own in |H1|: its column is too unsteady to count as stable, so it is not
     found; looking near the guide frequency 565 Hz finds it within 1 % (fitted with the
     590 Hz mode as its neighbour, and found on every hit), flagged "guided"."""
-    modes = Modes([191.6, 238.8, 383.0, 560.0, 590.0], [0.005, 0.004, 0.005, 0.005, 0.003], [-0.8, 0.6, 1.2, 0.004, 0.9])
+    modes = Modes(
+        [191.6, 238.8, 383.0, 560.0, 590.0], [0.005, 0.004, 0.005, 0.005, 0.003], [-0.8, 0.6, 1.2, 0.004, 0.9]
+    )
     hits = Session(modes, seed=5, options=TapOptions(noise_rel=3e-3)).hits()
     plain = extract_peaks(hits)
     assert not (np.abs(plain.table["frequency_hz"] / 560 - 1) < 0.02).any()
@@ -171,8 +178,11 @@ def test_outputs(session, tmp_path):
     _, result = session
     result.write_csv(tmp_path / "peaks.csv")
     written = pd.read_csv(tmp_path / "peaks.csv")
-    assert list(written.columns) == CSV_COLUMNS == ["configuration", "frequency_hz", "std_hz", "damping_ratio",
-                                                 "damping_std"]
+    assert (
+        list(written.columns)
+        == CSV_COLUMNS
+        == ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
+    )
     assert len(written) == len(result) and (written["configuration"] == "original").all()
     np.testing.assert_allclose(written["frequency_hz"], result.table["frequency_hz"], rtol=1e-6)
     data = json.loads(to_json(result.to_dict()))
@@ -192,7 +202,9 @@ def test_rebound_within_the_pulse_is_a_double_hit():
     hits = Session(MODES, n_hits=3, seed=1, double_hits=(1,), double_hit_ms=0.6).hits()
     (rejected,) = extract_peaks(hits).rejected
     assert rejected.source == "hit2"
-    apart = float(re.search(r"double hit: the force pulse has 2 maxima, (\S+) ms apart", rejected.reason).group(1))
+    apart = float(
+        re.search(r"double hit: the force pulse has 2 maxima, (\S+) ms apart", rejected.reason).group(1)
+    )
     assert apart == pytest.approx(0.6, abs=0.1)
 
 
@@ -222,7 +234,9 @@ def test_pure_noise_gives_no_peaks():
     """A clean hammer pulse and a response of white noise only: no stable column, no peak."""
     rng = np.random.default_rng(3)
     force = hammer_force(TapOptions())
-    hits = [Hit(f"noise{k}", 48000.0, rng.standard_normal(len(force)), force * (1 + 0.2 * k)) for k in range(3)]
+    hits = [
+        Hit(f"noise{k}", 48000.0, rng.standard_normal(len(force)), force * (1 + 0.2 * k)) for k in range(3)
+    ]
     result = extract_peaks(hits, band_hz=(20.0, 1000.0))
     assert len(result) == 0 and "no peaks found" in result.report()
 
@@ -273,7 +287,9 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
     )
     from identify.recordings.tap_quirks import real_like_plate
 
-    hits = Session(real_like_plate(), n_hits=2, seed=1, options=TapOptions(pulse_ms=0.35, noise_rel=3e-5)).hits()
+    hits = Session(
+        real_like_plate(), n_hits=2, seed=1, options=TapOptions(pulse_ms=0.35, noise_rel=3e-5)
+    ).hits()
     frf = extract_peaks(hits).frf
     band = (20.0, 2900.0)
     picked = picked_peaks(frf.frequency_hz, frf.h1, frf.lines(band), PICK_DB)
@@ -288,6 +304,10 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
         assert cut == pytest.approx(0.5 * (peaks[i - 1] + peaks[i]))
     for sub in bands:
         width = sub.core_hz[1] - sub.core_hz[0]
-        assert sub.fitted_hz[0] == pytest.approx(max(frf.frequency_hz[1], sub.core_hz[0] - SUB_BAND_OVERLAP * width))
-        assert sub.fitted_hz[1] == pytest.approx(min(frf.frequency_hz[-1], sub.core_hz[1] + SUB_BAND_OVERLAP * width))
+        assert sub.fitted_hz[0] == pytest.approx(
+            max(frf.frequency_hz[1], sub.core_hz[0] - SUB_BAND_OVERLAP * width)
+        )
+        assert sub.fitted_hz[1] == pytest.approx(
+            min(frf.frequency_hz[-1], sub.core_hz[1] + SUB_BAND_OVERLAP * width)
+        )
         assert MIN_ORDER <= sub.order <= MAX_ORDER

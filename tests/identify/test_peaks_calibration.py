@@ -2,6 +2,7 @@
 amplitudes each time) the mean reported std_hz matches the observed scatter of
 frequency_hz about the truth.  A larger run (100 sessions: ratio 0.97-0.99) is printed
 by ``python -m benchmarks.peaks``."""
+
 import numpy as np
 import pytest
 
@@ -9,8 +10,11 @@ from identify.recordings.peaks import extract_peaks
 from identify.recordings.tap_simulation import Modes, Session
 
 #: The test plate's well-separated modes (the close pair is tested elsewhere).
-MODES = Modes([129.2, 191.6, 238.8, 383.0, 440.0, 590.0], [0.006, 0.005, 0.004, 0.005, 0.011, 0.003],
-              [1.0, -0.8, 0.6, 1.2, -0.7, 0.9])
+MODES = Modes(
+    [129.2, 191.6, 238.8, 383.0, 440.0, 590.0],
+    [0.006, 0.005, 0.004, 0.005, 0.011, 0.003],
+    [1.0, -0.8, 0.6, 1.2, -0.7, 0.9],
+)
 SESSIONS = 10
 
 

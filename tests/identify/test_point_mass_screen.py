@@ -1,5 +1,6 @@
 """The point-mass screen: a mass added to a Rayleigh-Ritz model against the full solve
 with the mass, and the screen's best start against a hidden sensor."""
+
 import math
 
 import numpy as np
@@ -33,8 +34,9 @@ def test_a_mass_on_the_reduced_model_matches_the_full_solve():
     dofs, rows = point_operators(basis.base.units, SENSOR.x, SENSOR.y)
     v = np.stack([rows[f] @ basis.basis[dofs] for f in ("u", "v", "w")])
     eigenvalues = sla.eigh(k, m + SENSOR.mass * v.T @ v, eigvals_only=True)
-    assert np.all(np.abs(eigenvalues[:rigid]) < 1e-6 * eigenvalues[rigid])  # the rigid-body motions, with the mass
-    ritz = np.sqrt(eigenvalues[rigid:rigid + 8]) / (2 * math.pi)
+    # the rigid-body motions, with the mass
+    assert np.all(np.abs(eigenvalues[:rigid]) < 1e-6 * eigenvalues[rigid])
+    ritz = np.sqrt(eigenvalues[rigid : rigid + 8]) / (2 * math.pi)
     full = model.with_attachments([SENSOR]).solve("original").frequencies_hz[:8]
     assert np.all(ritz >= full * (1 - 1e-9))
     assert np.max(ritz / full - 1) < 1.5e-3
@@ -58,7 +60,12 @@ def test_the_screen_starts_at_the_hidden_sensor(sensor_baseline):
     specimen = sensor_baseline.model.specimen
     a, b = specimen.length, specimen.width
     x, y = best["xy"]
-    images = [(SENSOR.x, SENSOR.y), (a - SENSOR.x, SENSOR.y), (SENSOR.x, b - SENSOR.y), (a - SENSOR.x, b - SENSOR.y)]
+    images = [
+        (SENSOR.x, SENSOR.y),
+        (a - SENSOR.x, SENSOR.y),
+        (SENSOR.x, b - SENSOR.y),
+        (a - SENSOR.x, b - SENSOR.y),
+    ]
     cell = np.hypot(a / POSITIONS[0], b / POSITIONS[1])
     assert min(np.hypot(x - p, y - q) for p, q in images) < 2 * cell, (best, images)
     assert 0.5 < best["mass_kg"] / SENSOR.mass < 2

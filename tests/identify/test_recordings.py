@@ -1,5 +1,6 @@
 """Recordings: the tap simulator is exact, the writers and readers round-trip CSV, WAV and
 UFF58, and every bad input is a one-line MeasurementError naming the file and the fix."""
+
 from pathlib import Path
 
 import numpy as np
@@ -48,8 +49,10 @@ def test_simulated_response_is_exact():
     t = np.arange(len(force)) / options.sample_rate
     ours = exact_response(MODES, force, options.sample_rate)
     w = 2 * np.pi * MODES.frequencies_hz
-    reference = sum(signal.lsim(([a, 0, 0], [1, 2 * z * wr, wr**2]), force, t)[1]
-                    for a, z, wr in zip(MODES.residues, MODES.damping_ratios, w))
+    reference = sum(
+        signal.lsim(([a, 0, 0], [1, 2 * z * wr, wr**2]), force, t)[1]
+        for a, z, wr in zip(MODES.residues, MODES.damping_ratios, w)
+    )
     assert np.abs(ours - reference).max() < 1e-9 * np.abs(reference).max()
 
 
@@ -91,7 +94,11 @@ def test_round_trip_gives_the_same_peaks(tmp_path, hits, kind):
     read = read_recordings(paths, sample_rate=48000.0 if kind == "csv_rate" else None)
     assert all(r.sample_rate == 48000.0 and r.force is not None for r in read)
     expected = extract_peaks(hits).table["frequency_hz"].to_numpy()
-    got = extract_peaks(paths, sample_rate=48000.0 if kind == "csv_rate" else None).table["frequency_hz"].to_numpy()
+    got = (
+        extract_peaks(paths, sample_rate=48000.0 if kind == "csv_rate" else None)
+        .table["frequency_hz"]
+        .to_numpy()
+    )
     assert len(expected) == 4
     np.testing.assert_allclose(got, expected, atol=1e-5)
 
@@ -146,10 +153,13 @@ def test_uff_frf_record_is_used_as_averaged(tmp_path, hits):
     result = extract_peaks([tmp_path / "frf.uff"])
     assert len(result) == 4 and (result.table["quality"] == "single_hit").all()
     assert result.table["std_hz"].isna().all()
-    np.testing.assert_allclose(result.table["frequency_hz"], extract_peaks(hits).table["frequency_hz"], atol=0.05)
+    np.testing.assert_allclose(
+        result.table["frequency_hz"], extract_peaks(hits).table["frequency_hz"], atol=0.05
+    )
 
 
 # --- bad inputs: one line naming the file, the field and value, what is allowed, a fix ----
+
 
 def _csv(tmp_path, text, name="hit.csv"):
     path = tmp_path / name
@@ -159,7 +169,9 @@ def _csv(tmp_path, text, name="hit.csv"):
 
 def _series(n=300, rate=48000.0):
     t = np.arange(n) / rate
-    return pd.DataFrame({"time_s": t, "force": np.exp(-((t - 1e-3) / 2e-4) ** 2), "acceleration": np.sin(t * 2000)})
+    return pd.DataFrame(
+        {"time_s": t, "force": np.exp(-(((t - 1e-3) / 2e-4) ** 2)), "acceleration": np.sin(t * 2000)}
+    )
 
 
 def _frame_csv(tmp_path, frame, name="hit.csv"):
@@ -169,14 +181,27 @@ def _frame_csv(tmp_path, frame, name="hit.csv"):
 BAD_CSV = {
     "empty": ("", "empty"),
     "header only": ("time_s,force,acceleration\n", "no rows"),
-    "unknown column": (lambda f: f.rename(columns={"acceleration": "acceleraton"}), "did you mean 'acceleration'"),
+    "unknown column": (
+        lambda f: f.rename(columns={"acceleration": "acceleraton"}),
+        "did you mean 'acceleration'",
+    ),
     "missing force": (lambda f: f.drop(columns="force"), "missing column 'force'"),
     "two responses": (lambda f: f.assign(velocity=1.0), "exactly one response column"),
     "nan": (lambda f: f.assign(force=f["force"].where(f.index != 10)), "line 12: force = nan"),
-    "text": (lambda f: f.astype(object).assign(acceleration=["x" if i == 5 else v for i, v in enumerate(f["acceleration"])]),
-             "line 7: acceleration = 'x' is not a number"),
-    "time backwards": (lambda f: f.assign(time_s=f["time_s"].where(f.index != 20, 0.0)), "line 22: time_s = 0 is not after"),
-    "uneven time": (lambda f: f.assign(time_s=f["time_s"] * np.where(f.index > 100, 1.01, 1.0)), "evenly spaced"),
+    "text": (
+        lambda f: f.astype(object).assign(
+            acceleration=["x" if i == 5 else v for i, v in enumerate(f["acceleration"])]
+        ),
+        "line 7: acceleration = 'x' is not a number",
+    ),
+    "time backwards": (
+        lambda f: f.assign(time_s=f["time_s"].where(f.index != 20, 0.0)),
+        "line 22: time_s = 0 is not after",
+    ),
+    "uneven time": (
+        lambda f: f.assign(time_s=f["time_s"] * np.where(f.index > 100, 1.01, 1.0)),
+        "evenly spaced",
+    ),
     "too short": (lambda f: f.iloc[:100], "100 samples, need at least 256"),
     "binary junk": (b"\x00\xff\xfe" * 50, "cannot read as CSV"),
 }
@@ -205,12 +230,16 @@ def test_sample_rate_rules(tmp_path):
         read_csv(with_time, sample_rate=44100)
     assert read_csv(with_time, sample_rate=48000).sample_rate == 48000
     no_time = _frame_csv(tmp_path, _series().drop(columns="time_s"), "no_time.csv")
-    with pytest.raises(MeasurementError, match=r"no_time.csv: no time_s column and no sample rate; .*--sample-rate"):
+    with pytest.raises(
+        MeasurementError, match=r"no_time.csv: no time_s column and no sample rate; .*--sample-rate"
+    ):
         read_csv(no_time)
     with pytest.raises(MeasurementError, match=r"sample_rate = -5 must be a positive number of Hz"):
         read_csv(no_time, sample_rate=-5)
     slow = _frame_csv(tmp_path, _series(rate=44100.0), "slow.csv")
-    with pytest.raises(MeasurementError, match=r"slow.csv: sample rate 44100 Hz differs from hit.csv's 48000 Hz"):
+    with pytest.raises(
+        MeasurementError, match=r"slow.csv: sample rate 44100 Hz differs from hit.csv's 48000 Hz"
+    ):
         read_recordings([with_time, slow])
 
 
@@ -219,7 +248,9 @@ def test_bad_files_and_mixtures(tmp_path, hits):
         read_recordings([tmp_path / "missing.csv"])
     with pytest.raises(MeasurementError, match=r"hit.mat: cannot read as a MAT file"):
         read_recordings([_csv(tmp_path, "x", "hit.mat")])
-    with pytest.raises(MeasurementError, match=r"hit.xlsx: file type '.xlsx' is not supported; allowed: .csv, .wav"):
+    with pytest.raises(
+        MeasurementError, match=r"hit.xlsx: file type '.xlsx' is not supported; allowed: .csv, .wav"
+    ):
         read_recordings([_csv(tmp_path, "x", "hit.xlsx")])
     with pytest.raises(MeasurementError, match=r"no recordings given"):
         read_recordings([])
@@ -228,33 +259,46 @@ def test_bad_files_and_mixtures(tmp_path, hits):
     with pytest.raises(MeasurementError, match=r"junk.wav: cannot read as WAV"):
         read_recordings([junk])
     from scipy.io import wavfile
+
     wavfile.write(tmp_path / "three.wav", 48000, np.zeros((1000, 3), dtype=np.float32))
     with pytest.raises(MeasurementError, match=r"three.wav: 3 channels; allowed: 2 \(force, response\) or 1"):
         read_recordings([tmp_path / "three.wav"])
     write_wav(hits[0], tmp_path / "a.wav")
-    with pytest.raises(MeasurementError, match=r"a.wav: the WAV header says 48000 Hz but sample_rate = 44100 Hz"):
+    with pytest.raises(
+        MeasurementError, match=r"a.wav: the WAV header says 48000 Hz but sample_rate = 44100 Hz"
+    ):
         read_recordings([tmp_path / "a.wav"], sample_rate=44100)
     write_wav(hits[1], tmp_path / "b.wav", force_channel=False)
-    with pytest.raises(MeasurementError, match=r"b.wav: has a force channel where a.wav has none \(or the reverse\)"):
+    with pytest.raises(
+        MeasurementError, match=r"b.wav: has a force channel where a.wav has none \(or the reverse\)"
+    ):
         read_recordings([tmp_path / "a.wav", tmp_path / "b.wav"])
     write_csv(hits[0], tmp_path / "a.csv")
     with pytest.raises(MeasurementError, match=r"a.wav: response is response but a.csv has acceleration"):
         read_recordings([tmp_path / "a.csv", tmp_path / "a.wav"])
     (tmp_path / "none.uff").write_text("    -1\n    58\nnot a universal file\n")
-    with pytest.raises(MeasurementError, match=r"none.uff: no type-58 record; export the FRF or the force and response"):
+    with pytest.raises(
+        MeasurementError, match=r"none.uff: no type-58 record; export the FRF or the force and response"
+    ):
         read_recordings([tmp_path / "none.uff"])
     write_uff(tmp_path / "frf.uff", frf=(np.arange(100.0), np.ones(100, dtype=complex)))
     text = (tmp_path / "frf.uff").read_text()
     (tmp_path / "garbled.uff").write_text(text.replace("1.00000000000e+00", "x.0000000000e+00", 3))
-    with pytest.raises(MeasurementError, match=r"garbled.uff: cannot read as UFF \(Error when reading data-set"):
+    with pytest.raises(
+        MeasurementError, match=r"garbled.uff: cannot read as UFF \(Error when reading data-set"
+    ):
         read_recordings([tmp_path / "garbled.uff"])
     (tmp_path / "cut.uff").write_text(text[:1500] + "\n    -1\n")
-    with pytest.raises(MeasurementError, match=r"cut.uff: record 'accelerance' holds \d+ of its num_pts = 100 points"):
+    with pytest.raises(
+        MeasurementError, match=r"cut.uff: record 'accelerance' holds \d+ of its num_pts = 100 points"
+    ):
         read_recordings([tmp_path / "cut.uff"])
     write_uff(tmp_path / "force.uff", hit=hits[0])
     text = (tmp_path / "force.uff").read_text()
-    (tmp_path / "force.uff").write_text(text[:text.index("    -1", 10) + 7])  # the force record alone
-    with pytest.raises(MeasurementError, match=r"force.uff: 1 time records with 1 force and 0 response; need one force"):
+    (tmp_path / "force.uff").write_text(text[: text.index("    -1", 10) + 7])  # the force record alone
+    with pytest.raises(
+        MeasurementError, match=r"force.uff: 1 time records with 1 force and 0 response; need one force"
+    ):
         read_recordings([tmp_path / "force.uff"])
     write_uff(tmp_path / "hit.uff", hit=hits[0])
     with pytest.raises(MeasurementError, match=r"frf.uff: mixes an averaged FRF with time hits"):
@@ -262,9 +306,15 @@ def test_bad_files_and_mixtures(tmp_path, hits):
 
 
 def test_every_hit_rejected_is_an_error():
-    noise = Hit("noise.csv", 48000.0, np.random.default_rng(0).standard_normal(4800),
-                np.random.default_rng(1).standard_normal(4800))
-    with pytest.raises(MeasurementError, match=r"every hit was rejected \(noise.csv: no hit: force peak only"):
+    noise = Hit(
+        "noise.csv",
+        48000.0,
+        np.random.default_rng(0).standard_normal(4800),
+        np.random.default_rng(1).standard_normal(4800),
+    )
+    with pytest.raises(
+        MeasurementError, match=r"every hit was rejected \(noise.csv: no hit: force peak only"
+    ):
         extract_peaks([noise])
     force = hammer_force(TapOptions(duration_s=0.1))
     silent = Hit("silent.csv", 48000.0, np.zeros_like(force), force)
@@ -273,7 +323,9 @@ def test_every_hit_rejected_is_an_error():
 
 
 def test_guide_is_validated(hits):
-    with pytest.raises(MeasurementError, match=r"guide_hz = \[130.0, -5\] must be positive frequencies in Hz"):
+    with pytest.raises(
+        MeasurementError, match=r"guide_hz = \[130.0, -5\] must be positive frequencies in Hz"
+    ):
         extract_peaks(hits, guide_hz=[130.0, -5])
     with pytest.raises(MeasurementError, match=r"guide_hz = 'x' must be positive"):
         extract_peaks(hits, guide_hz="x")
@@ -286,7 +338,9 @@ def test_hits_in_memory_are_checked_together(hits):
 
 
 def test_band_is_validated(hits):
-    with pytest.raises(MeasurementError, match=r"band_hz = \(500, 100\) must satisfy 0 <= low < high <= 24000 Hz"):
+    with pytest.raises(
+        MeasurementError, match=r"band_hz = \(500, 100\) must satisfy 0 <= low < high <= 24000 Hz"
+    ):
         extract_peaks(hits, band_hz=(500, 100))
     with pytest.raises(MeasurementError, match=r"band_hz = 'wide' must be two frequencies"):
         extract_peaks(hits, band_hz="wide")
@@ -302,14 +356,21 @@ def _as_binary_58(ascii_path, out_path, single: bool) -> None:
     lines = Path(ascii_path).read_text().splitlines()
     out, i = b"", 0
     while i < len(lines):
-        header, j, values = lines[i + 2:i + 13], i + 13, []
+        header, j, values = lines[i + 2 : i + 13], i + 13, []
         while lines[j].strip() != "-1":
-            values += [float(lines[j][20 * k:20 * (k + 1)]) for k in range(len(lines[j]) // 20)]
+            values += [float(lines[j][20 * k : 20 * (k + 1)]) for k in range(len(lines[j]) // 20)]
             j += 1
         header[6] = f"{2 if single else 4:10d}" + header[6][10:]
         data = struct.pack(f"<{len(values)}{'f' if single else 'd'}", *values)
-        out += (f"{-1:6d}\n{58:6d}b{1:6d}{2:6d}{11:12d}{len(data):12d}{0:6d}{0:6d}{0:12d}{0:12d}\n"
-                + "\n".join(header) + "\n").encode() + data + f"\n{-1:6d}\n".encode()
+        out += (
+            (
+                f"{-1:6d}\n{58:6d}b{1:6d}{2:6d}{11:12d}{len(data):12d}{0:6d}{0:6d}{0:12d}{0:12d}\n"
+                + "\n".join(header)
+                + "\n"
+            ).encode()
+            + data
+            + f"\n{-1:6d}\n".encode()
+        )
         i = j + 1
     Path(out_path).write_bytes(out)
 

@@ -1,5 +1,6 @@
 """Rounding a value to its uncertainty (GUM 7.2.6: the std to at most two significant
 digits, the value to the same decimal), per cent, and one status line."""
+
 import math
 
 import pytest
@@ -7,13 +8,16 @@ import pytest
 from identify.reporting.rounding import percent, status_line, with_std
 
 
-@pytest.mark.parametrize("value, std, unit, expected", [
-    (67.8287, 1.15955, "GPa", "67.8 ± 1.2 GPa (1.7 %)"),
-    (0.310937, 0.0084567, "", "0.3109 ± 0.0085 (2.7 %)"),
-    (201.09, 0.99, "GPa", "201.09 ± 0.99 GPa (0.49 %)"),      # 0.99 stays 2 digits
-    (12345.6, 234.5, "N/m", "12350 ± 230 N/m (1.9 %)"),         # std above 10: tens
-    (-3.14159, 0.0271, "deg", "-3.142 ± 0.027 deg (0.86 %)"),
-])
+@pytest.mark.parametrize(
+    "value, std, unit, expected",
+    [
+        (67.8287, 1.15955, "GPa", "67.8 ± 1.2 GPa (1.7 %)"),
+        (0.310937, 0.0084567, "", "0.3109 ± 0.0085 (2.7 %)"),
+        (201.09, 0.99, "GPa", "201.09 ± 0.99 GPa (0.49 %)"),  # 0.99 stays 2 digits
+        (12345.6, 234.5, "N/m", "12350 ± 230 N/m (1.9 %)"),  # std above 10: tens
+        (-3.14159, 0.0271, "deg", "-3.142 ± 0.027 deg (0.86 %)"),
+    ],
+)
 def test_value_rounded_to_two_digits_of_its_std(value, std, unit, expected):
     assert with_std(value, std, unit) == expected
 

@@ -2,6 +2,7 @@
 residues recovered exactly from analytic FRFs, standard errors that cover the noise, the
 shapes of the project's FE plate from simulated roving-hammer recordings, agreement with
 sdypy-EMA's LSFD on the same FRFs, and bad inputs refused with the field named."""
+
 import json
 from dataclasses import replace
 from types import SimpleNamespace
@@ -156,10 +157,17 @@ def roving(tmp_path_factory):
     shapes = [shape(r) for r in range(MODES)]
     frequencies = solution.frequencies_hz[:MODES]
     damping = np.linspace(0.004, 0.007, MODES)
-    points = pd.DataFrame([(f"P{i}{j}", x, y) for i, x in enumerate(np.linspace(15.0, 135.0, 5))
-                           for j, y in enumerate(np.linspace(15.0, 85.0, 4))], columns=["point", "x_mm", "y_mm"])
-    hits = roving_hits(frequencies, damping, shapes, SENSOR_MM, points, hits=3, position_std_mm=1.0, seed=4,
-                       options=OPTIONS)
+    points = pd.DataFrame(
+        [
+            (f"P{i}{j}", x, y)
+            for i, x in enumerate(np.linspace(15.0, 135.0, 5))
+            for j, y in enumerate(np.linspace(15.0, 85.0, 4))
+        ],
+        columns=["point", "x_mm", "y_mm"],
+    )
+    hits = roving_hits(
+        frequencies, damping, shapes, SENSOR_MM, points, hits=3, position_std_mm=1.0, seed=4, options=OPTIONS
+    )
     paths = write_roving(hits, folder / "recordings")
     exact = deflection_operator(solution.units, points["x_mm"] / 1000, points["y_mm"] / 1000) @ field
     estimate = estimate_shapes(paths, points, "original", band_hz=BAND_HZ)
@@ -201,7 +209,9 @@ def test_shapes_csv(roving):
     assert set(text["frequency_hz"]) == set(peaks["frequency_hz"]) and len(peaks) == MODES
     back = pd.read_csv(path)
     first = back[back["frequency_hz"] == back["frequency_hz"].iloc[0]]
-    np.testing.assert_allclose(first["amplitude"] + 1j * first["amplitude_imag"], estimate.shapes[0], atol=1e-6)
+    np.testing.assert_allclose(
+        first["amplitude"] + 1j * first["amplitude_imag"], estimate.shapes[0], atol=1e-6
+    )
     np.testing.assert_array_equal(first[["x_mm", "y_mm"]], estimate.points[["x_mm", "y_mm"]])
 
 
@@ -218,14 +228,24 @@ def test_same_shapes_as_sdypy_ema(roving):
     lines = frfs[0].lines(estimate.band_hz)
     first, last = lines[0], lines[-1]
     # sdypy keeps the lines below the one nearest ``upper`` and fits [f_lower, f_upper)
-    f = frfs[0].frequency_hz[:last + 3]
-    model = ema.Model(frf=np.array([frf.h1[:last + 3] for frf in frfs]), freq=f, lower=f[first], upper=f[last + 2],
-                      pol_order_high=2, frf_form="accelerance")
+    f = frfs[0].frequency_hz[: last + 3]
+    model = ema.Model(
+        frf=np.array([frf.h1[: last + 3] for frf in frfs]),
+        freq=f,
+        lower=f[first],
+        upper=f[last + 2],
+        pol_order_high=2,
+        frf_form="accelerance",
+    )
     table = estimate.modes
-    given = SimpleNamespace(all_poles=[poles(table["frequency_hz"], table["damping_ratio"])],
-                            pole_ind=np.array([[0, r] for r in range(len(table))]))
+    given = SimpleNamespace(
+        all_poles=[poles(table["frequency_hz"], table["damping_ratio"])],
+        pole_ind=np.array([[0, r] for r in range(len(table))]),
+    )
     _, constants = model.get_constants(whose_poles=given, f_lower=f[first], f_upper=f[last + 1])
-    np.testing.assert_allclose(constants.T, estimate.residues, rtol=0, atol=1e-9 * np.abs(estimate.residues).max())
+    np.testing.assert_allclose(
+        constants.T, estimate.residues, rtol=0, atol=1e-9 * np.abs(estimate.residues).max()
+    )
     assert min(mac(estimate.residues[r], constants[:, r]) for r in range(len(table))) >= 0.999
 
 
@@ -240,8 +260,17 @@ def test_roving_hits_land_off_the_point():
     points = pd.DataFrame({"point": ["A"], "x_mm": [50.0], "y_mm": [20.0]})
 
     def gains(std_mm):
-        hits = roving_hits([300.0], [0.01], [lambda x, y: x / 100], (100.0, 20.0), points, hits=8,
-                           position_std_mm=std_mm, seed=5, options=options)["A"]
+        hits = roving_hits(
+            [300.0],
+            [0.01],
+            [lambda x, y: x / 100],
+            (100.0, 20.0),
+            points,
+            hits=8,
+            position_std_mm=std_mm,
+            seed=5,
+            options=options,
+        )["A"]
         line = 300  # 300 Hz on the 1 Hz lines of a 1-s record
         return np.array([abs(np.fft.rfft(h.response)[line] / np.fft.rfft(h.force)[line]) for h in hits])
 
@@ -251,20 +280,41 @@ def test_roving_hits_land_off_the_point():
 
 
 BAD_INPUTS = [
-    ({"A": ["a.csv"], "B": []}, {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
-     "point 'B' .* has no recordings"),
-    ({"A": ["a.csv"], "C": ["c.csv"]}, {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
-     "point 'C' has recordings but no row in points"),
-    ({"A": ["a.csv"], "B": ["b.csv"]}, {"point": ["A", "B"], "x_mm": [0.0, np.nan], "y_mm": [0.0, 0.0]},
-     "x_mm of point 'B' is nan"),
-    ({"A": ["a.csv"], "B": ["b.csv"]}, {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, "ten"]},
-     "y_mm of point 'B' is 'ten'"),
-    ({"A": ["a.csv"]}, {"point": ["A", "A"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
-     r"point 'A' is listed 2 times \(rows \[1, 2\]\)"),
-    ({"A": ["a.csv"], "B": ["b.csv"]}, {"point": ["A", "B"], "x_mm": [5.0, 5.0], "y_mm": [0.0, 0.0]},
-     "'A', 'B' share x_mm, y_mm = \\(5, 0\\)"),
-    ({"A": ["a.csv"], "B": ["b.csv"]}, {"point": ["A", "B"], "x": [0.0, 1.0], "y_mm": [0.0, 0.0]},
-     "column 'x_mm' is missing"),
+    (
+        {"A": ["a.csv"], "B": []},
+        {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
+        "point 'B' .* has no recordings",
+    ),
+    (
+        {"A": ["a.csv"], "C": ["c.csv"]},
+        {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
+        "point 'C' has recordings but no row in points",
+    ),
+    (
+        {"A": ["a.csv"], "B": ["b.csv"]},
+        {"point": ["A", "B"], "x_mm": [0.0, np.nan], "y_mm": [0.0, 0.0]},
+        "x_mm of point 'B' is nan",
+    ),
+    (
+        {"A": ["a.csv"], "B": ["b.csv"]},
+        {"point": ["A", "B"], "x_mm": [0.0, 10.0], "y_mm": [0.0, "ten"]},
+        "y_mm of point 'B' is 'ten'",
+    ),
+    (
+        {"A": ["a.csv"]},
+        {"point": ["A", "A"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]},
+        r"point 'A' is listed 2 times \(rows \[1, 2\]\)",
+    ),
+    (
+        {"A": ["a.csv"], "B": ["b.csv"]},
+        {"point": ["A", "B"], "x_mm": [5.0, 5.0], "y_mm": [0.0, 0.0]},
+        "'A', 'B' share x_mm, y_mm = \\(5, 0\\)",
+    ),
+    (
+        {"A": ["a.csv"], "B": ["b.csv"]},
+        {"point": ["A", "B"], "x": [0.0, 1.0], "y_mm": [0.0, 0.0]},
+        "column 'x_mm' is missing",
+    ),
     ({"A": ["a.csv"]}, {"point": ["A"], "x_mm": [0.0], "y_mm": [0.0]}, "needs at least 2 points"),
 ]
 
@@ -278,8 +328,15 @@ def test_bad_inputs_name_the_field(recordings, points, message):
 def test_response_only_recordings_are_refused():
     """Without the force, a point's response scales with how hard it was hit: no shape."""
     points = pd.DataFrame({"point": ["A", "B"], "x_mm": [20.0, 60.0], "y_mm": [20.0, 20.0]})
-    hits = roving_hits([300.0], [0.01], [lambda x, y: x / 100], (100.0, 20.0), points, hits=2,
-                       options=TapOptions(sample_rate=8000.0, duration_s=0.5))
+    hits = roving_hits(
+        [300.0],
+        [0.01],
+        [lambda x, y: x / 100],
+        (100.0, 20.0),
+        points,
+        hits=2,
+        options=TapOptions(sample_rate=8000.0, duration_s=0.5),
+    )
     silent = {p: [replace(h, force=None) for h in hs] for p, hs in hits.items()}
     with pytest.raises(MeasurementError, match="point 'A': its recordings have no force channel"):
         estimate_shapes(silent, points, band_hz=(100.0, 1000.0))
@@ -288,8 +345,10 @@ def test_response_only_recordings_are_refused():
 def test_a_points_recording_error_names_the_point(tmp_path):
     """An error reading a point's recordings says which point."""
     with pytest.raises(MeasurementError, match="point 'B': .*no such file"):
-        estimate_shapes({"A": [tmp_path / "a.csv"], "B": [tmp_path / "b.csv"]},
-                        pd.DataFrame({"point": ["B", "A"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]}))
+        estimate_shapes(
+            {"A": [tmp_path / "a.csv"], "B": [tmp_path / "b.csv"]},
+            pd.DataFrame({"point": ["B", "A"], "x_mm": [0.0, 10.0], "y_mm": [0.0, 0.0]}),
+        )
 
 
 def test_peaks_points_command(roving, capsys):
@@ -298,21 +357,35 @@ def test_peaks_points_command(roving, capsys):
     drawn, exit 0."""
     folder = roving.folder / "recordings"
     roving.estimate.points.to_csv(folder / "points.csv", index=False)
-    code = identify_layers(["peaks", "--points", str(folder / "points.csv"), "--band", *map(str, BAND_HZ),
-                            "--out", str(roving.folder / "cli_peaks.csv"), "--shapes-out",
-                            str(roving.folder / "cli_shapes.csv"), "--json", "--report",
-                            str(roving.folder / "cli_report")])
+    code = identify_layers(
+        [
+            "peaks",
+            "--points",
+            str(folder / "points.csv"),
+            "--band",
+            *map(str, BAND_HZ),
+            "--out",
+            str(roving.folder / "cli_peaks.csv"),
+            "--shapes-out",
+            str(roving.folder / "cli_shapes.csv"),
+            "--json",
+            "--report",
+            str(roving.folder / "cli_report"),
+        ]
+    )
     document = json.loads(capsys.readouterr().out)
     assert code == 0
-    np.testing.assert_allclose([p["frequency_hz"] for p in document["peaks"]],
-                               roving.estimate.modes["frequency_hz"], rtol=1e-12)
+    np.testing.assert_allclose(
+        [p["frequency_hz"] for p in document["peaks"]], roving.estimate.modes["frequency_hz"], rtol=1e-12
+    )
     assert len(pd.read_csv(roving.folder / "cli_shapes.csv")) == MODES * 20
     assert len(pd.read_csv(roving.folder / "cli_peaks.csv")) == MODES
     assert (roving.folder / "cli_report" / "shapes.png").stat().st_size > 0
 
 
 def test_peaks_points_without_a_point_folder_is_exit_2(tmp_path, capsys):
-    pd.DataFrame({"point": ["A", "B"], "x_mm": [10.0, 20.0], "y_mm": [5.0, 5.0]}).to_csv(tmp_path / "points.csv",
-                                                                                       index=False)
+    pd.DataFrame({"point": ["A", "B"], "x_mm": [10.0, 20.0], "y_mm": [5.0, 5.0]}).to_csv(
+        tmp_path / "points.csv", index=False
+    )
     assert identify_layers(["peaks", "--points", str(tmp_path / "points.csv")]) == 2
     assert "point 'A': no recordings" in capsys.readouterr().err

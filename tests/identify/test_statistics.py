@@ -1,5 +1,6 @@
 """The fit statistics, the score test of compare and the uncertainty flags, each against
 numbers worked out by hand (fast unit tests: no model solves)."""
+
 import math
 
 import numpy as np
@@ -17,9 +18,17 @@ from identify.measurements import Measurements
 
 def measurements(frequencies, std=None) -> Measurements:
     n = len(frequencies)
-    return Measurements(pd.DataFrame({"configuration": ["original"] * n, "mode": np.arange(1, n + 1),
-                                      "frequency_hz": frequencies, "std_hz": std if std is not None else np.nan,
-                                      "label": [""] * n}))
+    return Measurements(
+        pd.DataFrame(
+            {
+                "configuration": ["original"] * n,
+                "mode": np.arange(1, n + 1),
+                "frequency_hz": frequencies,
+                "std_hz": std if std is not None else np.nan,
+                "label": [""] * n,
+            }
+        )
+    )
 
 
 def test_statistics_with_stated_scatter():
@@ -82,13 +91,16 @@ def plate():
     return Specimen("plate", 0.1, 0.1, (Layer(steel, 1e-3, 0.0, "layer1"),), (Configuration("original"),))
 
 
-@pytest.mark.parametrize("kind,value,std,expected", [
-    ("E1", 200e9, 1e9, ()),
-    ("E1", 200e9, (WEAK_REL_STD + 0.01) * 200e9, ("weakly identifiable",)),
-    ("E1", 200e9, math.inf, ("not identifiable",)),
-    ("nu12", 0.3, 0.01, ()),
-    ("nu12", 0.3, 0.05, ("weakly identifiable",)),        # std above 0.1 x 0.3, nu's usual size
-    ("nu12", 0.995, 0.01, ("at bound (nu12^2 -> E1/E2)",)),  # 0.99 > 0.98 x E1/E2 = 0.98
-])
+@pytest.mark.parametrize(
+    "kind,value,std,expected",
+    [
+        ("E1", 200e9, 1e9, ()),
+        ("E1", 200e9, (WEAK_REL_STD + 0.01) * 200e9, ("weakly identifiable",)),
+        ("E1", 200e9, math.inf, ("not identifiable",)),
+        ("nu12", 0.3, 0.01, ()),
+        ("nu12", 0.3, 0.05, ("weakly identifiable",)),  # std above 0.1 x 0.3, nu's usual size
+        ("nu12", 0.995, 0.01, ("at bound (nu12^2 -> E1/E2)",)),  # 0.99 > 0.98 x E1/E2 = 0.98
+    ],
+)
 def test_uncertainty_flags(plate, kind, value, std, expected):
     assert parameter_flags(Parameter(kind, "steel"), value, std, plate) == expected

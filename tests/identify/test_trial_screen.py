@@ -1,6 +1,7 @@
 """The trial screen (``identify.engine.objective.TrialScreen``): built when a trial step
 is rejected, on assembled Ritz models of the current point and the rejected trial, it
 judges the shorter trials between them as the full solves do."""
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -12,8 +13,11 @@ from identify.measurements import parse_measurements
 from tests.fem.test_reduced_basis import SANDWICH
 
 
-@pytest.mark.parametrize("theory", [{"transverse_shear": True, "rotary_inertia": True}, {"theory": "layerwise"}],
-                         ids=["thick", "layerwise"])
+@pytest.mark.parametrize(
+    "theory",
+    [{"transverse_shear": True, "rotary_inertia": True}, {"theory": "layerwise"}],
+    ids=["thick", "layerwise"],
+)
 def test_the_screen_judges_trials_as_the_full_solves(theory):
     """A sandwich (skins' moduli and the core's shear free) measured with a 6 g sensor the
     model lacks; the current point 0.8-1.25 x the truth, a rejected trial 30 % further.
@@ -23,14 +27,22 @@ def test_the_screen_judges_trials_as_the_full_solves(theory):
     (misfits apart by more than 1 %, far beyond what 2e-4 in frequency can turn)."""
     truth = parse_spec(SANDWICH).with_options(**theory)
     hz = truth.with_attachments([PointMass(0.006, 0.05, 0.04, "sensor")]).solve("original").frequencies_hz
-    frame = pd.DataFrame({"configuration": "original", "mode": np.arange(1, len(hz) + 1), "frequency_hz": hz,
-                          "std_hz": 1e-3 * hz})
+    frame = pd.DataFrame(
+        {
+            "configuration": "original",
+            "mode": np.arange(1, len(hz) + 1),
+            "frequency_hz": hz,
+            "std_hz": 1e-3 * hz,
+        }
+    )
     parameters = truth.specimen.material_parameters()
     objective = Objective(truth, parse_measurements(frame, truth), parameters)
     x0 = np.array([truth.value(p) for p in parameters]) * np.array([1.25, 0.8, 1.2, 0.85, 1.2, 0.8])
     step = x0 * np.array([-0.3, 0.3, -0.25, 0.2, -0.3, 0.3])
     current = objective.evaluate(x0, None)
-    screen = TrialScreen.of(objective, current, objective.evaluate(x0 + step, current.pairings, differentiate=False))
+    screen = TrialScreen.of(
+        objective, current, objective.evaluate(x0 + step, current.pairings, differentiate=False)
+    )
     decided = 0
     for t in (0.05, 0.1, 0.2, 0.4, 0.7):
         values = x0 + t * step

@@ -4,6 +4,7 @@ exact modal sum, with and without noise, in ASCII and binary (58b), the grid's
 coordinates in data set 15 or 2411 (metres or mm, with or without data set 164, in one
 file or agreeing in two), a vibrometer's and a roving hammer's layout, -Z records, a
 point measured twice, and every bad input refused with the record and field named."""
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -26,7 +27,8 @@ LINES_HZ = np.arange(100.0, 1050.0, 0.25)
 X_MM, Y_MM = np.linspace(15.0, 135.0, 5), np.array([14.0, 38.0, 62.0, 86.0])
 #: Damping ratios of the 8 solved modes ([model] modes = 8).
 DAMPING = np.linspace(0.004, 0.007, 8)
-FIXED_NODE = 100  # the fixed end (reference of a vibrometer test, sensor of a roving hammer): no coordinates needed
+# the fixed end (reference of a vibrometer test, sensor of a roving hammer): no coordinates needed
+FIXED_NODE = 100
 SI = {"units_code": 1, "units_description": "SI", "length": 1.0}
 MM = {"units_code": 5, "units_description": "mm (milli newton)", "length": 1000.0}
 
@@ -41,14 +43,25 @@ def plate(tmp_path_factory):
     (folder / "plate.toml").write_text(PLATE)
     solution = load_spec(folder / "plate.toml").solve("original")
     field = solution.modes.shapes
-    points = pd.DataFrame([(str(i * 4 + j + 1), x, y) for i, x in enumerate(X_MM) for j, y in enumerate(Y_MM)],
-                          columns=["point", "x_mm", "y_mm"])
+    points = pd.DataFrame(
+        [(str(i * 4 + j + 1), x, y) for i, x in enumerate(X_MM) for j, y in enumerate(Y_MM)],
+        columns=["point", "x_mm", "y_mm"],
+    )
     at_points = deflection_operator(solution.units, points["x_mm"] / 1000, points["y_mm"] / 1000) @ field
     at_sensor = deflection_operator(solution.units, SENSOR_MM[0] / 1000, SENSOR_MM[1] / 1000) @ field
     constants = at_points * at_sensor[0]
-    frfs = {int(p): Modes(solution.frequencies_hz, DAMPING, row).accelerance(LINES_HZ)
-            for p, row in zip(points["point"], constants)}
-    return folder, points, frfs, at_points[:, :MODES].T, solution.frequencies_hz[:MODES], constants[:, :MODES].T
+    frfs = {
+        int(p): Modes(solution.frequencies_hz, DAMPING, row).accelerance(LINES_HZ)
+        for p, row in zip(points["point"], constants)
+    }
+    return (
+        folder,
+        points,
+        frfs,
+        at_points[:, :MODES].T,
+        solution.frequencies_hz[:MODES],
+        constants[:, :MODES].T,
+    )
 
 
 def frf_record(node, h, roving="response", direction=3, func_type=4, lines=LINES_HZ):
@@ -59,9 +72,20 @@ def frf_record(node, h, roving="response", direction=3, func_type=4, lines=LINES
     ends = {"rsp_node": node, "rsp_dir": direction, "ref_node": FIXED_NODE, "ref_dir": 3}
     if roving == "reference":
         ends = {"rsp_node": FIXED_NODE, "rsp_dir": 3, "ref_node": node, "ref_dir": direction}
-    return pyuff.prepare_58(binary=0, func_type=func_type, id1=f"H{node}", **ends, data=np.asarray(h), x=lines,
-                            abscissa_spacing=1, abscissa_min=float(lines[0]), abscissa_inc=float(lines[1] - lines[0]),
-                            abscissa_spec_data_type=18, ordinate_spec_data_type=12, orddenom_spec_data_type=13)
+    return pyuff.prepare_58(
+        binary=0,
+        func_type=func_type,
+        id1=f"H{node}",
+        **ends,
+        data=np.asarray(h),
+        x=lines,
+        abscissa_spacing=1,
+        abscissa_min=float(lines[0]),
+        abscissa_inc=float(lines[1] - lines[0]),
+        abscissa_spec_data_type=18,
+        ordinate_spec_data_type=12,
+        orddenom_spec_data_type=13,
+    )
 
 
 def geometry(points, dataset=15, scale=1.0):
@@ -70,9 +94,15 @@ def geometry(points, dataset=15, scale=1.0):
 
     n = len(points)
     prepare = pyuff.prepare_15 if dataset == 15 else pyuff.prepare_2411
-    return prepare(node_nums=points["point"].astype(int).to_numpy(), def_cs=np.zeros(n, int),
-                   disp_cs=np.zeros(n, int), color=np.ones(n, int), x=points["x_mm"].to_numpy() * scale,
-                   y=points["y_mm"].to_numpy() * scale, z=np.zeros(n))
+    return prepare(
+        node_nums=points["point"].astype(int).to_numpy(),
+        def_cs=np.zeros(n, int),
+        disp_cs=np.zeros(n, int),
+        color=np.ones(n, int),
+        x=points["x_mm"].to_numpy() * scale,
+        y=points["y_mm"].to_numpy() * scale,
+        z=np.zeros(n),
+    )
 
 
 def units(system):
@@ -92,8 +122,10 @@ def write(path, sets):
 def metres_file(plate):
     """A vibrometer test in one file: data set 164 (SI), the geometry in metres (15) and the 20 FRFs."""
     folder, points, frfs, *_ = plate
-    return write(folder / "metres.uff",
-                 [units(SI), geometry(points, 15, 1e-3), *(frf_record(n, h) for n, h in frfs.items())])
+    return write(
+        folder / "metres.uff",
+        [units(SI), geometry(points, 15, 1e-3), *(frf_record(n, h) for n, h in frfs.items())],
+    )
 
 
 @pytest.fixture(scope="module")
@@ -125,7 +157,10 @@ def test_roving_hammer_along_minus_z(plate, metres_file, tmp_path):
     sign flip the -Z nodes' amplitudes would change sign."""
     _, points, frfs, *_ = plate
     records = [frf_record(n, -h if n % 2 else h, "reference", -3 if n % 2 else 3) for n, h in frfs.items()]
-    paths = [write(tmp_path / "frfs.uff", records), write(tmp_path / "grid.unv", [units(SI), geometry(points, 15, 1e-3)])]
+    paths = [
+        write(tmp_path / "frfs.uff", records),
+        write(tmp_path / "grid.unv", [units(SI), geometry(points, 15, 1e-3)]),
+    ]
     measured, reference = read_uff_points(paths), read_uff_points(metres_file)
     assert measured.roving == "reference"
     pd.testing.assert_frame_equal(measured.points, points)
@@ -137,9 +172,16 @@ def test_roving_hammer_along_minus_z(plate, metres_file, tmp_path):
 INCH = {"units_code": 7, "units_description": "IN: inch (pound f)", "length": 1 / 0.0254}
 
 
-@pytest.mark.parametrize("dataset, system, scale, assumed", [
-    (15, SI, 1e-3, False), (2411, MM, 1.0, False), (2411, INCH, 1 / 25.4, False), (15, None, 1e-3, True),
-    (15, None, 1.0, False)])
+@pytest.mark.parametrize(
+    "dataset, system, scale, assumed",
+    [
+        (15, SI, 1e-3, False),
+        (2411, MM, 1.0, False),
+        (2411, INCH, 1 / 25.4, False),
+        (15, None, 1e-3, True),
+        (15, None, 1.0, False),
+    ],
+)
 def test_coordinates_in_any_length_unit(plate, dataset, system, scale, assumed, tmp_path):
     """The grid in metres, mm or inches (data set 164), or without 164 (metres when every
     coordinate is below 5, with a note; mm otherwise): the same points in mm.  Data set 15
@@ -147,7 +189,9 @@ def test_coordinates_in_any_length_unit(plate, dataset, system, scale, assumed, 
     the reader rounds to."""
     _, points, frfs, *_ = plate
     sets = [geometry(points, dataset, scale), frf_record(1, frfs[1]), frf_record(2, frfs[2])]
-    measured = read_uff_points(write(tmp_path / "grid.uff", sets if system is None else [units(system), *sets]))
+    measured = read_uff_points(
+        write(tmp_path / "grid.uff", sets if system is None else [units(system), *sets])
+    )
     pd.testing.assert_frame_equal(measured.points, points.iloc[:2])
     assert len(measured.notes) == assumed
 
@@ -156,9 +200,21 @@ def test_cli_mm_file_gives_the_metres_files_shapes(plate, estimate, tmp_path):
     """``peaks FILE.uff --shapes-out --out`` on the grid in mm (data sets 2411 and 164):
     the text SHAPES.csv and the peak list the library writes from the metres file; exit 0."""
     _, points, frfs, *_ = plate
-    path = write(tmp_path / "mm.uff", [units(MM), geometry(points, 2411), *(frf_record(n, h) for n, h in frfs.items())])
-    code = identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--shapes-out",
-                            str(tmp_path / "shapes.csv"), "--out", str(tmp_path / "peaks.csv")])
+    path = write(
+        tmp_path / "mm.uff", [units(MM), geometry(points, 2411), *(frf_record(n, h) for n, h in frfs.items())]
+    )
+    code = identify_layers(
+        [
+            "peaks",
+            str(path),
+            "--band",
+            *map(str, BAND_HZ),
+            "--shapes-out",
+            str(tmp_path / "shapes.csv"),
+            "--out",
+            str(tmp_path / "peaks.csv"),
+        ]
+    )
     assert code == 0
     estimate[1].write_csv(tmp_path / "library_shapes.csv")
     estimate[1].write_peaks_csv(tmp_path / "library_peaks.csv")
@@ -188,29 +244,72 @@ GRID = pd.DataFrame({"point": ["1", "2", "3"], "x_mm": [10.0, 20.0, 30.0], "y_mm
 ONES = np.ones(len(SHORT), complex)
 
 BAD_FILES = [
-    ("one_node", [geometry(GRID), frf_record(1, ONES), frf_record(1, 2 * ONES)],
-     r"every FRF has response node 1 and reference node 100: one point, not a multi-point test"),
-    ("no_coordinates", [geometry(GRID.iloc[:2]), *(frf_record(n, ONES) for n in (1, 2, 3))],
-     r"record 'H3': rsp_node = 3 has no coordinates; export the geometry \(data set 15 or 2411\)"),
-    ("other_lines", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, lines=SHORT + 0.25)],
-     r"record 'H2' \(node 2\): 64 lines from 200.25 Hz by 0.5 Hz, but .*same frequency lines"),
-    ("time_record", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), frf_record(3, ONES, func_type=1)],
-     r"record 'H3': func_type = 1 is not an FRF"),
-    ("in_plane", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, direction=1)],
-     r"record 'H2' \(node 2\): rsp_dir = 1 \(\+X\) is not the plate normal; allowed \+Z \(3\) or -Z \(-3\)"),
-    ("both_ends_rove", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, "reference"),
-                        frf_record(3, ONES, "reference")],
-     r"FRFs of 2 response nodes and 3 reference nodes; a shape needs one fixed end"),
-    ("moved_node", [geometry(GRID), geometry(GRID.assign(x_mm=[10.0, 20.5, 30.0]), 2411), frf_record(1, ONES),
-                    frf_record(2, ONES)],
-     r"node 2\b.*\(20, 5\).*data set 15.*\(20\.5, 5\).*data set 2411"),
-    ("record_twice", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), frf_record(2, ONES)],
-     r"'H2'.*node 2\b.*record_twice\.uff.*'H2'"),
-    ("repeat_as_velocity", [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES),
-                            {**frf_record(2, 2 * ONES), "ordinate_spec_data_type": 11}],
-     r"'H2'.*node 2\b.*velocity.*'H2'.*acceleration"),
-    ("two_units", [units(SI), geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), units(MM)],
-     r"data sets 164 give different length units \(1, 1000 per metre\)"),
+    (
+        "one_node",
+        [geometry(GRID), frf_record(1, ONES), frf_record(1, 2 * ONES)],
+        r"every FRF has response node 1 and reference node 100: one point, not a multi-point test",
+    ),
+    (
+        "no_coordinates",
+        [geometry(GRID.iloc[:2]), *(frf_record(n, ONES) for n in (1, 2, 3))],
+        r"record 'H3': rsp_node = 3 has no coordinates; export the geometry \(data set 15 or 2411\)",
+    ),
+    (
+        "other_lines",
+        [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, lines=SHORT + 0.25)],
+        r"record 'H2' \(node 2\): 64 lines from 200.25 Hz by 0.5 Hz, but .*same frequency lines",
+    ),
+    (
+        "time_record",
+        [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), frf_record(3, ONES, func_type=1)],
+        r"record 'H3': func_type = 1 is not an FRF",
+    ),
+    (
+        "in_plane",
+        [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES, direction=1)],
+        r"record 'H2' \(node 2\): rsp_dir = 1 \(\+X\) is not the plate normal; allowed \+Z \(3\) or -Z "
+        r"\(-3\)",
+    ),
+    (
+        "both_ends_rove",
+        [
+            geometry(GRID),
+            frf_record(1, ONES),
+            frf_record(2, ONES, "reference"),
+            frf_record(3, ONES, "reference"),
+        ],
+        r"FRFs of 2 response nodes and 3 reference nodes; a shape needs one fixed end",
+    ),
+    (
+        "moved_node",
+        [
+            geometry(GRID),
+            geometry(GRID.assign(x_mm=[10.0, 20.5, 30.0]), 2411),
+            frf_record(1, ONES),
+            frf_record(2, ONES),
+        ],
+        r"node 2\b.*\(20, 5\).*data set 15.*\(20\.5, 5\).*data set 2411",
+    ),
+    (
+        "record_twice",
+        [geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), frf_record(2, ONES)],
+        r"'H2'.*node 2\b.*record_twice\.uff.*'H2'",
+    ),
+    (
+        "repeat_as_velocity",
+        [
+            geometry(GRID),
+            frf_record(1, ONES),
+            frf_record(2, ONES),
+            {**frf_record(2, 2 * ONES), "ordinate_spec_data_type": 11},
+        ],
+        r"'H2'.*node 2\b.*velocity.*'H2'.*acceleration",
+    ),
+    (
+        "two_units",
+        [units(SI), geometry(GRID), frf_record(1, ONES), frf_record(2, ONES), units(MM)],
+        r"data sets 164 give different length units \(1, 1000 per metre\)",
+    ),
 ]
 
 
@@ -230,7 +329,10 @@ def test_single_point_uff_stays_one_points_hits(plate, tmp_path):
     --shapes-out they are refused (exit 2)."""
     _, _, frfs, *_ = plate
     path = write(tmp_path / "one.uff", [frf_record(1, frfs[1]), frf_record(1, frfs[1])])
-    assert identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--out", str(tmp_path / "p.csv")]) == 0
+    assert (
+        identify_layers(["peaks", str(path), "--band", *map(str, BAND_HZ), "--out", str(tmp_path / "p.csv")])
+        == 0
+    )
     assert len(pd.read_csv(tmp_path / "p.csv")) >= 5
     assert identify_layers(["peaks", str(path), "--shapes-out", str(tmp_path / "s.csv")]) == 2
 
@@ -242,7 +344,10 @@ def test_coherences_beside_the_frfs_are_skipped(plate, metres_file, tmp_path):
     records = [units(SI), geometry(points, 15, 1e-3)]
     for n, h in frfs.items():
         records += [frf_record(n, h), frf_record(n, np.ones(len(h)), func_type=6)]
-    measured, reference = read_uff_points(write(tmp_path / "with_coherence.uff", records)), read_uff_points(metres_file)
+    measured, reference = (
+        read_uff_points(write(tmp_path / "with_coherence.uff", records)),
+        read_uff_points(metres_file),
+    )
     assert len(measured.notes) == 1 and reference.notes == ()
     for name, (record,) in measured.recordings_by_point.items():
         np.testing.assert_array_equal(record.frf, reference.recordings_by_point[name][0].frf)
@@ -257,11 +362,21 @@ def test_a_node_placed_alike_by_two_files(plate, tmp_path):
     _, points, frfs, *_ = plate
     shifted = points.assign(x_mm=points["x_mm"] + 1 / 3, y_mm=points["y_mm"] + 1 / 3)
     fixed = pd.DataFrame({"point": [str(FIXED_NODE)], "x_mm": [0.0], "y_mm": [0.0]})
-    frf_file = write(tmp_path / "frfs.uff", [units(SI), geometry(pd.concat([shifted, fixed]), 15, 1e-3),
-                                             *(frf_record(n, h) for n, h in frfs.items())])
-    grid = write(tmp_path / "grid.unv", [units(SI), geometry(pd.concat([shifted, fixed.assign(x_mm=9.0)]), 2411, 1e-3)])
+    frf_file = write(
+        tmp_path / "frfs.uff",
+        [
+            units(SI),
+            geometry(pd.concat([shifted, fixed]), 15, 1e-3),
+            *(frf_record(n, h) for n, h in frfs.items()),
+        ],
+    )
+    grid = write(
+        tmp_path / "grid.unv", [units(SI), geometry(pd.concat([shifted, fixed.assign(x_mm=9.0)]), 2411, 1e-3)]
+    )
     alone = read_uff_points(frf_file)
-    assert np.abs(alone.points[["x_mm", "y_mm"]].to_numpy() - shifted[["x_mm", "y_mm"]].to_numpy()).max() > 1e-5
+    assert (
+        np.abs(alone.points[["x_mm", "y_mm"]].to_numpy() - shifted[["x_mm", "y_mm"]].to_numpy()).max() > 1e-5
+    )
     pd.testing.assert_frame_equal(read_uff_points([frf_file, grid]).points, alone.points)
 
 
@@ -288,12 +403,20 @@ def test_a_point_measured_twice_is_averaged(plate, tmp_path):
     plate's FRF (each printed to 12 digits: within 7.1e-12 of it) as two hits.  The first
     file given twice is refused: copies would pass for repeats."""
     _, points, frfs, *_ = plate
-    first = write(tmp_path / "first.uff", [units(SI), geometry(points, 15, 1e-3),
-                                           *(frf_record(n, 1.1 * h if n == 7 else h) for n, h in frfs.items())])
+    first = write(
+        tmp_path / "first.uff",
+        [
+            units(SI),
+            geometry(points, 15, 1e-3),
+            *(frf_record(n, 1.1 * h if n == 7 else h) for n, h in frfs.items()),
+        ],
+    )
     again = write(tmp_path / "again.uff", [frf_record(7, -0.9 * frfs[7], direction=-3)])
     measured = read_uff_points([first, again])
     assert len(measured.notes) == 1
-    assert {n: len(r) for n, r in measured.recordings_by_point.items()} == {n: 1 + (n == "7") for n in points["point"]}
+    assert {n: len(r) for n, r in measured.recordings_by_point.items()} == {
+        n: 1 + (n == "7") for n in points["point"]
+    }
     pd.testing.assert_frame_equal(measured.points, points)
     twice = extract_peaks(measured.recordings_by_point["7"], band_hz=BAND_HZ).frf
     assert twice.n_hits == 2
@@ -339,20 +462,37 @@ def test_noisy_frfs_give_shapes_within_the_noise(plate, estimate, tmp_path):
     _, points, frfs, exact, frequencies, constants = plate
     rng = np.random.default_rng(1)
     noise = NOISE_REL * max(np.abs(h).max() for h in frfs.values())
-    noisy = {n: h + noise * (rng.standard_normal(len(h)) + 1j * rng.standard_normal(len(h))) for n, h in frfs.items()}
-    measured = read_uff_points(write(tmp_path / "noisy.uff", [units(SI), geometry(points, 15, 1e-3),
-                                                               *(frf_record(n, h) for n, h in noisy.items())]))
+    noisy = {
+        n: h + noise * (rng.standard_normal(len(h)) + 1j * rng.standard_normal(len(h)))
+        for n, h in frfs.items()
+    }
+    measured = read_uff_points(
+        write(
+            tmp_path / "noisy.uff",
+            [units(SI), geometry(points, 15, 1e-3), *(frf_record(n, h) for n, h in noisy.items())],
+        )
+    )
     result = estimate_shapes(measured.recordings_by_point, measured.points, band_hz=BAND_HZ)
     found = result.modes["frequency_hz"].to_numpy()
     assert len(found) == MODES and np.all(np.abs(found - frequencies) < DAMPING[:MODES] * frequencies), found
     w = 2 * np.pi * frequencies
-    expected = np.sqrt(16 * len(points) * noise**2 * DAMPING[:MODES] * (LINES_HZ[1] - LINES_HZ[0])
-                       / (w * np.sum(constants**2, axis=1)))
+    expected = np.sqrt(
+        16
+        * len(points)
+        * noise**2
+        * DAMPING[:MODES]
+        * (LINES_HZ[1] - LINES_HZ[0])
+        / (w * np.sum(constants**2, axis=1))
+    )
     clean = estimate[1].shapes
     to_exact = np.array([shape_angle(result.shapes[r], exact[r]) for r in range(MODES)])
     clean_to_exact = np.array([shape_angle(clean[r], exact[r]) for r in range(MODES)])
     to_clean = np.array([shape_angle(result.shapes[r], clean[r]) for r in range(MODES)])
-    assert np.all(to_exact <= clean_to_exact + 3 * expected), (np.cos(to_exact) ** 2, clean_to_exact, expected)
+    assert np.all(to_exact <= clean_to_exact + 3 * expected), (
+        np.cos(to_exact) ** 2,
+        clean_to_exact,
+        expected,
+    )
     assert np.all((to_clean >= expected / 3) & (to_clean <= 3 * expected)), to_clean / expected
 
 
@@ -367,15 +507,25 @@ def test_binary_58b_reads_as_the_ascii_file(plate, metres_file, tmp_path):
     import pyuff
 
     _, points, frfs, *_ = plate
-    binary = write(tmp_path / "binary.uff", [units(SI), geometry(points, 15, 1e-3),
-                                             *({**frf_record(n, h), "binary": 1} for n, h in frfs.items())])
+    binary = write(
+        tmp_path / "binary.uff",
+        [
+            units(SI),
+            geometry(points, 15, 1e-3),
+            *({**frf_record(n, h), "binary": 1} for n, h in frfs.items()),
+        ],
+    )
     if b"\n    58b" not in binary.read_bytes():
-        pytest.skip(f"pyuff {pyuff.__version__} wrote data set 58 in ASCII despite 'binary': 1: no 58b to read")
+        pytest.skip(
+            f"pyuff {pyuff.__version__} wrote data set 58 in ASCII despite 'binary': 1: no 58b to read"
+        )
     assert is_multi_point_uff(binary)
     measured, reference = read_uff_points(binary), read_uff_points(metres_file)
     assert (measured.roving, measured.notes) == (reference.roving, reference.notes)
     pd.testing.assert_frame_equal(measured.points, reference.points)
     for name, (record,) in measured.recordings_by_point.items():
-        np.testing.assert_array_equal(record.frequency_hz, reference.recordings_by_point[name][0].frequency_hz)
+        np.testing.assert_array_equal(
+            record.frequency_hz, reference.recordings_by_point[name][0].frequency_hz
+        )
         np.testing.assert_array_equal(record.frf, frfs[int(name)])
         np.testing.assert_allclose(record.frf, reference.recordings_by_point[name][0].frf, rtol=1e-11, atol=0)

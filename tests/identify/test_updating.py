@@ -1,4 +1,5 @@
 """Multi-model identification against known truths (virtual experiments, paper 4.5)."""
+
 import numpy as np
 import pytest
 
@@ -71,7 +72,10 @@ def test_noisy_data_within_three_std(start, paper_model, paper_specimen, seed):
     data = synthetic_measurements(paper_model, noise_rel=5e-4, seed=seed, labels="close")
     result = fit(start, data)
     assert result.converged
-    z = [(v - paper_specimen.value(p)) / s for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)]
+    z = [
+        (v - paper_specimen.value(p)) / s
+        for p, v, s in zip(result.parameters, result.values, result.uncertainty.std)
+    ]
     assert np.max(np.abs(z)) < 3, z
     assert 0.05 < result.statistics.reduced_chi2 < 5
 
@@ -81,8 +85,11 @@ def test_single_plate_is_flagged_not_identifiable(start, paper_model):
     parameters are not determined (paper section 2.2), with no error bars."""
     one = paper_model.with_configurations(paper_model.specimen.configurations[:1])
     data = synthetic_measurements(one, modes=15, labels="close")
-    result = fit(start.with_configurations(start.specimen.configurations[:1]), data,
-                 options=FitOptions(max_iterations=12))
+    result = fit(
+        start.with_configurations(start.specimen.configurations[:1]),
+        data,
+        options=FitOptions(max_iterations=12),
+    )
     assert not result.converged
     assert "not identifiable" in result.message
     assert result.uncertainty.condition_number > 1e7
@@ -133,7 +140,8 @@ def test_unknown_densities_with_measured_plate_mass(paper_model, paper_specimen)
     guessed["specimen"]["mass_g"] = true_mass_g
     model = parse_spec(guessed)
     assert model.specimen.laminate("original").inertia[0] == pytest.approx(
-        paper_specimen.laminate("original").inertia[0])
+        paper_specimen.laminate("original").inertia[0]
+    )
     result = fit(model, synthetic_measurements(paper_model, labels="close"))
     assert result.converged and max_relative_error(result, paper_specimen) < 1e-4
     guessed["specimen"]["mass_g"] = true_mass_g * 1000  # given in milligrams
@@ -146,10 +154,19 @@ def test_absurd_start_is_reported_not_silently_fitted(start, paper_model, paper_
     says it did not converge, with its history; it never reports a wrong converged answer."""
     values = {}
     for m in ("steel", "top_coating", "bottom_coating"):
-        values.update({Parameter("E1", m): 1500e9, Parameter("E2", m): 1500e9, Parameter("G12", m): 900e9,
-                       Parameter("nu12", m): 0.9})
-    result = fit(start.with_values(values), synthetic_measurements(paper_model, labels="close"),
-                 options=FitOptions(max_iterations=8))
+        values.update(
+            {
+                Parameter("E1", m): 1500e9,
+                Parameter("E2", m): 1500e9,
+                Parameter("G12", m): 900e9,
+                Parameter("nu12", m): 0.9,
+            }
+        )
+    result = fit(
+        start.with_values(values),
+        synthetic_measurements(paper_model, labels="close"),
+        options=FitOptions(max_iterations=8),
+    )
     assert len(result.history) >= 2
     if result.converged:
         assert max_relative_error(result, paper_specimen) < 1e-3
@@ -173,7 +190,9 @@ def test_predicted_chi2_of_a_repaired_state_is_one_gauss_newton_step(start, pape
     assert len(pairs) >= 6, "precondition: the 8-mode square plate has close and near pairs"
     for rows in pairs:
         state = ambiguity.swapped(objective, at_truth, rows)
-        history = [Iteration(0, state.values, state.model_hz, objective.rms(state), objective.cost(state), 0, 0)]
+        history = [
+            Iteration(0, state.values, state.model_hz, objective.rms(state), objective.cost(state), 0, 0)
+        ]
         after, _, _ = iterate(objective, state, history, FitOptions(max_iterations=1))
         predicted, actual = ambiguity.predicted_chi2(objective, state), 2 * objective.cost(after)
         assert predicted < 2 * objective.cost(state)
@@ -215,11 +234,13 @@ def test_ambiguous_pair_count_reads_the_table_alone():
 
     from identify.engine.ambiguity import ambiguous_pair_count
 
-    table = pd.DataFrame({
-        "configuration": ["a"] * 4 + ["b"] * 3,
-        "mode": [1, 2, 3, 4, 1, 2, 3],  # a measurement table always has its ranks
-        "frequency_hz": [100.0, 101.0, 110.0, 111.0, 100.0, 102.9, 103.5],
-        "label": ["", "", "", "(2,1)", "", "", ""],
-    })
+    table = pd.DataFrame(
+        {
+            "configuration": ["a"] * 4 + ["b"] * 3,
+            "mode": [1, 2, 3, 4, 1, 2, 3],  # a measurement table always has its ranks
+            "frequency_hz": [100.0, 101.0, 110.0, 111.0, 100.0, 102.9, 103.5],
+            "label": ["", "", "", "(2,1)", "", "", ""],
+        }
+    )
     # a: 100/101 (1 %) counts, 101/110 (9 %) does not, 110/111 has a label; b: 2.9 % and 0.6 % count.
     assert ambiguous_pair_count(table) == 3

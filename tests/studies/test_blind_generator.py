@@ -1,5 +1,6 @@
 """The blind study's 3-D case generator (``tests/data/solid3d/blind.py``), without CalculiX:
 its draws are reproducible and agree with the stored records."""
+
 import json
 import os
 import subprocess
@@ -21,11 +22,14 @@ OTHER_ORDER = {"blind16_hybrid", "blind19_hybrid"}
 
 
 def _materials_drawn(hash_seed: str) -> str:
-    code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import blind; "
-            "print(json.dumps([c['materials'] for c in blind.all_cases()], sort_keys=True))")
+    code = (
+        "import json, sys; sys.path.insert(0, sys.argv[1]); import blind; "
+        "print(json.dumps([c['materials'] for c in blind.all_cases()], sort_keys=True))"
+    )
     env = dict(os.environ, PYTHONHASHSEED=hash_seed)
-    return subprocess.run([sys.executable, "-c", code, str(SOLID3D)], env=env, capture_output=True, text=True,
-                          check=True).stdout
+    return subprocess.run(
+        [sys.executable, "-c", code, str(SOLID3D)], env=env, capture_output=True, text=True, check=True
+    ).stdout
 
 
 def test_draws_do_not_depend_on_the_hash_seed():
@@ -53,8 +57,9 @@ def test_stored_records_are_the_draws(case):
     its series' seed."""
     record = json.loads((blind.OUT / f"{case['name']}.json").read_text())
     assert (record["half"], record["seed"]) == (HALVES[case["name"]], case["seed"])
-    assert record["choices"]["true_layers"] == [dict(material=m, thickness_mm=t, angle_deg=a)
-                                                for m, t, a in case["layers"]]
+    assert record["choices"]["true_layers"] == [
+        dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]
+    ]
     assert record["choices"]["misalignment_max_deg"] == case["misalignment_max_deg"]
     assert (record["choices"]["sensor"] is None) == (case["sensor"] is None)
     if case["name"] in OTHER_ORDER:
@@ -62,7 +67,6 @@ def test_stored_records_are_the_draws(case):
     for name, constants in case["materials"].items():
         assert record["materials"][name]["E1"] == generate._sig(constants["E1"]), name
         assert record["materials"][name]["density"] == generate._sig(constants["density"]), name
-
 
 
 def test_a_sandwich_sensor_is_spread_over_its_base_in_the_solid_model():
@@ -75,14 +79,19 @@ def test_a_sandwich_sensor_is_spread_over_its_base_in_the_solid_model():
     configuration = case["configurations"][0]
     layers = generate.stack(case, configuration)
     level = generate.LEVELS[0]
-    mesh, (heavy, added) = blind._on_base(generate.build_mesh(case, layers, level, quarter=False), case, level, layers)
+    mesh, (heavy, added) = blind._on_base(
+        generate.build_mesh(case, layers, level, quarter=False), case, level, layers
+    )
     x0, y0, side = blind._base_square(case)
     for lines, start in ((mesh.xs, x0), (mesh.ys, y0)):
         inside = lines[(lines >= start - 1e-9) & (lines <= start + side + 1e-9)]
         assert inside == pytest.approx(np.linspace(start, start + side, 4))
     top_rows = int(np.sum(mesh.element_layer == len(layers) - 1))
     assert len(heavy) == 9 * top_rows
-    volume_mm3 = np.sum(mesh.element_areas()[heavy] * np.repeat(np.diff(mesh.z_levels), mesh.nx * mesh.ny)[heavy])
+    volume_mm3 = np.sum(
+        mesh.element_areas()[heavy] * np.repeat(np.diff(mesh.z_levels), mesh.nx * mesh.ny)[heavy]
+    )
     assert added * volume_mm3 * 1e-9 == pytest.approx(1e-3 * case["sensor"]["mass_g"], rel=1e-9)
-    assert f"base_mm = {case['sensor']['base_mm']!r}" in blind.truth_spec(case, (case["sensor"]["x_mm"],
-                                                                                case["sensor"]["y_mm"]))
+    assert f"base_mm = {case['sensor']['base_mm']!r}" in blind.truth_spec(
+        case, (case["sensor"]["x_mm"], case["sensor"]["y_mm"])
+    )

@@ -1,6 +1,7 @@
 """The blind study's outputs (without running a diagnosis: ``run_case`` is replaced by a
 recorded outcome): each case's diagnosis report is kept as the case ends, the rows and the
 summary are strict JSON."""
+
 import json
 import math
 
@@ -10,9 +11,21 @@ from studies import blind_diagnosis as study
 def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, monkeypatch):
     def recorded(name, progress=None):
         oracle = study.Oracle(1.9e-4, "layerwise", 1.1, {"shear": (5e-3, 40.0)}, ("shear",))
-        return study.Outcome(name, "hybrid", "dev", 5e-4, oracle, selected=("layerwise",),
-                             rms_baseline=0.01, rms_after=2e-4, max_z=1.2, z={"cfrp_ud.E1": 1.2},
-                             seconds=12.0, oracle_seconds=3.0, report=f"== diagnosis of {name} ==")
+        return study.Outcome(
+            name,
+            "hybrid",
+            "dev",
+            5e-4,
+            oracle,
+            selected=("layerwise",),
+            rms_baseline=0.01,
+            rms_after=2e-4,
+            max_z=1.2,
+            z={"cfrp_ud.E1": 1.2},
+            seconds=12.0,
+            oracle_seconds=3.0,
+            report=f"== diagnosis of {name} ==",
+        )
 
     monkeypatch.setattr(study, "run_case", recorded)
     assert study.main(["--case", "blind04_hybrid", "--out", str(tmp_path)]) == 0
@@ -49,8 +62,12 @@ def test_the_properties_are_also_scored_in_the_measurements_std_alone():
     from identify.fitting.budget import Budget
 
     nu12 = Parameter("nu12", "carbon")
-    fit = SimpleNamespace(parameters=(nu12,), value=lambda p: 0.30, std=lambda p: 0.44,
-                          budget=Budget((nu12,), (), np.array([0.021]), np.zeros((1, 0))))
+    fit = SimpleNamespace(
+        parameters=(nu12,),
+        value=lambda p: 0.30,
+        std=lambda p: 0.44,
+        budget=Budget((nu12,), (), np.array([0.021]), np.zeros((1, 0))),
+    )
     assert math.isclose(study._z(fit, {nu12: 0.41})["carbon.nu12"], 0.11 / 0.44)
     assert math.isclose(study._z(fit, {nu12: 0.41}, measurement_only=True)["carbon.nu12"], 0.11 / 0.021)
 
@@ -108,7 +125,11 @@ def test_the_3d_top_face_shapes_load_as_a_shapes_table_that_pairs_with_the_plate
         assert np.isclose(first["amplitude"].abs().max(), 1.0)
         paired = conf["modes"][0]["plate_mode"]
         solution = study.truth_model(case).with_options(modes=paired + 2).solve(conf["name"])
-        w = deflection_operator(solution.units, 1e-3 * first["x_mm"].to_numpy(),
-                                1e-3 * first["y_mm"].to_numpy()) @ solution.modes.shapes[:, paired - 1]
+        w = (
+            deflection_operator(
+                solution.units, 1e-3 * first["x_mm"].to_numpy(), 1e-3 * first["y_mm"].to_numpy()
+            )
+            @ solution.modes.shapes[:, paired - 1]
+        )
         a = first["amplitude"].to_numpy()
         assert (a @ w) ** 2 / ((a @ a) * (w @ w)) >= 0.9, conf["name"]

@@ -3,6 +3,7 @@ paper's plate with damping coatings -> peaks -> fit of the peak lists -> the lay
 factors, each within 3 reported std of the truth.  The damping status may be poor_fit:
 peaks' damping_std of overlapping close modes (0.1-1 %) is below their estimation error
 (2-6 %), which the chi^2 test then reports; the values are what is asserted."""
+
 import numpy as np
 
 from studies.damping import tap_chain

@@ -1,6 +1,7 @@
 """The hidden-effect study, run small: each synthetic case diagnosed among four or five
 candidate effects (the full study tries every registered kind); the 3-D reference is in
 ``tests/identify/test_diagnose_reference.py``."""
+
 import pytest
 
 from studies import hidden_effect
@@ -33,7 +34,9 @@ def test_true_effect_ranked_first_and_error_falls(case):
         folded = (abs(values["x_mm"] - 75), abs(values["y_mm"] - 75))
         assert sorted(folded) == pytest.approx([35, 50], abs=5)
         if folded[0] < folded[1]:
-            assert any("other solution(s) fit about as well" in w for w in o.diagnosis.candidates[0].fit.warnings)
+            assert any(
+                "other solution(s) fit about as well" in w for w in o.diagnosis.candidates[0].fit.warnings
+            )
 
 
 def test_two_hidden_effects_are_both_selected():
@@ -43,7 +46,7 @@ def test_two_hidden_effects_are_both_selected():
     the final refit is at the noise level (RMS within 2x the noise, converged)."""
     o = hidden_effect.run_case("sensor_on_thick", CANDIDATES + ["thick_plate"])
     assert o.found_all, o.diagnosis.report()
-    assert len(o.selected) <= 3   # shear, the mass, and at most rotary inertia beside transverse_shear
+    assert len(o.selected) <= 3  # shear, the mass, and at most rotary inertia beside transverse_shear
     assert o.diagnosis.final.converged and o.rms_after <= 2 * hidden_effect.NOISE
     final = o.diagnosis.final
     mass = next(p for p in final.parameters if p.kind == "mass")

@@ -1,5 +1,6 @@
 """studies.long_plates on one thin plate (nothing missing from the model): the lab's
 loop from recordings, with its key numbers asserted."""
+
 import pytest
 
 from studies import long_plates

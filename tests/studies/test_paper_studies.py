@@ -1,4 +1,5 @@
 """The paper's studies, run small, with their key numbers asserted."""
+
 import numpy as np
 
 from studies import monte_carlo, paper_equivalent_plate, paper_multi_model, paper_single_plate

@@ -1,6 +1,7 @@
 """The recording chain on two variants of the corpus (the study runs all of them): integer
 ADC counts on an offset without a time column are honest data and give the layers within
 3 std; every hit clipped is refused with the reason, not fitted."""
+
 import json
 
 from studies import recording_chain
@@ -12,7 +13,11 @@ def test_counts_are_honest_and_clipped_recordings_are_refused(tmp_path):
     counts, clipped = outcomes
     assert counts.peaks == "ok" and counts.status == "converged" and counts.rejected == 3  # the double hits
     assert counts.max_z < 3, counts.z
-    assert clipped.peaks.startswith("refused: ") and "response clipped" in clipped.peaks and clipped.status is None
+    assert (
+        clipped.peaks.startswith("refused: ")
+        and "response clipped" in clipped.peaks
+        and clipped.status is None
+    )
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert [v["variant"] for v in summary["variants"]] == ["adc_counts", "all_clipped"]
     assert summary["variants"][1]["max_abs_z"] is None and dense is None

@@ -1,4 +1,5 @@
 """The lab's chain on simulated recordings (studies.tap_test): recordings -> peaks -> fit."""
+
 import numpy as np
 
 from fem.specimen import Parameter

@@ -1,5 +1,6 @@
 """One small example recording per supported format (one hit of a plate with modes at
 500 and 1200 Hz, 0.3 s at 8 kHz), made by :mod:`identify.examples.recordings.make`."""
+
 from pathlib import Path
 
 FOLDER = Path(__file__).parent

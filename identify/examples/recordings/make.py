@@ -1,4 +1,5 @@
 """Write the example recordings (seeded): ``python -m identify.examples.recordings.make``."""
+
 import wave
 
 import numpy as np
@@ -22,17 +23,25 @@ def write_examples() -> None:
     hit = example_hit()
     write_rounded_csv(hit, FOLDER / "hit.csv")
     write_counts_csv(hit, FOLDER / "hit_counts.csv", bits=16, offset_counts=40)
-    counts = np.column_stack([np.rint(x / np.abs(x).max() * 20000) for x in (hit.force, hit.response)]).astype("<i2")
+    counts = np.column_stack(
+        [np.rint(x / np.abs(x).max() * 20000) for x in (hit.force, hit.response)]
+    ).astype("<i2")
     with wave.open(str(FOLDER / "hit.wav"), "wb") as w:
         w.setnchannels(2)
         w.setsampwidth(2)
         w.setframerate(int(SAMPLE_RATE))
         w.writeframes(counts.tobytes())
-    savemat(FOLDER / "hit.mat", {"force": hit.force, "acceleration": hit.response, "sample_rate": SAMPLE_RATE})
+    savemat(
+        FOLDER / "hit.mat", {"force": hit.force, "acceleration": hit.response, "sample_rate": SAMPLE_RATE}
+    )
     properties = {"wf_increment": 1 / SAMPLE_RATE}
     with TdmsWriter(FOLDER / "hit.tdms") as writer:
-        writer.write_segment([ChannelObject("hit", "force", hit.force, properties=properties),
-                              ChannelObject("hit", "acceleration", hit.response, properties=properties)])
+        writer.write_segment(
+            [
+                ChannelObject("hit", "force", hit.force, properties=properties),
+                ChannelObject("hit", "acceleration", hit.response, properties=properties),
+            ]
+        )
     write_uff(FOLDER / "hit.uff", hit=hit)
     assert all(path.exists() for path in EXAMPLES.values())
 

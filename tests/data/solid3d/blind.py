@@ -49,6 +49,7 @@ w of their stored flexural modes (``blind_shapes/<case>.json``, the grid of ``ge
 refusing a case whose re-solved frequencies differ from its record by more than
 ``SHAPES_TOLERANCE``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -103,8 +104,19 @@ def _ply(rng, base: str) -> dict:
     s = lambda: rng.uniform(*SCATTER)  # noqa: E731
     e1, e2, g12, nu12, rho = b["E1"] * s(), b["E2"] * s(), b["G12"] * s(), b["nu12"] * s(), b["density"] * s()
     nu23 = b["nu23"]
-    return dict(E1=e1, E2=e2, E3=e2, G12=g12, G13=g12, G23=e2 / (2 * (1 + nu23)), nu12=nu12, nu13=nu12,
-                nu23=nu23, density=rho, note=f"{base} scaled 0.85-1.15 per constant")
+    return dict(
+        E1=e1,
+        E2=e2,
+        E3=e2,
+        G12=g12,
+        G13=g12,
+        G23=e2 / (2 * (1 + nu23)),
+        nu12=nu12,
+        nu13=nu12,
+        nu23=nu23,
+        density=rho,
+        note=f"{base} scaled 0.85-1.15 per constant",
+    )
 
 
 def _fabric(rng, base: str) -> dict:
@@ -112,21 +124,49 @@ def _fabric(rng, base: str) -> dict:
     b = g.MATERIALS[base]
     s = lambda: rng.uniform(*SCATTER)  # noqa: E731
     e = b["E1"] * s()
-    return dict(b, E1=e, E2=e * b["E2"] / b["E1"] * s(), G12=b["G12"] * s(), nu12=b["nu12"] * s(),
-                density=b["density"] * s(), note=f"{base} scaled 0.85-1.15 per in-plane constant")
+    return dict(
+        b,
+        E1=e,
+        E2=e * b["E2"] / b["E1"] * s(),
+        G12=b["G12"] * s(),
+        nu12=b["nu12"] * s(),
+        density=b["density"] * s(),
+        note=f"{base} scaled 0.85-1.15 per in-plane constant",
+    )
 
 
-GLASS_FABRIC = dict(E1=24.0, E2=23.0, E3=10.0, G12=4.0, G13=3.2, G23=3.2, nu12=0.12, nu13=0.3, nu23=0.3,
-                    density=1900.0, note="woven E-glass/epoxy skin")
+GLASS_FABRIC = dict(
+    E1=24.0,
+    E2=23.0,
+    E3=10.0,
+    G12=4.0,
+    G13=3.2,
+    G23=3.2,
+    nu12=0.12,
+    nu13=0.3,
+    nu23=0.3,
+    density=1900.0,
+    note="woven E-glass/epoxy skin",
+)
 
 
 def _core(rng) -> dict:
     """An isotropic foam core, G = 10-200 MPa log-uniform, nu = 0.3, density growing with G."""
     shear = math.exp(rng.uniform(math.log(0.010), math.log(0.200)))
     nu = 0.3
-    return dict(E1=2 * shear * (1 + nu), E2=2 * shear * (1 + nu), E3=2 * shear * (1 + nu), G12=shear, G13=shear,
-                G23=shear, nu12=nu, nu13=nu, nu23=nu, density=50.0 + 900.0 * shear,
-                note="isotropic foam core, E = 2G(1 + nu)")
+    return dict(
+        E1=2 * shear * (1 + nu),
+        E2=2 * shear * (1 + nu),
+        E3=2 * shear * (1 + nu),
+        G12=shear,
+        G13=shear,
+        G23=shear,
+        nu12=nu,
+        nu13=nu,
+        nu23=nu,
+        density=50.0 + 900.0 * shear,
+        note="isotropic foam core, E = 2G(1 + nu)",
+    )
 
 
 def draw_case(rng, index: int) -> dict:
@@ -136,7 +176,9 @@ def draw_case(rng, index: int) -> dict:
     if family == "sandwich":
         length = rng.uniform(200.0, 300.0)
         skin_name = "cfrp_fabric" if rng.random() < 0.6 else "gfrp_fabric"
-        materials[skin_name] = _fabric(rng, "cfrp_fabric") if skin_name == "cfrp_fabric" else dict(GLASS_FABRIC)
+        materials[skin_name] = (
+            _fabric(rng, "cfrp_fabric") if skin_name == "cfrp_fabric" else dict(GLASS_FABRIC)
+        )
         materials["foam_core"] = _core(rng)
         skin, core = rng.uniform(0.3, 1.0), rng.uniform(4.0, 12.0)
         nominal = [(skin_name, skin, 0.0), ("foam_core", core, 0.0), (skin_name, skin, 0.0)]
@@ -163,49 +205,117 @@ def draw_case(rng, index: int) -> dict:
         layers.append((m, round(t, 3), round(angle + turn, 2)))
     sensor = None
     if rng.random() < 0.5:
-        sensor = dict(mass_g=round(rng.uniform(1.0, 10.0), 2), x_mm=rng.uniform(0.1, 0.9) * length,
-                      y_mm=rng.uniform(0.1, 0.9) * width)
+        sensor = dict(
+            mass_g=round(rng.uniform(1.0, 10.0), 2),
+            x_mm=rng.uniform(0.1, 0.9) * length,
+            y_mm=rng.uniform(0.1, 0.9) * width,
+        )
         if family == "sandwich":
             sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
     bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
     added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
     return dict(
-        name=f"blind{index + 1:02d}_{family}", family=family, length_mm=round(length, 1), width_mm=round(width, 1),
-        layers=layers, nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal], materials=materials,
-        sensor=sensor, misalignment_max_deg=round(spread, 2), bond_line_mm=bond, aluminium_mm=plate,
-        configurations=[dict(name="original", bottom=[], top=[]), dict(name="al_bottom", bottom=added, top=[]),
-                        dict(name="al_top", bottom=[], top=added)],
+        name=f"blind{index + 1:02d}_{family}",
+        family=family,
+        length_mm=round(length, 1),
+        width_mm=round(width, 1),
+        layers=layers,
+        nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal],
+        materials=materials,
+        sensor=sensor,
+        misalignment_max_deg=round(spread, 2),
+        bond_line_mm=bond,
+        aluminium_mm=plate,
+        configurations=[
+            dict(name="original", bottom=[], top=[]),
+            dict(name="al_bottom", bottom=added, top=[]),
+            dict(name="al_top", bottom=[], top=added),
+        ],
         description=f"blind {family} case {index + 1}",
     )
 
 
-def _fixed(name: str, family: str, length: float, width: float, layers, materials: dict, sensor, bond: float,
-           plate: float, description: str) -> dict:
+def _fixed(
+    name: str,
+    family: str,
+    length: float,
+    width: float,
+    layers,
+    materials: dict,
+    sensor,
+    bond: float,
+    plate: float,
+    description: str,
+) -> dict:
     added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
     return dict(
-        name=name, family=family, length_mm=length, width_mm=width, layers=layers, nominal_layers=layers,
-        materials={"aluminium": g.MATERIALS["aluminium"], "soft_adhesive": g.MATERIALS["soft_adhesive"], **materials},
-        sensor=sensor, misalignment_max_deg=0.0, bond_line_mm=bond, aluminium_mm=plate,
-        configurations=[dict(name="original", bottom=[], top=[]), dict(name="al_bottom", bottom=added, top=[]),
-                        dict(name="al_top", bottom=[], top=added)],
-        description=description)
+        name=name,
+        family=family,
+        length_mm=length,
+        width_mm=width,
+        layers=layers,
+        nominal_layers=layers,
+        materials={
+            "aluminium": g.MATERIALS["aluminium"],
+            "soft_adhesive": g.MATERIALS["soft_adhesive"],
+            **materials,
+        },
+        sensor=sensor,
+        misalignment_max_deg=0.0,
+        bond_line_mm=bond,
+        aluminium_mm=plate,
+        configurations=[
+            dict(name="original", bottom=[], top=[]),
+            dict(name="al_bottom", bottom=added, top=[]),
+            dict(name="al_top", bottom=[], top=added),
+        ],
+        description=description,
+    )
 
 
 #: The diagnosis's two known failures rebuilt on other stacks and masses (regression
 #: tests, not part of the blind family): a thick carbon/glass/carbon laminate carrying a
 #: sensor, and a glass-skinned foam sandwich.
 REGRESSION = (
-    _fixed("regression_sensor_on_thick", "hybrid", 200.0, 150.0,
-           [("cfrp_ud", 1.2, 0.0), ("gfrp_ud", 3.0, 0.0), ("cfrp_ud", 1.2, 0.0)],
-           {"cfrp_ud": g.MATERIALS["cfrp_ud"], "gfrp_ud": g.MATERIALS["gfrp_ud"]},
-           dict(mass_g=6.0, x_mm=150.0, y_mm=40.0), 0.1, 1.0,
-           "5.4 mm CFRP/GFRP/CFRP (a/h = 37) with a 6 g sensor"),
-    _fixed("regression_foam_sandwich", "sandwich", 260.0, 200.0,
-           [("gfrp_fabric", 0.6, 0.0), ("foam_core", 8.0, 0.0), ("gfrp_fabric", 0.6, 0.0)],
-           {"gfrp_fabric": GLASS_FABRIC,
-            "foam_core": dict(E1=0.13, E2=0.13, E3=0.13, G12=0.05, G13=0.05, G23=0.05, nu12=0.3, nu13=0.3, nu23=0.3,
-                              density=95.0, note="isotropic foam core, E = 2G(1 + nu)")},
-           None, 0.15, 1.5, "glass-fabric skins 0.6 mm on an 8 mm foam core of G = 50 MPa"),
+    _fixed(
+        "regression_sensor_on_thick",
+        "hybrid",
+        200.0,
+        150.0,
+        [("cfrp_ud", 1.2, 0.0), ("gfrp_ud", 3.0, 0.0), ("cfrp_ud", 1.2, 0.0)],
+        {"cfrp_ud": g.MATERIALS["cfrp_ud"], "gfrp_ud": g.MATERIALS["gfrp_ud"]},
+        dict(mass_g=6.0, x_mm=150.0, y_mm=40.0),
+        0.1,
+        1.0,
+        "5.4 mm CFRP/GFRP/CFRP (a/h = 37) with a 6 g sensor",
+    ),
+    _fixed(
+        "regression_foam_sandwich",
+        "sandwich",
+        260.0,
+        200.0,
+        [("gfrp_fabric", 0.6, 0.0), ("foam_core", 8.0, 0.0), ("gfrp_fabric", 0.6, 0.0)],
+        {
+            "gfrp_fabric": GLASS_FABRIC,
+            "foam_core": dict(
+                E1=0.13,
+                E2=0.13,
+                E3=0.13,
+                G12=0.05,
+                G13=0.05,
+                G23=0.05,
+                nu12=0.3,
+                nu13=0.3,
+                nu23=0.3,
+                density=95.0,
+                note="isotropic foam core, E = 2G(1 + nu)",
+            ),
+        },
+        None,
+        0.15,
+        1.5,
+        "glass-fabric skins 0.6 mm on an 8 mm foam core of G = 50 MPa",
+    ),
 )
 
 
@@ -225,7 +335,10 @@ def halves(cases: list[dict]) -> dict[str, str]:
     """Every case's half: the first series all development (its held-out half, drawn by
     ``split``, was run once in run 8 and then worked on), the second series held-out."""
     first = [c["name"] for c in cases if c["seed"] == SEED]
-    return {**{name: "dev" for name in split(first)}, **{c["name"]: "heldout" for c in cases if c["seed"] != SEED}}
+    return {
+        **{name: "dev" for name in split(first)},
+        **{c["name"]: "heldout" for c in cases if c["seed"] != SEED},
+    }
 
 
 def split(names: list[str], seed: int = SPLIT_SEED) -> dict[str, str]:
@@ -246,8 +359,12 @@ def _sensor_lines(mesh: g.Mesh, case: dict, n_elements: int) -> tuple[tuple[str,
     j = 2 * int(round(s["y_mm"] / (mesh.ly / mesh.ny)))
     node = int(ids[i, j, -1])
     x, y, _ = coords[node - 1]
-    lines = ("*ELEMENT, TYPE=MASS, ELSET=SENSOR", f"{n_elements + 1},{node}", "*MASS, ELSET=SENSOR",
-             f"{s['mass_g'] * 1e-6:.10g}")
+    lines = (
+        "*ELEMENT, TYPE=MASS, ELSET=SENSOR",
+        f"{n_elements + 1},{node}",
+        "*MASS, ELSET=SENSOR",
+        f"{s['mass_g'] * 1e-6:.10g}",
+    )
     return lines, (float(x), float(y))
 
 
@@ -296,8 +413,16 @@ def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> d
     if case["sensor"] and heavier is None:
         extra, where = _sensor_lines(mesh, case, len(elements))
     job = workdir / tag
-    g.write_input(job.with_suffix(".inp"), mesh, layers, None, 6 + ELASTIC, materials=case["materials"], extra=extra,
-                  heavier=heavier)
+    g.write_input(
+        job.with_suffix(".inp"),
+        mesh,
+        layers,
+        None,
+        6 + ELASTIC,
+        materials=case["materials"],
+        extra=extra,
+        heavier=heavier,
+    )
     wall = g.run_ccx(job, 1)
     lam = g.read_eigenvalues(job.with_suffix(".dat"))
     disp = g.read_displacements(job.with_suffix(".frd"), len(coords))
@@ -320,10 +445,17 @@ def solve_full(case: dict, layers, level: g.Level, workdir: Path, tag: str) -> d
     flexural = [k for k in range(len(lam)) if shares[k] > g.FLEXURAL_SHARE][:FLEXURAL_MODES]
     if len(flexural) < FLEXURAL_MODES:
         raise RuntimeError(f"{tag}: only {len(flexural)} flexural modes among {len(lam)}")
-    return dict(frequency_hz=np.sqrt(lam[flexural]) / (2 * np.pi), w=grid[flexural, 2], w_top=top[flexural, 2],
-                labels=[g.nodal_label(fine[k, 2]) for k in flexural], w_share=shares[flexural], wall_s=wall,
-                dofs=3 * len(coords), sensor_xy_mm=where,
-                elements=[mesh.nx, mesh.ny, [g.layer_elements(t, level.thickness_factor) for _, t, _ in layers]])
+    return dict(
+        frequency_hz=np.sqrt(lam[flexural]) / (2 * np.pi),
+        w=grid[flexural, 2],
+        w_top=top[flexural, 2],
+        labels=[g.nodal_label(fine[k, 2]) for k in flexural],
+        w_share=shares[flexural],
+        wall_s=wall,
+        dofs=3 * len(coords),
+        sensor_xy_mm=where,
+        elements=[mesh.nx, mesh.ny, [g.layer_elements(t, level.thickness_factor) for _, t, _ in layers]],
+    )
 
 
 def truth_spec(case: dict, sensor_xy=None) -> str:
@@ -332,8 +464,10 @@ def truth_spec(case: dict, sensor_xy=None) -> str:
     text = g.spec_toml(case["name"], case, materials=case["materials"])
     if case["sensor"]:
         x, y = sensor_xy
-        text += (f'\n[[effects]]\nkind = "point_mass"\nmass_g = {case["sensor"]["mass_g"]!r}\n'
-                 f"x_mm = {x:.6g}\ny_mm = {y:.6g}\n")
+        text += (
+            f'\n[[effects]]\nkind = "point_mass"\nmass_g = {case["sensor"]["mass_g"]!r}\n'
+            f"x_mm = {x:.6g}\ny_mm = {y:.6g}\n"
+        )
         if case["sensor"].get("base_mm"):
             text += f"base_mm = {case['sensor']['base_mm']!r}\n"
     return text
@@ -346,13 +480,15 @@ def plate_grid_w(spec_text: str, configuration: str) -> np.ndarray:
     from studies.hidden_effect import _grid_w  # noqa: PLC0415
 
     model = parse_spec(tomllib.loads(spec_text), "<blind>").with_options(
-        modes=FLEXURAL_MODES + 8, transverse_shear=True, rotary_inertia=True)
+        modes=FLEXURAL_MODES + 8, transverse_shear=True, rotary_inertia=True
+    )
     solution = model.solve(configuration)
     return _grid_w(solution, model.specimen.length, model.specimen.width)
 
 
-def pair_with_plate(spec_text: str, configuration: str, w3d: np.ndarray,
-                    w: np.ndarray | None = None) -> tuple[list[int], list[float]]:
+def pair_with_plate(
+    spec_text: str, configuration: str, w3d: np.ndarray, w: np.ndarray | None = None
+) -> tuple[list[int], list[float]]:
     """Rank (1-based) of the plate mode each 3-D mode pairs with, and the MAC (``w``: the
     plate's grid shapes, when already at hand)."""
     from scipy.optimize import linear_sum_assignment  # noqa: PLC0415
@@ -369,8 +505,10 @@ def solve_configurations(case: dict, level: g.Level, prefix: str) -> dict:
     """``solve_full`` of every configuration of a case, in a scratch folder removed after."""
     workdir = Path(tempfile.mkdtemp(prefix=f"{prefix}_{case['name']}_"))
     try:
-        return {c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
-                for c in case["configurations"]}
+        return {
+            c["name"]: solve_full(case, g.stack(case, c), level, workdir, f"{case['name']}_{c['name']}")
+            for c in case["configurations"]
+        }
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
 
@@ -385,27 +523,61 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
     for c in case["configurations"]:
         s = solved[c["name"]]
         rank, mac = pair_with_plate(spec, c["name"], s["w"])
-        configurations.append(dict(
-            name=c["name"], total_thickness_mm=g._sig(sum(t for _, t, _ in g.stack(case, c))),
-            elements=s["elements"], dofs=s["dofs"], wall_s=round(s["wall_s"], 1),
-            modes=[dict(frequency_hz=g._sig(float(f)), label=lab, w_share=g._sig(float(sh), 4), plate_mode=r,
-                        mac=m)
-                   for f, lab, sh, r, m in zip(s["frequency_hz"], s["labels"], s["w_share"], rank, mac, strict=True)]))
+        configurations.append(
+            dict(
+                name=c["name"],
+                total_thickness_mm=g._sig(sum(t for _, t, _ in g.stack(case, c))),
+                elements=s["elements"],
+                dofs=s["dofs"],
+                wall_s=round(s["wall_s"], 1),
+                modes=[
+                    dict(
+                        frequency_hz=g._sig(float(f)),
+                        label=lab,
+                        w_share=g._sig(float(sh), 4),
+                        plate_mode=r,
+                        mac=m,
+                    )
+                    for f, lab, sh, r, m in zip(
+                        s["frequency_hz"], s["labels"], s["w_share"], rank, mac, strict=True
+                    )
+                ],
+            )
+        )
     return dict(
-        case=case["name"], family=case["family"], half=half, seed=case.get("seed"), split_seed=SPLIT_SEED,
-        choices=dict(length_mm=case["length_mm"], width_mm=case["width_mm"],
-                     nominal_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["nominal_layers"]],
-                     true_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
-                     misalignment_max_deg=case["misalignment_max_deg"],
-                     sensor=None if not case["sensor"] else dict(case["sensor"], x_mm=sensor_xy[0],
-                                                                  y_mm=sensor_xy[1]),
-                     bond_line_mm=case["bond_line_mm"], aluminium_mm=case["aluminium_mm"]),
-        materials={m: {k: (g._sig(v) if isinstance(v, float) else v) for k, v in c.items()}
-                   for m, c in case["materials"].items()},
-        made_with=dict(solver=g.ccx_version(), element="C3D20R", model="full plate, free-free",
-                       mesh=dict(level=level.name, elements_along_length=level.n_length,
-                                 thickness_factor=level.thickness_factor),
-                       script="tests/data/solid3d/blind.py", wall_time_s=round(time.perf_counter() - started, 1)),
+        case=case["name"],
+        family=case["family"],
+        half=half,
+        seed=case.get("seed"),
+        split_seed=SPLIT_SEED,
+        choices=dict(
+            length_mm=case["length_mm"],
+            width_mm=case["width_mm"],
+            nominal_layers=[
+                dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["nominal_layers"]
+            ],
+            true_layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
+            misalignment_max_deg=case["misalignment_max_deg"],
+            sensor=None if not case["sensor"] else dict(case["sensor"], x_mm=sensor_xy[0], y_mm=sensor_xy[1]),
+            bond_line_mm=case["bond_line_mm"],
+            aluminium_mm=case["aluminium_mm"],
+        ),
+        materials={
+            m: {k: (g._sig(v) if isinstance(v, float) else v) for k, v in c.items()}
+            for m, c in case["materials"].items()
+        },
+        made_with=dict(
+            solver=g.ccx_version(),
+            element="C3D20R",
+            model="full plate, free-free",
+            mesh=dict(
+                level=level.name,
+                elements_along_length=level.n_length,
+                thickness_factor=level.thickness_factor,
+            ),
+            script="tests/data/solid3d/blind.py",
+            wall_time_s=round(time.perf_counter() - started, 1),
+        ),
         truth_spec_toml=spec,
         configurations=configurations,
     )
@@ -433,8 +605,10 @@ def shapes(case: dict, record: dict, level: g.Level) -> tuple[dict | None, str]:
         worst = max(worst, float(change.max()))
         if change.max() > SHAPES_TOLERANCE:
             k = int(np.argmax(change))
-            failures.append(f"{c['name']} mode {k + 1}: {s['frequency_hz'][k]:.7g} Hz re-solved, "
-                            f"{f_stored[k]:.7g} Hz stored ({change[k]:.2e} relative)")
+            failures.append(
+                f"{c['name']} mode {k + 1}: {s['frequency_hz'][k]:.7g} Hz re-solved, "
+                f"{f_stored[k]:.7g} Hz stored ({change[k]:.2e} relative)"
+            )
             continue
         mid = np.array([np.ravel(w) for w in s["w"]])
         top = np.array([np.ravel(w) for w in s["w_top"]])
@@ -442,38 +616,71 @@ def shapes(case: dict, record: dict, level: g.Level) -> tuple[dict | None, str]:
         plate = plate_grid_w(spec, c["name"])
         rank_mid, _ = pair_with_plate(spec, c["name"], s["w"], plate)
         rank_top, _ = pair_with_plate(spec, c["name"], s["w_top"], plate)
-        mac_top = [g.mac(top[k][:, None], plate[:, m["plate_mode"] - 1:m["plate_mode"]])[0, 0]
-                   for k, m in enumerate(kept)]
+        mac_top = [
+            g.mac(top[k][:, None], plate[:, m["plate_mode"] - 1 : m["plate_mode"]])[0, 0]
+            for k, m in enumerate(kept)
+        ]
         if rank_mid != [m["plate_mode"] for m in kept]:  # the plate model may have changed since
-            notes.append(f"{c['name']}: the re-solved mid-plane shapes pair with plate modes {rank_mid} today, "
-                         f"the record with {[m['plate_mode'] for m in kept]}")
+            notes.append(
+                f"{c['name']}: the re-solved mid-plane shapes pair with plate modes {rank_mid} today, "
+                f"the record with {[m['plate_mode'] for m in kept]}"
+            )
         if rank_top != rank_mid:
-            notes.append(f"{c['name']}: the top face pairs with plate modes {rank_top} (mid-plane {rank_mid})")
+            notes.append(
+                f"{c['name']}: the top face pairs with plate modes {rank_top} (mid-plane {rank_mid})"
+            )
         thickness = sum(t for _, t, _ in g.stack(case, c))
-        configurations.append(dict(
-            name=c["name"], face_z_mm=g._sig(thickness),
-            x_mm=[g._sig(x) for x in case["length_mm"] * np.arange(g.GRID[0]) / (g.GRID[0] - 1)],
-            y_mm=[g._sig(y) for y in case["width_mm"] * np.arange(g.GRID[1]) / (g.GRID[1] - 1)],
-            modes=[dict(frequency_hz=g._sig(float(f)), label=m["label"], plate_mode=m["plate_mode"],
-                        mac_plate_mode=round(float(mt), 4), one_minus_mac_mid_plane=g._sig(float(b), 3),
-                        w=g._grid_list(_unit_max(w)))
-                   for f, m, mt, b, w in zip(s["frequency_hz"], kept, mac_top, between, s["w_top"], strict=True)]))
+        configurations.append(
+            dict(
+                name=c["name"],
+                face_z_mm=g._sig(thickness),
+                x_mm=[g._sig(x) for x in case["length_mm"] * np.arange(g.GRID[0]) / (g.GRID[0] - 1)],
+                y_mm=[g._sig(y) for y in case["width_mm"] * np.arange(g.GRID[1]) / (g.GRID[1] - 1)],
+                modes=[
+                    dict(
+                        frequency_hz=g._sig(float(f)),
+                        label=m["label"],
+                        plate_mode=m["plate_mode"],
+                        mac_plate_mode=round(float(mt), 4),
+                        one_minus_mac_mid_plane=g._sig(float(b), 3),
+                        w=g._grid_list(_unit_max(w)),
+                    )
+                    for f, m, mt, b, w in zip(
+                        s["frequency_hz"], kept, mac_top, between, s["w_top"], strict=True
+                    )
+                ],
+            )
+        )
         notes.append(f"{c['name']}: 1 - MAC(top, mid) max {between.max():.2e}")
     if failures:
         return None, f"{case['name']}: NOT written, re-solve differs from the record: " + "; ".join(failures)
     out = dict(
-        case=case["name"], family=case["family"], face="top (z = the configuration's total thickness)",
-        grid=dict(points=list(g.GRID), x="x_i = L i / 12, from the corner", y="y_j = W j / 10",
-                  layout="w[j][i], row = y"),
+        case=case["name"],
+        family=case["family"],
+        face="top (z = the configuration's total thickness)",
+        grid=dict(
+            points=list(g.GRID),
+            x="x_i = L i / 12, from the corner",
+            y="y_j = W j / 10",
+            layout="w[j][i], row = y",
+        ),
         normalisation="max |w| = 1 per mode, its largest value positive; 5 significant digits",
-        made_with=dict(solver=g.ccx_version(), element="C3D20R", model="full plate, free-free",
-                       mesh=dict(level=level.name, elements_along_length=level.n_length,
-                                 thickness_factor=level.thickness_factor),
-                       script="tests/data/solid3d/blind.py",
-                       command=f"python tests/data/solid3d/blind.py --shapes-only --only {case['name']}",
-                       wall_time_s=round(time.perf_counter() - started, 1),
-                       frequency_check=dict(max_relative_difference=g._sig(worst, 3), tolerance=SHAPES_TOLERANCE)),
-        configurations=configurations)
+        made_with=dict(
+            solver=g.ccx_version(),
+            element="C3D20R",
+            model="full plate, free-free",
+            mesh=dict(
+                level=level.name,
+                elements_along_length=level.n_length,
+                thickness_factor=level.thickness_factor,
+            ),
+            script="tests/data/solid3d/blind.py",
+            command=f"python tests/data/solid3d/blind.py --shapes-only --only {case['name']}",
+            wall_time_s=round(time.perf_counter() - started, 1),
+            frequency_check=dict(max_relative_difference=g._sig(worst, 3), tolerance=SHAPES_TOLERANCE),
+        ),
+        configurations=configurations,
+    )
     return out, f"{case['name']}: frequencies within {worst:.1e} of the record; " + "; ".join(notes)
 
 
@@ -489,10 +696,15 @@ def mesh_check(case: dict) -> dict:
             coarse = solve_full(case, layers, LEVEL, workdir, f"c_{c['name']}")
             medium = solve_full(case, layers, CHECK_LEVEL, workdir, f"m_{c['name']}")
             change = coarse["frequency_hz"] / medium["frequency_hz"] - 1
-            out.append(dict(configuration=c["name"], max_abs_change=g._sig(float(np.abs(change).max()), 3),
-                            per_mode=[g._sig(float(x), 3) for x in change],
-                            wall_s=[round(coarse["wall_s"], 1), round(medium["wall_s"], 1)],
-                            dofs=[coarse["dofs"], medium["dofs"]]))
+            out.append(
+                dict(
+                    configuration=c["name"],
+                    max_abs_change=g._sig(float(np.abs(change).max()), 3),
+                    per_mode=[g._sig(float(x), 3) for x in change],
+                    wall_s=[round(coarse["wall_s"], 1), round(medium["wall_s"], 1)],
+                    dofs=[coarse["dofs"], medium["dofs"]],
+                )
+            )
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     return dict(case=case["name"], levels=[LEVEL.name, CHECK_LEVEL.name], configurations=out)
@@ -507,9 +719,18 @@ def stored_convergence() -> list[dict]:
         data = json.loads((HERE / f"{name}.json").read_text())
         for c in data["configurations"]:
             flexural = [m for m in c["modes"] if m["classification"] == "flexural"][:FLEXURAL_MODES]
-            change = [m["frequencies_by_level"][LEVEL.name] / m["frequencies_by_level"]["fine"] - 1 for m in flexural]
-            out.append(dict(case=name, configuration=c["name"], levels=[LEVEL.name, "fine"],
-                            max_abs_change=g._sig(float(np.max(np.abs(change))), 3)))
+            change = [
+                m["frequencies_by_level"][LEVEL.name] / m["frequencies_by_level"]["fine"] - 1
+                for m in flexural
+            ]
+            out.append(
+                dict(
+                    case=name,
+                    configuration=c["name"],
+                    levels=[LEVEL.name, "fine"],
+                    max_abs_change=g._sig(float(np.max(np.abs(change))), 3),
+                )
+            )
     return out
 
 
@@ -524,8 +745,10 @@ def _shapes_only(cases: list[dict], names: list[str] | None, parser) -> int:
     re-solves) and its shapes written; 1 when a case's re-solve was refused."""
     known = {c["name"]: c for c in cases}
     if not names or any(n not in known for n in names):
-        parser.error(f"--shapes-only needs --only NAME for stored cases; unknown: "
-                     f"{[n for n in names or [] if n not in known] or 'none given'}")
+        parser.error(
+            f"--shapes-only needs --only NAME for stored cases; unknown: "
+            f"{[n for n in names or [] if n not in known] or 'none given'}"
+        )
     SHAPES_OUT.mkdir(exist_ok=True)
     status = 0
     for name in names:
@@ -545,15 +768,24 @@ def _shapes_only(cases: list[dict], names: list[str] | None, parser) -> int:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", action="extend", nargs="+", help="case name(s) to (re)run")
-    parser.add_argument("--check", action="store_true",
-                        help="coarse against medium mesh, the first hybrid and the first sandwich")
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="coarse against medium mesh, the first hybrid and the first sandwich",
+    )
     parser.add_argument("--out", type=Path, default=OUT)
-    parser.add_argument("--check-stored", action="store_true",
-                        help="the coarse mesh's error on the stored references (no ccx run)")
+    parser.add_argument(
+        "--check-stored",
+        action="store_true",
+        help="the coarse mesh's error on the stored references (no ccx run)",
+    )
     parser.add_argument("--regression", action="store_true", help="the regression cases, into ../regression")
-    parser.add_argument("--shapes-only", action="store_true",
-                        help="re-solve the --only cases and write their top-face shapes into blind_shapes/ "
-                             "(the case records are not touched)")
+    parser.add_argument(
+        "--shapes-only",
+        action="store_true",
+        help="re-solve the --only cases and write their top-face shapes into blind_shapes/ "
+        "(the case records are not touched)",
+    )
     args = parser.parse_args(argv)
     if shutil.which("ccx") is None:
         parser.error("ccx (CalculiX) is not on the PATH; on Debian: apt-get install calculix-ccx")
@@ -581,21 +813,30 @@ def main(argv=None) -> int:
     if args.check_stored:
         _write(args.out / "mesh_check.json", dict(stored_references=stored_convergence()))
         return 0
-    _write(args.out / "index.json", dict(seed=SEED, split_seed=SPLIT_SEED, seed_2=SEED_2, cases=half,
-                                         script="tests/data/solid3d/blind.py"))
+    _write(
+        args.out / "index.json",
+        dict(
+            seed=SEED, split_seed=SPLIT_SEED, seed_2=SEED_2, cases=half, script="tests/data/solid3d/blind.py"
+        ),
+    )
     for case in cases:
         if args.only and case["name"] not in args.only:
             continue
         path = args.out / f"{case['name']}.json"
         if path.exists() and not args.only:
             continue
-        if path.exists():  # re-solved: the plate its record holds (blind16 and 19 drew the plies the other way)
+        # re-solved: the plate its record holds (blind16 and 19 drew the plies the other way)
+        if path.exists():
             case["materials"] = json.loads(path.read_text())["materials"]
         result = run_case(case, LEVEL, half[case["name"]])
         _write(path, result)
-        print(f"{case['name']}: {result['made_with']['wall_time_s']:.0f} s "
-              + " | ".join(f"{c['name']} {c['modes'][0]['frequency_hz']:.1f} Hz" for c in result["configurations"]),
-              flush=True)
+        print(
+            f"{case['name']}: {result['made_with']['wall_time_s']:.0f} s "
+            + " | ".join(
+                f"{c['name']} {c['modes'][0]['frequency_hz']:.1f} Hz" for c in result["configurations"]
+            ),
+            flush=True,
+        )
     return 0
 
 

@@ -20,6 +20,7 @@ coarser one (``--check-divisions``): the largest change of a paired frequency is
 Uses the project's API as it is (``fem.spec.parse_spec``, ``fem.model``,
 ``fem.solver.attachments.point_operators``); the plate models are not modified.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -84,8 +85,13 @@ def compare_case(data: dict, modes: int, divisions: int, check_divisions: int, l
         reference = flexural[:N_COMPARED]
         f3d = np.array([m["frequency_hz"] for m in reference])
         w3d = np.array([np.ravel(m["w"]) for m in reference]).T
-        row = dict(case=data["case"], configuration=configuration["name"], f3d=f3d.tolist(),
-                   labels=[m["label"] for m in reference], models={})
+        row = dict(
+            case=data["case"],
+            configuration=configuration["name"],
+            f3d=f3d.tolist(),
+            labels=[m["label"] for m in reference],
+            models={},
+        )
         for name, switches in MODELS.items():
             freqs = {}
             for d in (check_divisions, divisions):
@@ -97,8 +103,12 @@ def compare_case(data: dict, modes: int, divisions: int, check_divisions: int, l
             mesh_change = np.max(np.abs(freqs[check_divisions][0] / f - 1))
             error = f / f3d - 1
             row["models"][name] = dict(
-                frequencies_hz=f.tolist(), rel_error=error.tolist(), mac=macs.tolist(), plate_mode=index.tolist(),
-                max_abs_error=float(np.max(np.abs(error))), rms_error=float(np.sqrt(np.mean(error**2))),
+                frequencies_hz=f.tolist(),
+                rel_error=error.tolist(),
+                mac=macs.tolist(),
+                plate_mode=index.tolist(),
+                max_abs_error=float(np.max(np.abs(error))),
+                rms_error=float(np.sqrt(np.mean(error**2))),
                 mesh_change=float(mesh_change),
             )
         out.append(row)
@@ -107,29 +117,45 @@ def compare_case(data: dict, modes: int, divisions: int, check_divisions: int, l
 
 
 def format_configuration(row: dict) -> str:
-    lines = [f"\n{row['case']} / {row['configuration']}",
-             f"{'mode':>4} {'label':>7} {'3-D Hz':>10} " + " ".join(f"{n:>9}" for n in MODELS) + "   MAC (CLT/FSDT/+RI)"]
+    lines = [
+        f"\n{row['case']} / {row['configuration']}",
+        f"{'mode':>4} {'label':>7} {'3-D Hz':>10} "
+        + " ".join(f"{n:>9}" for n in MODELS)
+        + "   MAC (CLT/FSDT/+RI)",
+    ]
     for k, f in enumerate(row["f3d"]):
         errors = " ".join(f"{100 * row['models'][n]['rel_error'][k]:+8.2f}%" for n in MODELS)
         macs = "/".join(f"{row['models'][n]['mac'][k]:.3f}" for n in MODELS)
         flag = "  <- low MAC" if min(row["models"][n]["mac"][k] for n in MODELS) < MAC_WARN else ""
         lines.append(f"{k + 1:>4} {row['labels'][k]:>7} {f:>10.2f} {errors}   {macs}{flag}")
-    lines.append(f"{'max':>4} {'':>7} {'':>10} " + " ".join(
-        f"{100 * row['models'][n]['max_abs_error']:8.2f}%" for n in MODELS))
-    lines.append(f"{'rms':>4} {'':>7} {'':>10} " + " ".join(
-        f"{100 * row['models'][n]['rms_error']:8.2f}%" for n in MODELS))
-    lines.append("plate-mesh check (largest frequency change vs the coarser mesh): " + ", ".join(
-        f"{n} {100 * row['models'][n]['mesh_change']:.4f}%" for n in MODELS))
+    lines.append(
+        f"{'max':>4} {'':>7} {'':>10} "
+        + " ".join(f"{100 * row['models'][n]['max_abs_error']:8.2f}%" for n in MODELS)
+    )
+    lines.append(
+        f"{'rms':>4} {'':>7} {'':>10} "
+        + " ".join(f"{100 * row['models'][n]['rms_error']:8.2f}%" for n in MODELS)
+    )
+    lines.append(
+        "plate-mesh check (largest frequency change vs the coarser mesh): "
+        + ", ".join(f"{n} {100 * row['models'][n]['mesh_change']:.4f}%" for n in MODELS)
+    )
     return "\n".join(lines)
 
 
 def summary(rows: list[dict]) -> str:
-    head = f"{'case':<22} {'configuration':<11} " + " ".join(f"{n + ' max':>11} {n + ' rms':>11}" for n in MODELS)
+    head = f"{'case':<22} {'configuration':<11} " + " ".join(
+        f"{n + ' max':>11} {n + ' rms':>11}" for n in MODELS
+    )
     lines = ["\nSummary: relative error of the first 10 flexural modes vs 3-D (max |e|, rms e)", head]
     for r in rows:
-        lines.append(f"{r['case']:<22} {r['configuration']:<11} " + " ".join(
-            f"{100 * r['models'][n]['max_abs_error']:10.2f}% {100 * r['models'][n]['rms_error']:10.2f}%"
-            for n in MODELS))
+        lines.append(
+            f"{r['case']:<22} {r['configuration']:<11} "
+            + " ".join(
+                f"{100 * r['models'][n]['max_abs_error']:10.2f}% {100 * r['models'][n]['rms_error']:10.2f}%"
+                for n in MODELS
+            )
+        )
     return "\n".join(lines)
 
 
@@ -137,30 +163,48 @@ def reference_tables(data: dict) -> str:
     """Markdown tables of a case's 3-D reference: meshes and run times, convergence and the
     first 10 flexural frequencies of every configuration."""
     made = data["made_with"]
-    lines = [f"### {data['case']}", "", "| configuration | level | elements (x, y, through layers) | DOFs (4 quarter "
-             "models) | wall s |", "|---|---|---|---|---|"]
+    lines = [
+        f"### {data['case']}",
+        "",
+        "| configuration | level | elements (x, y, through layers) | DOFs (4 quarter models) | wall s |",
+        "|---|---|---|---|---|",
+    ]
     walls = {(r["configuration"], r["level"]): r["wall_s"] for r in made["runs"]}
     for c in data["configurations"]:
         for m in c["meshes"]:
             wall = walls.get((c["name"], m["level"]), "mirror")
-            lines.append(f"| {c['name']} | {m['level']} | {m['elements_along_length']} x {m['elements_along_width']} x "
-                         f"{m['elements_through_layers']} | {m['dofs_total']} | {wall} |")
+            lines.append(
+                f"| {c['name']} | {m['level']} | {m['elements_along_length']} x {m['elements_along_width']} "
+                "x "
+                f"{m['elements_through_layers']} | {m['dofs_total']} | {wall} |"
+            )
     levels = [l["name"] for l in made["levels"]]
     for c in data["configurations"]:
         flex = [m for m in c["modes"] if m["classification"] == "flexural"][:10]
         inplane = [m for m in c["modes"] if m["classification"] != "flexural"]
         conv = c.get("convergence", {})
-        lines += ["", f"{c['name']} (H = {c['total_thickness_mm']:g} mm): max |change| {levels[-2] if len(levels) > 1 else ''}"
-                  f" -> {levels[-1]}: first 10 elastic {_pct(conv.get('max_abs_change_first10_elastic'))}, first 10 "
-                  f"flexural {_pct(conv.get('max_abs_change_first10_flexural'))}; in-plane modes stored: "
-                  + (", ".join(f"rank {m['rank']} {m['frequency_hz']:.1f} Hz" for m in inplane) or "none"), "",
-                  "| mode | label | " + " | ".join(f"{l} Hz" for l in levels) + " | change | w share |",
-                  "|---|---|" + "---|" * len(levels) + "---|---|"]
+        lines += [
+            "",
+            f"{c['name']} (H = {c['total_thickness_mm']:g} mm): max |change| "
+            f"{levels[-2] if len(levels) > 1 else ''}"
+            f" -> {levels[-1]}: first 10 elastic {_pct(conv.get('max_abs_change_first10_elastic'))}, first "
+            "10 "
+            f"flexural {_pct(conv.get('max_abs_change_first10_flexural'))}; in-plane modes stored: "
+            + (", ".join(f"rank {m['rank']} {m['frequency_hz']:.1f} Hz" for m in inplane) or "none"),
+            "",
+            "| mode | label | " + " | ".join(f"{l} Hz" for l in levels) + " | change | w share |",
+            "|---|---|" + "---|" * len(levels) + "---|---|",
+        ]
         for k, m in enumerate(flex):
-            per = " | ".join("-" if m["frequencies_by_level"][l] is None else f"{m['frequencies_by_level'][l]:.2f}"
-                             for l in levels)
-            lines.append(f"| {k + 1} (rank {m['rank']}) | {m['label']} | {per} | {_pct(m['relative_change_last_two'])} "
-                         f"| {m['w_share']:.4f} |")
+            per = " | ".join(
+                "-" if m["frequencies_by_level"][l] is None else f"{m['frequencies_by_level'][l]:.2f}"
+                for l in levels
+            )
+            lines.append(
+                f"| {k + 1} (rank {m['rank']}) | {m['label']} | {per} | "
+                f"{_pct(m['relative_change_last_two'])} "
+                f"| {m['w_share']:.4f} |"
+            )
     return "\n".join(lines)
 
 
@@ -171,13 +215,22 @@ def _pct(x) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--case", action="append", help="case name(s) (default: every <case>.json here)")
-    parser.add_argument("--modes", type=int, default=24, help="plate modes solved for the pairing (default 24)")
-    parser.add_argument("--divisions", type=int, default=40, help="plate elements along the longer side (default 40)")
-    parser.add_argument("--check-divisions", type=int, default=30, help="coarser plate mesh for the check (30)")
+    parser.add_argument(
+        "--modes", type=int, default=24, help="plate modes solved for the pairing (default 24)"
+    )
+    parser.add_argument(
+        "--divisions", type=int, default=40, help="plate elements along the longer side (default 40)"
+    )
+    parser.add_argument(
+        "--check-divisions", type=int, default=30, help="coarser plate mesh for the check (30)"
+    )
     parser.add_argument("--dir", type=Path, default=HERE, help="folder of the <case>.json files")
     parser.add_argument("--json", type=Path, help="also write the table as JSON")
-    parser.add_argument("--reference-tables", action="store_true",
-                        help="print the 3-D references' mesh, convergence and frequency tables (Markdown) and stop")
+    parser.add_argument(
+        "--reference-tables",
+        action="store_true",
+        help="print the 3-D references' mesh, convergence and frequency tables (Markdown) and stop",
+    )
     args = parser.parse_args(argv)
     names = args.case or sorted(p.stem for p in args.dir.glob("*.json"))
     if args.reference_tables:

@@ -32,6 +32,7 @@ Usage::
 (Debian: ``apt-get install calculix-ccx``); runs one ccx at a time with
 OMP_NUM_THREADS=1 unless ``--threads`` says otherwise.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -59,36 +60,99 @@ ROOT = HERE.parents[2]
 # Sources and reasons in README.md next to this file.
 MATERIALS = {
     "cfrp_ud": dict(
-        E1=130.0, E2=9.0, E3=9.0, G12=5.0, G13=5.0, G23=3.2, nu12=0.30, nu13=0.30, nu23=0.40, density=1560.0,
+        E1=130.0,
+        E2=9.0,
+        E3=9.0,
+        G12=5.0,
+        G13=5.0,
+        G23=3.2,
+        nu12=0.30,
+        nu13=0.30,
+        nu23=0.40,
+        density=1560.0,
         note="T300/epoxy-like unidirectional ply, transversely isotropic (G23 = E2 / (2 (1 + nu23)) = 3.21)",
     ),
     "gfrp_ud": dict(
-        E1=40.0, E2=10.0, E3=10.0, G12=4.0, G13=4.0, G23=3.5, nu12=0.28, nu13=0.28, nu23=0.43, density=1950.0,
+        E1=40.0,
+        E2=10.0,
+        E3=10.0,
+        G12=4.0,
+        G13=4.0,
+        G23=3.5,
+        nu12=0.28,
+        nu13=0.28,
+        nu23=0.43,
+        density=1950.0,
         note="E-glass/epoxy unidirectional ply, transversely isotropic (G23 = E2 / (2 (1 + nu23)) = 3.50)",
     ),
     "cfrp_fabric": dict(
-        E1=62.0, E2=60.0, E3=9.0, G12=4.8, G13=3.5, G23=3.5, nu12=0.05, nu13=0.30, nu23=0.30, density=1500.0,
+        E1=62.0,
+        E2=60.0,
+        E3=9.0,
+        G12=4.8,
+        G13=3.5,
+        G23=3.5,
+        nu12=0.05,
+        nu13=0.30,
+        nu23=0.30,
+        density=1500.0,
         note="woven (plain/twill) carbon/epoxy skin",
     ),
     "pvc_foam": dict(
-        E1=0.10, E2=0.10, E3=0.10, G12=0.035, G13=0.035, G23=0.035,
-        nu12=0.10 / (2 * 0.035) - 1, nu13=0.10 / (2 * 0.035) - 1, nu23=0.10 / (2 * 0.035) - 1, density=80.0,
+        E1=0.10,
+        E2=0.10,
+        E3=0.10,
+        G12=0.035,
+        G13=0.035,
+        G23=0.035,
+        nu12=0.10 / (2 * 0.035) - 1,
+        nu13=0.10 / (2 * 0.035) - 1,
+        nu23=0.10 / (2 * 0.035) - 1,
+        density=80.0,
         note="cross-linked PVC foam core, H80-like, taken isotropic (nu = E / 2G - 1 = 0.4286)",
     ),
     "aluminium": dict(
-        E1=70.0, E2=70.0, E3=70.0, G12=70.0 / 2.66, G13=70.0 / 2.66, G23=70.0 / 2.66,
-        nu12=0.33, nu13=0.33, nu23=0.33, density=2700.0, note="aluminium alloy, isotropic (G = E / 2(1 + nu))",
+        E1=70.0,
+        E2=70.0,
+        E3=70.0,
+        G12=70.0 / 2.66,
+        G13=70.0 / 2.66,
+        G23=70.0 / 2.66,
+        nu12=0.33,
+        nu13=0.33,
+        nu23=0.33,
+        density=2700.0,
+        note="aluminium alloy, isotropic (G = E / 2(1 + nu))",
     ),
     "soft_adhesive": dict(
-        E1=1.0, E2=1.0, E3=1.0, G12=1.0 / 2.8, G13=1.0 / 2.8, G23=1.0 / 2.8,
-        nu12=0.40, nu13=0.40, nu23=0.40, density=1150.0,
+        E1=1.0,
+        E2=1.0,
+        E3=1.0,
+        G12=1.0 / 2.8,
+        G13=1.0 / 2.8,
+        G23=1.0 / 2.8,
+        nu12=0.40,
+        nu13=0.40,
+        nu23=0.40,
+        density=1150.0,
         note="flexible epoxy / polyurethane bond line, isotropic (G = E / 2(1 + nu))",
     ),
     "spruce": dict(
-        E1=11.0, E2=0.90, E3=0.50, G12=0.70, G13=0.65, G23=0.040, nu12=0.37, nu13=0.42, nu23=0.47, density=450.0,
-        note=("quarter-sawn Norway spruce, 1 = longitudinal L, 2 = radial R, 3 = tangential T; ratios in the "
-              "range of the Wood Handbook (USDA FPL, ch. 5) for spruce; rolling shear G23 = G_RT = E2 / 22.5 "
-              "= G12 / 17.5"),
+        E1=11.0,
+        E2=0.90,
+        E3=0.50,
+        G12=0.70,
+        G13=0.65,
+        G23=0.040,
+        nu12=0.37,
+        nu13=0.42,
+        nu23=0.47,
+        density=450.0,
+        note=(
+            "quarter-sawn Norway spruce, 1 = longitudinal L, 2 = radial R, 3 = tangential T; ratios in the "
+            "range of the Wood Handbook (USDA FPL, ch. 5) for spruce; rolling shear G23 = G_RT = E2 / 22.5 "
+            "= G12 / 17.5"
+        ),
     ),
 }
 
@@ -104,42 +168,57 @@ def _bonded(plate_mm: float, adhesive_mm: float = 0.1):
 
 CASES = {
     "thick_laminate": dict(
-        description=("Symmetric 0-deg hybrid laminate GFRP/CFRP/GFRP, 6 mm thick (a/h = 33): transverse shear "
-                     "of the low-shear-modulus plies matters; bonded configurations add a soft 0.1 mm bond "
-                     "line and a 1 mm aluminium plate under or over it."),
-        length_mm=200.0, width_mm=150.0,
+        description=(
+            "Symmetric 0-deg hybrid laminate GFRP/CFRP/GFRP, 6 mm thick (a/h = 33): transverse shear "
+            "of the low-shear-modulus plies matters; bonded configurations add a soft 0.1 mm bond "
+            "line and a 1 mm aluminium plate under or over it."
+        ),
+        length_mm=200.0,
+        width_mm=150.0,
         layers=[("gfrp_ud", 1.5, 0.0), ("cfrp_ud", 3.0, 0.0), ("gfrp_ud", 1.5, 0.0)],
         configurations=_bonded(1.0),
     ),
     "laminate_on_adhesive": dict(
-        description=("Cross-ply CFRP(0)/GFRP(90)/CFRP(0), 5 mm thick; bonded configurations add a soft 0.1 mm "
-                     "bond line and a 2 mm aluminium plate, where the bond line's shear flexibility matters."),
-        length_mm=200.0, width_mm=150.0,
+        description=(
+            "Cross-ply CFRP(0)/GFRP(90)/CFRP(0), 5 mm thick; bonded configurations add a soft 0.1 mm "
+            "bond line and a 2 mm aluminium plate, where the bond line's shear flexibility matters."
+        ),
+        length_mm=200.0,
+        width_mm=150.0,
         layers=[("cfrp_ud", 1.25, 0.0), ("gfrp_ud", 2.5, 90.0), ("cfrp_ud", 1.25, 0.0)],
         configurations=_bonded(2.0),
     ),
     "foam_sandwich": dict(
-        description=("Sandwich of woven CFRP skins (0.5 mm) on a 6 mm PVC foam core: core shear dominates the "
-                     "higher modes (the case where single-layer plate theories are weakest); bonded "
-                     "configurations add a soft 0.1 mm bond line and a 1 mm aluminium plate."),
-        length_mm=250.0, width_mm=200.0,
+        description=(
+            "Sandwich of woven CFRP skins (0.5 mm) on a 6 mm PVC foam core: core shear dominates the "
+            "higher modes (the case where single-layer plate theories are weakest); bonded "
+            "configurations add a soft 0.1 mm bond line and a 1 mm aluminium plate."
+        ),
+        length_mm=250.0,
+        width_mm=200.0,
         layers=[("cfrp_fabric", 0.5, 0.0), ("pvc_foam", 6.0, 0.0), ("cfrp_fabric", 0.5, 0.0)],
         configurations=_bonded(1.0),
     ),
     "spruce_plate": dict(
-        description=("A quarter-sawn spruce plate, 240 x 180 x 8 mm (a/h = 30 along the grain, 22.5 across), "
-                     "one layer, grain along the length: wood's rolling shear modulus G23 = G_RT is about 20x "
-                     "smaller than E2 and 17x smaller than G12, so transverse shear matters at moderate "
-                     "slenderness and the default G13 = G23 = G12 is badly wrong; bonded configurations add a "
-                     "soft 0.1 mm bond line and a 1 mm aluminium plate under or over it."),
-        length_mm=240.0, width_mm=180.0,
+        description=(
+            "A quarter-sawn spruce plate, 240 x 180 x 8 mm (a/h = 30 along the grain, 22.5 across), "
+            "one layer, grain along the length: wood's rolling shear modulus G23 = G_RT is about 20x "
+            "smaller than E2 and 17x smaller than G12, so transverse shear matters at moderate "
+            "slenderness and the default G13 = G23 = G12 is badly wrong; bonded configurations add a "
+            "soft 0.1 mm bond line and a 1 mm aluminium plate under or over it."
+        ),
+        length_mm=240.0,
+        width_mm=180.0,
         layers=[("spruce", 8.0, 0.0)],
         configurations=_bonded(1.0),
     ),
     "thick_homogeneous": dict(
-        description=("Control: a homogeneous 150 x 100 x 8 mm aluminium plate (a/h = 19), where first-order "
-                     "shear deformation with k = 5/6 and rotary inertia is known to be excellent."),
-        length_mm=150.0, width_mm=100.0,
+        description=(
+            "Control: a homogeneous 150 x 100 x 8 mm aluminium plate (a/h = 19), where first-order "
+            "shear deformation with k = 5/6 and rotary inertia is known to be excellent."
+        ),
+        length_mm=150.0,
+        width_mm=100.0,
         layers=[("aluminium", 8.0, 0.0)],
         configurations=[dict(name="original", bottom=[], top=[])],
     ),
@@ -244,7 +323,9 @@ class Mesh:
         ex, ey, ez = np.meshgrid(np.arange(self.nx), np.arange(self.ny), np.arange(self.nz), indexing="ij")
         ex, ey, ez = (a.transpose(2, 1, 0).ravel() for a in (ex, ey, ez))  # x fastest
         offsets = (NATURAL + 1).astype(int)
-        return ids[2 * ex[:, None] + offsets[:, 0], 2 * ey[:, None] + offsets[:, 1], 2 * ez[:, None] + offsets[:, 2]]
+        return ids[
+            2 * ex[:, None] + offsets[:, 0], 2 * ey[:, None] + offsets[:, 1], 2 * ez[:, None] + offsets[:, 2]
+        ]
 
     def locate(self, x: float, y: float, z: float) -> tuple[int, np.ndarray]:
         """Element number (0-based, order of ``elements``) holding the point, and its
@@ -254,8 +335,13 @@ class Mesh:
         ey = int(np.clip(np.searchsorted(ys, y, side="right") - 1, 0, self.ny - 1))
         ez = int(np.clip(np.searchsorted(self.z_levels, z, side="right") - 1, 0, self.nz - 1))
         z0, z1 = self.z_levels[ez], self.z_levels[ez + 1]
-        natural = np.array([2 * (x - xs[ex]) / (xs[ex + 1] - xs[ex]) - 1, 2 * (y - ys[ey]) / (ys[ey + 1] - ys[ey]) - 1,
-                            2 * (z - z0) / (z1 - z0) - 1])
+        natural = np.array(
+            [
+                2 * (x - xs[ex]) / (xs[ex + 1] - xs[ex]) - 1,
+                2 * (y - ys[ey]) / (ys[ey + 1] - ys[ey]) - 1,
+                2 * (z - z0) / (z1 - z0) - 1,
+            ]
+        )
         return (ez * self.ny + ey) * self.nx + ex, natural
 
 
@@ -268,9 +354,30 @@ def _with_midpoints(lines: np.ndarray) -> np.ndarray:
 
 #: Natural coordinates of the 20 nodes of C3D20 in ccx/Abaqus order.
 NATURAL = np.array(
-    [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
-     [0, -1, -1], [1, 0, -1], [0, 1, -1], [-1, 0, -1], [0, -1, 1], [1, 0, 1], [0, 1, 1], [-1, 0, 1],
-     [-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=float)
+    [
+        [-1, -1, -1],
+        [1, -1, -1],
+        [1, 1, -1],
+        [-1, 1, -1],
+        [-1, -1, 1],
+        [1, -1, 1],
+        [1, 1, 1],
+        [-1, 1, 1],
+        [0, -1, -1],
+        [1, 0, -1],
+        [0, 1, -1],
+        [-1, 0, -1],
+        [0, -1, 1],
+        [1, 0, 1],
+        [0, 1, 1],
+        [-1, 0, 1],
+        [-1, -1, 0],
+        [1, -1, 0],
+        [1, 1, 0],
+        [-1, 1, 0],
+    ],
+    dtype=float,
+)
 
 
 def shape_functions(points: np.ndarray) -> np.ndarray:
@@ -285,7 +392,12 @@ def shape_functions(points: np.ndarray) -> np.ndarray:
     for axis in range(3):
         mid = NATURAL[:, axis] == 0
         others = [b for b in range(3) if b != axis]
-        out[:, mid] = (1 - p[:, 0, axis:axis + 1] ** 2) * one[:, mid][:, :, others[0]] * one[:, mid][:, :, others[1]] / 4
+        out[:, mid] = (
+            (1 - p[:, 0, axis : axis + 1] ** 2)
+            * one[:, mid][:, :, others[0]]
+            * one[:, mid][:, :, others[1]]
+            / 4
+        )
     return out
 
 
@@ -308,8 +420,16 @@ def build_mesh(case: dict, layers, level: Level, quarter: bool) -> Mesh:
 # ccx input, run and results
 
 
-def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: int, materials=None,
-                extra: tuple[str, ...] = (), heavier: tuple[np.ndarray, float] | None = None) -> None:
+def write_input(
+    path: Path,
+    mesh: Mesh,
+    layers,
+    boundary: str | None,
+    n_eigen: int,
+    materials=None,
+    extra: tuple[str, ...] = (),
+    heavier: tuple[np.ndarray, float] | None = None,
+) -> None:
     """A ccx deck: nodes, C3D20R elements by layer, materials (mm, N, t, s -> MPa, t/mm^3;
     ``materials`` defaults to ``MATERIALS``), orientations for turned plies, mirror
     conditions of a symmetry class, ``extra`` model lines (e.g. a point mass), *FREQUENCY.
@@ -324,8 +444,10 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
     per_layer = mesh.nx * mesh.ny
     element_layer = np.repeat(mesh.element_layer, per_layer)
     heavy = set() if heavier is None else {int(e) for e in heavier[0]}
-    sets = [(f"LAYER{index + 1}", index, [e for e in np.nonzero(element_layer == index)[0] if e not in heavy])
-            for index in range(len(layers))]
+    sets = [
+        (f"LAYER{index + 1}", index, [e for e in np.nonzero(element_layer == index)[0] if e not in heavy])
+        for index in range(len(layers))
+    ]
     if heavy:
         sets.append(("SENSOR", int(element_layer[min(heavy)]), sorted(heavy)))
     for elset, _, members in sets:
@@ -342,8 +464,19 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
         lines += [
             f"*MATERIAL, NAME={label}",
             "*ELASTIC, TYPE=ENGINEERING CONSTANTS",
-            ",".join(f"{v:.10g}" for v in (1e3 * c["E1"], 1e3 * c["E2"], 1e3 * c["E3"], c["nu12"], c["nu13"],
-                                            c["nu23"], 1e3 * c["G12"], 1e3 * c["G13"])),
+            ",".join(
+                f"{v:.10g}"
+                for v in (
+                    1e3 * c["E1"],
+                    1e3 * c["E2"],
+                    1e3 * c["E3"],
+                    c["nu12"],
+                    c["nu13"],
+                    c["nu23"],
+                    1e3 * c["G12"],
+                    1e3 * c["G13"],
+                )
+            ),
             f"{1e3 * c['G23']:.10g}",
             "*DENSITY",
             f"{(c['density'] + added) * 1e-12:.10g}",
@@ -353,8 +486,10 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
         option = ""
         if angle != 0.0:
             a = math.radians(angle)
-            lines += [f"*ORIENTATION, NAME=OR{elset}, SYSTEM=RECTANGULAR",
-                      f"{math.cos(a):.12g},{math.sin(a):.12g},0,{-math.sin(a):.12g},{math.cos(a):.12g},0"]
+            lines += [
+                f"*ORIENTATION, NAME=OR{elset}, SYSTEM=RECTANGULAR",
+                f"{math.cos(a):.12g},{math.sin(a):.12g},0,{-math.sin(a):.12g},{math.cos(a):.12g},0",
+            ]
             option = f", ORIENTATION=OR{elset}"
         material = "SENSOR_BASE" if elset == "SENSOR" else name.upper()
         lines.append(f"*SOLID SECTION, ELSET={elset}, MATERIAL={material}{option}")
@@ -363,7 +498,7 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
         on_y = ids[:, -1, :][ids[:, -1, :] > 0]
         for name, nodes in (("MIRRORX", on_x), ("MIRRORY", on_y)):
             lines.append(f"*NSET, NSET={name}")
-            lines += [",".join(map(str, nodes[i:i + 16])) for i in range(0, len(nodes), 16)]
+            lines += [",".join(map(str, nodes[i : i + 16])) for i in range(0, len(nodes), 16)]
         sx, sy = boundary
         lines.append("*BOUNDARY")
         lines += ["MIRRORX,1,1"] if sx == "S" else ["MIRRORX,2,3"]
@@ -373,8 +508,13 @@ def write_input(path: Path, mesh: Mesh, layers, boundary: str | None, n_eigen: i
 
 
 def run_ccx(job: Path, threads: int) -> float:
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), CCX_NPROC_EQUATION_SOLVER=str(threads),
-               CCX_NPROC_STIFFNESS=str(threads), CCX_NPROC_RESULTS=str(threads))
+    env = dict(
+        os.environ,
+        OMP_NUM_THREADS=str(threads),
+        CCX_NPROC_EQUATION_SOLVER=str(threads),
+        CCX_NPROC_STIFFNESS=str(threads),
+        CCX_NPROC_RESULTS=str(threads),
+    )
     start = time.perf_counter()
     result = subprocess.run(["ccx", "-i", job.name], cwd=job.parent, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
@@ -390,7 +530,7 @@ def read_eigenvalues(dat: Path) -> np.ndarray:
     text = dat.read_text().splitlines()
     start = next(i for i, line in enumerate(text) if "E I G E N V A L U E   O U T P U T" in line)
     values = []
-    for line in text[start + 1:]:
+    for line in text[start + 1 :]:
         parts = line.split()
         if "P A R T I C I P A T I O N" in line:
             break
@@ -486,7 +626,7 @@ def sample(solved: Solved, case: dict, z_mid: float, nx: int, ny: int) -> np.nda
 
 
 def nodal_label(w: np.ndarray) -> str:
-    """"(nx,ny)": nodal lines crossed along x and along y (signs where |w| > 5 % of max,
+    """ "(nx,ny)": nodal lines crossed along x and along y (signs where |w| > 5 % of max,
     sign changes counted per grid line, median)."""
     significant = np.where(np.abs(w) > 0.05 * np.abs(w).max(), np.sign(w), 0)
 
@@ -510,8 +650,9 @@ def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 # Solving one configuration on one mesh
 
 
-def solve(case: dict, layers, level: Level, workdir: Path, tag: str, threads: int, quarter: bool = True,
-          log=print) -> dict:
+def solve(
+    case: dict, layers, level: Level, workdir: Path, tag: str, threads: int, quarter: bool = True, log=print
+) -> dict:
     """Every elastic mode found (merged from the four quarter runs, or the full model),
     sorted, with the complete range only: frequencies, w-shares, grid shapes, labels."""
     classes = list(SYMMETRY_CLASSES) if quarter else [None]
@@ -535,13 +676,17 @@ def solve(case: dict, layers, level: Level, workdir: Path, tag: str, threads: in
         lam, disp = lam[order], disp[order]
         rigid, elastic = lam[:n_rigid], lam[n_rigid:]
         if np.abs(rigid).max() > 1e-6 * elastic[0]:
-            raise RuntimeError(f"{job}: the {n_rigid} lowest modes are not rigid-body modes "
-                               f"(omega^2 {rigid} vs first elastic {elastic[0]:.6g})")
+            raise RuntimeError(
+                f"{job}: the {n_rigid} lowest modes are not rigid-body modes "
+                f"(omega^2 {rigid} vs first elastic {elastic[0]:.6g})"
+            )
         densities = np.repeat(densities_by_layer[mesh.element_layer], mesh.nx * mesh.ny)
         shares = kinetic_shares(mesh, elements, densities, disp[n_rigid:])
         runs.append(Solved(mesh, elements, elastic, disp[n_rigid:], cls, shares, seconds))
-        log(f"    {tag} {cls or 'full'}: {len(coords)} nodes, {len(elements)} elements, "
-            f"{3 * len(coords)} DOFs, {seconds:.1f} s")
+        log(
+            f"    {tag} {cls or 'full'}: {len(coords)} nodes, {len(elements)} elements, "
+            f"{3 * len(coords)} DOFs, {seconds:.1f} s"
+        )
     complete = min(r.eigenvalues.max() for r in runs)  # every mode below this was found
     z_mid = sum(t for _, t, _ in layers) / 2
     modes = []
@@ -551,8 +696,9 @@ def solve(case: dict, layers, level: Level, workdir: Path, tag: str, threads: in
         for k, lam in enumerate(r.eigenvalues):
             if lam > complete * (1 + 1e-12):
                 continue
-            modes.append(dict(lam=lam, share=float(r.w_share[k]), cls=r.cls, grid=grid[k],
-                              label_w=fine[k, 2]))
+            modes.append(
+                dict(lam=lam, share=float(r.w_share[k]), cls=r.cls, grid=grid[k], label_w=fine[k, 2])
+            )
     modes.sort(key=lambda m: m["lam"])
     for m in modes:
         m["frequency_hz"] = math.sqrt(max(m["lam"], 0.0)) / (2 * math.pi)
@@ -560,15 +706,23 @@ def solve(case: dict, layers, level: Level, workdir: Path, tag: str, threads: in
         m["label"] = nodal_label(m["label_w"]) if m["classification"] == "flexural" else "in-plane"
     n_flexural = sum(m["classification"] == "flexural" for m in modes)
     if len(modes) < MIN_ELASTIC or n_flexural < MIN_FLEXURAL:
-        raise RuntimeError(f"{tag}: only {len(modes)} elastic ({n_flexural} flexural) modes complete; "
-                           f"raise ELASTIC_PER_CLASS")
+        raise RuntimeError(
+            f"{tag}: only {len(modes)} elastic ({n_flexural} flexural) modes complete; "
+            f"raise ELASTIC_PER_CLASS"
+        )
     dofs = sum(3 * len(r.mesh.lattice()[1]) for r in runs)
-    return dict(modes=modes, wall_s=wall, mesh=dict(
-        level=level.name, elements_along_length=level.n_length,
-        elements_along_width=max(2, 2 * round(level.n_length * case["width_mm"] / case["length_mm"] / 2)),
-        elements_through_layers=[layer_elements(t, level.thickness_factor) for _, t, _ in layers],
-        model="quarter, 4 symmetry classes" if quarter else "full", dofs_total=dofs,
-    ))
+    return dict(
+        modes=modes,
+        wall_s=wall,
+        mesh=dict(
+            level=level.name,
+            elements_along_length=level.n_length,
+            elements_along_width=max(2, 2 * round(level.n_length * case["width_mm"] / case["length_mm"] / 2)),
+            elements_through_layers=[layer_elements(t, level.thickness_factor) for _, t, _ in layers],
+            model="quarter, 4 symmetry classes" if quarter else "full",
+            dofs_total=dofs,
+        ),
+    )
 
 
 # ---------------------------------------------------------------------------------------
@@ -601,17 +755,30 @@ def spec_toml(name: str, case: dict, materials=None) -> str:
     def layer(m, t, a):
         return f'{{ material = "{m}", thickness_mm = {t:g}, angle_deg = {a:g} }}'
 
-    lines = ["[specimen]", f'name = "{name}"', f"length_mm = {case['length_mm']:g}",
-             f"width_mm = {case['width_mm']:g}", "layers = [   # bottom to top"]
+    lines = [
+        "[specimen]",
+        f'name = "{name}"',
+        f"length_mm = {case['length_mm']:g}",
+        f"width_mm = {case['width_mm']:g}",
+        "layers = [   # bottom to top",
+    ]
     lines += [f"  {layer(*l)}," for l in case["layers"]]
     lines += ["]", ""]
     for m in used + added:
         c = materials[m]
-        lines += [f"[materials.{m}]", f"E1_GPa = {_sig(c['E1'])!r}", f"E2_GPa = {_sig(c['E2'])!r}",
-                  f"G12_GPa = {_sig(c['G12'])!r}", f"nu12 = {_sig(c['nu12'])!r}",
-                  f"density_kg_m3 = {_sig(c['density'])!r}", f"G13_GPa = {_sig(c['G13'])!r}",
-                  f"G23_GPa = {_sig(c['G23'])!r}", f"identify = {'true' if m in used else 'false'}",
-                  f'note = "3-D: E3 = {c["E3"]:g} GPa, nu13 = {c["nu13"]:.4g}, nu23 = {c["nu23"]:.4g}"', ""]
+        lines += [
+            f"[materials.{m}]",
+            f"E1_GPa = {_sig(c['E1'])!r}",
+            f"E2_GPa = {_sig(c['E2'])!r}",
+            f"G12_GPa = {_sig(c['G12'])!r}",
+            f"nu12 = {_sig(c['nu12'])!r}",
+            f"density_kg_m3 = {_sig(c['density'])!r}",
+            f"G13_GPa = {_sig(c['G13'])!r}",
+            f"G23_GPa = {_sig(c['G23'])!r}",
+            f"identify = {'true' if m in used else 'false'}",
+            f'note = "3-D: E3 = {c["E3"]:g} GPa, nu13 = {c["nu13"]:.4g}, nu23 = {c["nu23"]:.4g}"',
+            "",
+        ]
     for c in case["configurations"]:
         lines += ["[[configurations]]", f'name = "{c["name"]}"']
         for side in ("bottom", "top"):
@@ -662,8 +829,11 @@ def mirrored(result: dict) -> dict:
     shares; at the mid-plane (u, v, w) -> (u, v, -w)."""
     flip = np.array([1.0, 1.0, -1.0])[:, None, None]
     modes = [dict(m, grid=m["grid"] * flip, label_w=-m["label_w"]) for m in result["modes"]]
-    mesh = dict(result["mesh"], model=result["mesh"]["model"] + "; z-mirror of the twin configuration's solution",
-                elements_through_layers=result["mesh"]["elements_through_layers"][::-1])
+    mesh = dict(
+        result["mesh"],
+        model=result["mesh"]["model"] + "; z-mirror of the twin configuration's solution",
+        elements_through_layers=result["mesh"]["elements_through_layers"][::-1],
+    )
     return dict(modes=modes, wall_s=0.0, mesh=mesh)
 
 
@@ -674,46 +844,64 @@ def convergence_summary(modes: list[dict], levels) -> dict:
         return {}
 
     def worst(selection):
-        changes = [abs(m["relative_change_last_two"]) for m in selection if m["relative_change_last_two"] is not None]
+        changes = [
+            abs(m["relative_change_last_two"]) for m in selection if m["relative_change_last_two"] is not None
+        ]
         return _sig(max(changes), 3) if len(changes) == len(selection) else None
 
     flexural = [m for m in modes if m["classification"] == "flexural"][:10]
-    return dict(between=[levels[-2].name, levels[-1].name], max_abs_change_first10_elastic=worst(modes[:10]),
-                max_abs_change_first10_flexural=worst(flexural))
+    return dict(
+        between=[levels[-2].name, levels[-1].name],
+        max_abs_change_first10_elastic=worst(modes[:10]),
+        max_abs_change_first10_flexural=worst(flexural),
+    )
 
 
 def dumps(data) -> str:
     """JSON with every innermost list of numbers on one line."""
     text = json.dumps(data, indent=1)
-    return re.sub(r"\[\s*([-+0-9.eE,\s]+?)\s*\]", lambda m: "[" + ", ".join(m.group(1).split()).replace(",,", ",") + "]",
-                  text)
+    return re.sub(
+        r"\[\s*([-+0-9.eE,\s]+?)\s*\]",
+        lambda m: "[" + ", ".join(m.group(1).split()).replace(",,", ",") + "]",
+        text,
+    )
 
 
 def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, log=print) -> dict:
     case = CASES[name]
     started = time.perf_counter()
     out = dict(
-        case=name, description=case["description"],
+        case=name,
+        description=case["description"],
         made_with=dict(
-            solver=ccx_version(), element="C3D20R (20-node hexahedron, reduced integration 2x2x2)",
+            solver=ccx_version(),
+            element="C3D20R (20-node hexahedron, reduced integration 2x2x2)",
             eigensolver="ARPACK shift-invert (ccx *FREQUENCY, SPOOLES), free-free, no boundary conditions "
-                        "on the full plate",
+            "on the full plate",
             symmetry="quarter model [0, L/2] x [0, W/2], four mirror-condition classes merged (every layer's "
-                     "material axes along the plate edges)",
-            script="tests/data/solid3d/generate.py", threads=threads,
-            levels=[dict(name=l.name, elements_along_length=l.n_length, thickness_factor=l.thickness_factor)
-                    for l in levels],
+            "material axes along the plate edges)",
+            script="tests/data/solid3d/generate.py",
+            threads=threads,
+            levels=[
+                dict(name=l.name, elements_along_length=l.n_length, thickness_factor=l.thickness_factor)
+                for l in levels
+            ],
             thickness_rule=f"elements through a layer = factor x max(1, ceil(t / {THICKNESS_UNIT_MM:g} mm))",
-            mid_surface="geometric mid-plane of each configuration's whole stack (the plate models' reference "
-                        "surface); u, v, w interpolated with the element shape functions",
-            grid=dict(nx=GRID[0], ny=GRID[1], x="x_i = L i / 12", y="y_j = W j / 10",
-                      layout="shapes are [row j (y)][column i (x)]"),
+            mid_surface="geometric mid-plane of each configuration's whole stack "
+            "(the plate models' reference surface); u, v, w interpolated with the element shape functions",
+            grid=dict(
+                nx=GRID[0],
+                ny=GRID[1],
+                x="x_i = L i / 12",
+                y="y_j = W j / 10",
+                layout="shapes are [row j (y)][column i (x)]",
+            ),
             normalisation="flexural modes: max |w| = 1 on the grid, largest w positive; in-plane modes: "
-                          "max(|u|, |v|) = 1, largest positive",
+            "max(|u|, |v|) = 1, largest positive",
             classification=f"flexural when w carries more than {FLEXURAL_SHARE:g} of the kinetic energy "
-                           "(integrated over the 3-D body), else in-plane",
+            "(integrated over the 3-D body), else in-plane",
             nodal_lines="(nx,ny): nodal lines of w crossed along x and along y, read on a 49 x 41 mid-plane "
-                        "grid (sign changes of w counted per grid line, median)",
+            "grid (sign changes of w counted per grid line, median)",
         ),
         plate=dict(length_mm=case["length_mm"], width_mm=case["width_mm"]),
         layers=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case["layers"]],
@@ -727,13 +915,19 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
                 used.append(m)
     for m in used:
         c = MATERIALS[m]
-        out["materials"][m] = {**{f"{k}_GPa": _sig(c[k]) for k in ("E1", "E2", "E3", "G12", "G13", "G23")},
-                               **{k: _sig(c[k]) for k in ("nu12", "nu13", "nu23")},
-                               "density_kg_m3": c["density"], "note": c["note"]}
+        out["materials"][m] = {
+            **{f"{k}_GPa": _sig(c[k]) for k in ("E1", "E2", "E3", "G12", "G13", "G23")},
+            **{k: _sig(c[k]) for k in ("nu12", "nu13", "nu23")},
+            "density_kg_m3": c["density"],
+            "note": c["note"],
+        }
     timings, solved, mirror_checks = [], {}, []
     for configuration in case["configurations"]:
         layers = stack(case, configuration)
-        log(f"  {name} / {configuration['name']}: {len(layers)} layers, H = {sum(t for _, t, _ in layers):g} mm")
+        log(
+            f"  {name} / {configuration['name']}: {len(layers)} layers, H = {sum(t for _, t, _ in layers):g} "
+            "mm"
+        )
         twin = mirror_twin(case, configuration, solved)
         results = []
         for index, level in enumerate(levels):
@@ -746,16 +940,31 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
                 continue
             tag = f"{name}_{configuration['name']}_{level.name}"
             results.append(solve(case, layers, level, workdir, tag, threads, log=log))
-            timings.append(dict(configuration=configuration["name"], level=level.name,
-                                wall_s=round(results[-1]["wall_s"], 1), dofs=results[-1]["mesh"]["dofs_total"]))
+            timings.append(
+                dict(
+                    configuration=configuration["name"],
+                    level=level.name,
+                    wall_s=round(results[-1]["wall_s"], 1),
+                    dofs=results[-1]["mesh"]["dofs_total"],
+                )
+            )
             if twin is not None:
                 mine = np.array([m["frequency_hz"] for m in results[-1]["modes"][:20]])
                 theirs = np.array([m["frequency_hz"] for m in solved[twin["name"]][index]["modes"][:20]])
                 difference = float(np.max(np.abs(mine / theirs - 1)))
-                mirror_checks.append(dict(configuration=configuration["name"], twin=twin["name"], level=level.name,
-                                          modes_compared=len(mine), max_relative_difference=_sig(difference, 3)))
-                log(f"    {configuration['name']} vs its mirror twin {twin['name']} ({level.name}): "
-                    f"max rel. difference {difference:.2e}")
+                mirror_checks.append(
+                    dict(
+                        configuration=configuration["name"],
+                        twin=twin["name"],
+                        level=level.name,
+                        modes_compared=len(mine),
+                        max_relative_difference=_sig(difference, 3),
+                    )
+                )
+                log(
+                    f"    {configuration['name']} vs its mirror twin {twin['name']} ({level.name}): "
+                    f"max rel. difference {difference:.2e}"
+                )
         solved[configuration["name"]] = results
         finest = results[-1]["modes"]
         matches = [match_to(finest, r["modes"]) for r in results]
@@ -778,24 +987,33 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
                 scale = uv[np.argmax(np.abs(uv))]
             if k >= stored:
                 break
-            modes.append(dict(
-                rank=k + 1, frequency_hz=_sig(m["frequency_hz"]),
-                frequencies_by_level=dict(zip((l.name for l in levels), per_level)),
-                relative_change_last_two=change,
-                classification=m["classification"], w_share=_sig(m["share"], 5),
-                label=m["label"], symmetry_class=m["cls"],
-                w=_grid_list(w / scale), u=_grid_list(u / scale), v=_grid_list(v / scale),
-            ))
-        out["configurations"].append(dict(
-            name=configuration["name"],
-            bottom=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in configuration["bottom"]],
-            top=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in configuration["top"]],
-            total_thickness_mm=_sig(sum(t for _, t, _ in layers)),
-            mid_surface_z_mm=_sig(sum(t for _, t, _ in layers) / 2),
-            meshes=[r["mesh"] for r in results],
-            convergence=convergence_summary(modes, levels),
-            modes=modes,
-        ))
+            modes.append(
+                dict(
+                    rank=k + 1,
+                    frequency_hz=_sig(m["frequency_hz"]),
+                    frequencies_by_level=dict(zip((l.name for l in levels), per_level)),
+                    relative_change_last_two=change,
+                    classification=m["classification"],
+                    w_share=_sig(m["share"], 5),
+                    label=m["label"],
+                    symmetry_class=m["cls"],
+                    w=_grid_list(w / scale),
+                    u=_grid_list(u / scale),
+                    v=_grid_list(v / scale),
+                )
+            )
+        out["configurations"].append(
+            dict(
+                name=configuration["name"],
+                bottom=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in configuration["bottom"]],
+                top=[dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in configuration["top"]],
+                total_thickness_mm=_sig(sum(t for _, t, _ in layers)),
+                mid_surface_z_mm=_sig(sum(t for _, t, _ in layers) / 2),
+                meshes=[r["mesh"] for r in results],
+                convergence=convergence_summary(modes, levels),
+                modes=modes,
+            )
+        )
     if mirror_checks:
         out["made_with"]["mirror_checks"] = mirror_checks
     if verify_full:
@@ -809,12 +1027,17 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
         fq = np.array([m["frequency_hz"] for m in quarter["modes"][:n]])
         ff = np.array([m["frequency_hz"] for m in full["modes"][:n]])
         out["made_with"]["full_model_check"] = dict(
-            configuration=configuration["name"], level=level.name, modes_compared=n,
+            configuration=configuration["name"],
+            level=level.name,
+            modes_compared=n,
             max_relative_difference=_sig(float(np.max(np.abs(fq - ff) / ff)), 3),
-            full_model_wall_s=round(full["wall_s"], 1), quarter_models_wall_s=round(quarter["wall_s"], 1),
+            full_model_wall_s=round(full["wall_s"], 1),
+            quarter_models_wall_s=round(quarter["wall_s"], 1),
         )
-        log(f"    quarter vs full, first {n} elastic modes: max rel. difference "
-            f"{np.max(np.abs(fq - ff) / ff):.2e}")
+        log(
+            f"    quarter vs full, first {n} elastic modes: max rel. difference "
+            f"{np.max(np.abs(fq - ff) / ff):.2e}"
+        )
     out["made_with"]["runs"] = timings
     out["made_with"]["wall_time_s"] = round(time.perf_counter() - started, 1)
     text = spec_toml(name, case)
@@ -825,11 +1048,17 @@ def run_case(name: str, levels, workdir: Path, threads: int, verify_full: bool, 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--case", action="append", choices=sorted(CASES), help="case(s) to run (default: all)")
+    parser.add_argument(
+        "--case", action="append", choices=sorted(CASES), help="case(s) to run (default: all)"
+    )
     parser.add_argument("--quick", action="store_true", help="coarsest mesh only, to check the script")
-    parser.add_argument("--out", type=Path, help="output folder (default: this folder; a temporary one with --quick)")
+    parser.add_argument(
+        "--out", type=Path, help="output folder (default: this folder; a temporary one with --quick)"
+    )
     parser.add_argument("--threads", type=int, default=1, help="threads for ccx (default 1)")
-    parser.add_argument("--no-full-check", action="store_true", help="skip the quarter-versus-full model check")
+    parser.add_argument(
+        "--no-full-check", action="store_true", help="skip the quarter-versus-full model check"
+    )
     parser.add_argument("--keep", action="store_true", help="keep the ccx work folder")
     parser.add_argument("--levels", help="comma-separated mesh levels to run instead (e.g. tiny,coarse)")
     args = parser.parse_args(argv)
@@ -846,8 +1075,14 @@ def main(argv=None) -> int:
         workdir = Path(tempfile.mkdtemp(prefix=f"ccx_{name}_"))
         print(f"{name}: work folder {workdir}", flush=True)
         try:
-            result = run_case(name, levels, workdir, args.threads, not args.no_full_check,
-                              log=lambda s: print(s, flush=True))
+            result = run_case(
+                name,
+                levels,
+                workdir,
+                args.threads,
+                not args.no_full_check,
+                log=lambda s: print(s, flush=True),
+            )
         finally:
             if not args.keep:
                 shutil.rmtree(workdir, ignore_errors=True)
