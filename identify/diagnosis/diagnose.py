@@ -32,17 +32,19 @@ import math
 import os
 import time
 from collections.abc import Callable
+from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
 from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
+from fem.specimen import Specimen
 
 from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
-from ..engine.updating import FitOptions
+from ..engine.updating import FitOptions, Settle
 from ..fitting.budget import with_budget
 from ..fitting.causes import with_causes
 from ..fitting.driver import (
@@ -51,6 +53,7 @@ from ..fitting.driver import (
     PRUNE_FACTOR,
     AddedEffect,
     Prepared,
+    Refit,
     add_effect,
     better_start,
     continued,
@@ -518,9 +521,29 @@ def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
     return max(1, min(2, os.cpu_count() or 1, tasks))
 
 
-def _leader_freed_again(
-    candidates: list[Candidate], held, state: FitResult, measurements: Measurements, nominal, hints, say
-) -> list[Candidate]:
+@dataclass(frozen=True)
+class Round:
+    """What a round's candidate refits share: the fit they add to (``state``), its data
+    (``measurements``: a peak list's peaks as ``state`` matched them), the spec's specimen
+    the estimates are judged against (``nominal``), the point-mass start positions
+    (``hints``) and the worker processes (``pool``, ``n_workers`` refits at a time; None:
+    all here)."""
+
+    state: FitResult
+    measurements: Measurements
+    nominal: Specimen
+    hints: tuple
+    pool: Executor | None = None
+    n_workers: int = 1
+
+    def job(self, prepared: Prepared, below: float | None) -> dict:
+        """The keyword arguments of one candidate's refit (``_add``; without the pool: it
+        may run in a worker process); ``below``: ``prune_below``."""
+        refit = Refit(self.state, self.measurements, self.nominal, CANDIDATE_OPTIONS, Settle.QUICK)
+        return dict(refit=refit, kind=prepared.kind, hints=self.hints, prune_below=below, prepared=prepared)
+
+
+def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -> list[Candidate]:
     """The round's leading candidate (the lowest criterion of those refitted, plausible
     or not) refitted again with the shear moduli ``held`` that ``state`` holds because they
     ran out while other physics was missing (``fitting.held_shear_moduli``) freed, where
@@ -529,18 +552,19 @@ def _leader_freed_again(
     skins' G13/G23 ran out again in each), and the leader is where the freed moduli
     decide the answer (blind13: the point mass alone 12.6 g, 0.72 % RMS, implausible; with
     the plies' G13/G23 free, 4.2 g at the sensor, 0.074 %, consistent)."""
+    state = round_.state
     fitted = [c for c in candidates if c.fit is not None and not shear_moduli_in(c.added.added)]
     if not held or not fitted:
         return candidates
     leader = min(fitted, key=lambda c: c.bic)
-    prepared = prepare_effect(state, leader.kind, hints, free_again=held)
+    prepared = prepare_effect(state, leader.kind, round_.hints, free_again=held)
     if isinstance(prepared, AddedEffect):
         again = _candidate(state, prepared)
     elif not frees_any(prepared, held):
         return candidates  # the data do not see them here (``choose_shear_moduli``): the refit would repeat
     else:
         say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
-        again = _candidate(state, _add(_job(state, prepared, measurements, nominal, hints, None)))
+        again = _candidate(state, _add(round_.job(prepared, None)))
     if again.fit is None or not again.fit.statistics.sum_squares < leader.fit.statistics.sum_squares:
         note = f"{leader.kind} refitted with the held G13, G23 free again: " + (
             again.error
@@ -553,53 +577,29 @@ def _leader_freed_again(
     return [again if c is leader else c for c in candidates]
 
 
-def _job(state: FitResult, prepared: Prepared, measurements: Measurements, nominal, hints, below) -> dict:
-    """The keyword arguments of one candidate's refit (``_add``); ``below``: ``prune_below``."""
-    return dict(
-        state=state,
-        kind=prepared.kind,
-        measurements=measurements,
-        nominal=nominal,
-        hints=hints,
-        settle="quick",
-        skip_singular=True,
-        options=CANDIDATE_OPTIONS,
-        prune_below=below,
-        prepared=prepared,
-    )
-
-
 def _add(job: dict):
     """One candidate's refit, ``add_effect(**job)`` (module level: runs in a worker process)."""
     return add_effect(**job)
 
 
-def _try(
-    state: FitResult,
-    kinds: list[str],
-    measurements: Measurements,
-    nominal,
-    hints,
-    pool,
-    n_workers: int,
-    starts: dict | None = None,
-    free_again=(),
-) -> list[Candidate]:
+def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again=()) -> list[Candidate]:
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
     (here), then refitted most promising first (by the linearised bound), each only when
     it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
     pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from;
     ``free_again``: shear moduli ``state`` holds, freed again with effects that free none
     themselves (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
+    state, pool = round_.state, round_.pool
+    at_once = round_.n_workers if pool else 1
     out, ready = [], []
     for kind in kinds:
-        prepared = prepare_effect(state, kind, hints, (starts or {}).get(kind), free_again)
+        prepared = prepare_effect(state, kind, round_.hints, (starts or {}).get(kind), free_again)
         if isinstance(prepared, AddedEffect):
             out.append(_candidate(state, prepared))
         else:
             ready.append(prepared)
     ready.sort(key=lambda r: -r.bound)
-    for i in range(0, len(ready), n_workers if pool else 1):
+    for i in range(0, len(ready), at_once):
         # Only an answer may prune: an implausible estimate that explains much must not
         # keep the right physics from being refitted, nor may one that does not pay for
         # itself (blind02, held-out: a thickness refit at gain / c 2.2 pruned the
@@ -610,10 +610,7 @@ def _try(
             if c.selectable and c.scaled_gain > MIN_GAIN
         ]
         below = max(explained) if explained else None
-        jobs = [
-            _job(state, r, measurements, nominal, hints, below)
-            for r in ready[i : i + (n_workers if pool else 1)]
-        ]
+        jobs = [round_.job(r, below) for r in ready[i : i + at_once]]
         out += [_candidate(state, a) for a in _added(jobs, pool)]
     return out
 
@@ -627,7 +624,9 @@ def _added(jobs: list[dict], pool) -> list:
         return [_add(job) for job in jobs]
     apart = [effect(job["kind"]).independent_starts for job in jobs]
     pending = {i: pool.submit(_add, job) for i, job in enumerate(jobs) if not apart[i]}
-    here = {i: _add({**job, "pool": pool}) for i, job in enumerate(jobs) if apart[i]}
+    here = {
+        i: _add({**job, "refit": replace(job["refit"], pool=pool)}) for i, job in enumerate(jobs) if apart[i]
+    }
     return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
 
 
@@ -689,22 +688,17 @@ def diagnose(
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
+            this_round = Round(state, measurements, nominal, hints, pool, n_workers)
+
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
                 in_processes = f" in {n_workers} processes" if pool else ""  # noqa: B023
                 say(f"round {number}: trying {', '.join(batch)}{in_processes}")  # noqa: B023
-                return _try(state, batch, measurements, nominal, hints, pool, n_workers, starts)  # noqa: B023
+                return _try(this_round, batch, starts)  # noqa: B023
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if not effect(k).refines])
-            candidates = _leader_freed_again(
-                candidates,
-                held_shear_moduli(state, [c.added for c in selected]),
-                state,
-                measurements,
-                nominal,
-                hints,
-                say,
-            )
+            held_by_state = held_shear_moduli(state, [c.added for c in selected])
+            candidates = _leader_freed_again(this_round, candidates, held_by_state, say)
             restart = restarted_from_spec(trying, state, baseline, respec)
             if restart:
                 # The thin-plate fit ran to its bounds: the shear candidates from the spec's values too.
@@ -809,7 +803,9 @@ def diagnose(
             # matching follows it, so they stay held until the final refit (the measured
             # case is in docs/diagnosis.md, "Peak lists").
             if not rematch:
-                polished = released(polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle="quick")
+                polished = released(
+                    polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle=Settle.QUICK
+                )
             if rematch or (
                 polished.finished
                 and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares)
@@ -884,9 +880,10 @@ def diagnose(
         )
         selected.append(completion)
         state = completion.fit
-    final = _final(state, peak_list, baseline, selected, nominal, say, like=matched) if selected else None
+    problem = Problem(peak_list, baseline, nominal, say)
+    final = _final(problem, state, selected, like=matched) if selected else None
     taken_out = ()
-    determined = _determined_final(final, steps, selected, peak_list, baseline, nominal, say)
+    determined = _determined_final(problem, final, steps, selected)
     if determined is not None:
         final, step = determined
         steps.append(step)
@@ -898,13 +895,7 @@ def diagnose(
 
 
 def _determined_final(
-    final: FitResult | None,
-    steps: list[Step],
-    selected: list[Candidate],
-    measurements: Measurements,
-    baseline: FitResult,
-    nominal,
-    say,
+    problem: Problem, final: FitResult | None, steps: list[Step], selected: list[Candidate]
 ) -> tuple[FitResult, Step] | None:
     """When the final refit fits the frequencies but does not determine its parameters
     (``not_identifiable``: the sensitivity matrix singular at the solution), the last
@@ -921,11 +912,11 @@ def _determined_final(
         return None
     last = selected[-1]
     before = next(s for s in reversed(steps) if s.chosen is last)
-    say(
+    problem.say(
         f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without "
         f"{last.kind}"
     )
-    again = _final(before.start, measurements, baseline, selected[:-1], nominal, say)
+    again = _final(problem, before.start, selected[:-1])
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
     reason = (
@@ -993,7 +984,7 @@ def _completed(
         )
         say(f"trying {kind} " + why.format(" + ".join(completed)))
         candidate = _candidate(
-            state, add_effect(state, kind, measurements, nominal, options=CANDIDATE_OPTIONS)
+            state, add_effect(Refit(state, measurements, nominal, CANDIDATE_OPTIONS), kind)
         )
         if candidate.fit is None or not candidate.selectable:
             continue
@@ -1011,23 +1002,29 @@ def _completed(
     return None
 
 
-def _final(
-    state: FitResult,
-    measurements: Measurements,
-    baseline: FitResult,
-    selected,
-    nominal,
-    say,
-    like: FitResult | None = None,
-) -> FitResult:
+@dataclass(frozen=True)
+class Problem:
+    """What every step of one diagnosis shares: the data as given (``measurements``: a
+    peak list is matched again by the final refit), the thin-plate ``baseline`` fit of
+    them, the spec's specimen (``nominal``) and where progress is told (``say``)."""
+
+    measurements: Measurements
+    baseline: FitResult
+    nominal: Specimen
+    say: Callable[[str], None]
+
+
+def _final(problem: Problem, state: FitResult, selected, like: FitResult | None = None) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
     check (a peak list matched again from ``like``'s matching, default ``state``'s), the
     layer properties the thin-plate fit held freed again where the data now determine
     them (``released``); its status is its own (converged only when consistent with the
     scatter)."""
-    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = continued(state, measurements, FINAL_OPTIONS, settle=True, like=like)
-    result = with_causes(with_budget(released(result, measurements, baseline, nominal, FINAL_OPTIONS)))
+    measurements, baseline = problem.measurements, problem.baseline
+    problem.say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
+    result = continued(state, measurements, FINAL_OPTIONS, Settle.FULL, like=like)
+    released_again = released(result, measurements, baseline, problem.nominal, FINAL_OPTIONS)
+    result = with_causes(with_budget(released_again))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(
         result,

@@ -34,7 +34,7 @@ from .peak_assignment import PeakAssignment, peak_table
 from .peak_screen import SCREEN_TOLERANCE, screen
 from .result import FitResult, FitStatus, Iteration
 from .statistics import ASSUMED_SCATTER_REL
-from .updating import FitOptions, update
+from .updating import FitOptions, Follow, Settle, update
 
 #: Model modes solved beyond the number of peaks of a configuration (spurious peaks and
 #: missing modes shift the ranks by a few).
@@ -176,13 +176,15 @@ def fit_peak_list(
     parameters: list[Parameter] | None = None,
     options: FitOptions = FitOptions(),
     progress: Callable[[Iteration], None] | None = None,
-    effect_of: dict | None = None,
-    start_matches: dict[str, Match] | None = None,
+    follow: Follow = Follow(),
 ) -> FitResult:
     """Identify ``parameters`` from a peak list (no mode numbers): match, fit, match again
     at the solution until settled; the result's ``peaks`` says what became of each peak.
-    ``start_matches`` skips the alignment (e.g. a baseline fit's final matching)."""
+    ``follow.matches`` (``Match`` per configuration) skips the alignment (e.g. a baseline
+    fit's final matching); ``follow.effect_of`` names each parameter's effect.  The final
+    fit settles its pairings in full; the modes are paired afresh in every round."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
+    start_matches, effect_of = follow.matches, follow.effect_of
     notes = []
     matches = start_matches or _match_all(_solver(model, peaks, options), peaks, None)
     if start_matches is None:
@@ -203,9 +205,8 @@ def fit_peak_list(
         ranked = _ranked(peaks, matches)
         if result is None:  # a round whose matching is the last fit's would refit the same problem
             # Rounds while the matching moves skip the pairing checks; the settled one does them.
-            result = update(
-                model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of, settle=False
-            )
+            moving = Follow(effect_of, settle=Settle.NONE)
+            result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, moving)
             history += _renumbered(result.history, history)
             model = result.model  # the last fit's solution: where the next round and the final fit start
         tightening = round_ < len(narrowing)
@@ -239,7 +240,7 @@ def fit_peak_list(
         # below starts from that fit's solution with the new matching.
         notes.append(f"the peak matching had not settled after {MAX_ROUNDS} rounds at the final tolerance")
     ranked = _ranked(peaks, matches)
-    result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, effect_of)
+    result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, Follow(effect_of))
     history += _renumbered(result.history, history)
     assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
     return replace(

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from enum import Enum
 
 import numpy as np
 from scipy.stats import chi2 as chi2_distribution
@@ -98,6 +99,41 @@ class FitOptions:
             validation.number(fields, key, where, low=0.0, low_inclusive=True, error=OptionsError)
         for key in ("max_log_step", "max_linear_step"):
             validation.number(fields, key, where, low=0.0, error=OptionsError)
+
+
+class Settle(Enum):
+    """The pairing check at a converged fit's solution."""
+
+    #: Every pairing the frequencies cannot rule out refitted (``settle_pairings``).
+    FULL = "full"
+    #: Only the re-pairings that lower the misfit at once (``repair``): a candidate's refit.
+    QUICK = "quick"
+    #: None: a fit whose peak matching or parameters still move.
+    NONE = "none"
+
+
+@dataclass(frozen=True)
+class Follow:
+    """How a fit follows an earlier one, and how it ends.
+
+    ``effect_of``: the effect kind each parameter belongs to (for reports; default none);
+    ``pairings``: the modes' pairings followed by shape from the start (None: afresh);
+    ``matches``: a peak list's peak matching to start from (None: the peaks are aligned
+    and screened afresh); ``settle``: the pairing check at the solution.
+    """
+
+    effect_of: dict | None = None
+    pairings: dict | None = None
+    matches: dict | None = None
+    settle: Settle = Settle.FULL
+
+    @classmethod
+    def on(cls, fit, settle: Settle = Settle.QUICK, effect_of: dict | None = None) -> Follow:
+        """A refit that goes on from ``fit`` (a ``FitResult``): its pairings, its peak
+        matching and (unless given) which effect each parameter belongs to."""
+        matches = fit.peaks.matches() if fit.peaks is not None else None
+        effect_of = fit.effect_of if effect_of is None else effect_of
+        return cls(effect_of, fit.pairings, matches, settle)
 
 
 def iterate(
@@ -223,16 +259,14 @@ def update(
     parameters: list[Parameter] | None = None,
     options: FitOptions = FitOptions(),
     progress: Callable[[Iteration], None] | None = None,
-    effect_of: dict[Parameter, str] | None = None,
-    settle: bool | str = True,
-    pairings: dict | None = None,
+    follow: Follow = Follow(),
 ) -> FitResult:
     """Identify ``parameters`` (default: the properties every identified material's
     ``identify`` names) from measured frequencies of all configurations at once, then
-    settle the pairings frequencies cannot rule out (``settle``; an intermediate fit may
-    skip it; "quick": only the re-pairings that lower the misfit at once, ``repair``).
-    ``effect_of`` names the effect kind a parameter belongs to, for reporting;
-    ``pairings``: a previous fit's, followed by shape from the start (default: afresh)."""
+    settle the pairings frequencies cannot rule out (``follow.settle``).  ``follow``: the
+    pairings followed from the start (default: afresh) and which effect each parameter
+    belongs to, for reports (its ``matches`` are a peak list's, not used here)."""
+    effect_of, pairings, settle = follow.effect_of, follow.pairings, follow.settle
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
     if not parameters:
         raise MeasurementError("nothing to identify: mark at least one material with identify = true")
@@ -271,7 +305,7 @@ def update(
         current, stop, tracking = iterate(objective, current, history, options, progress)
         warnings += tracking
     twins, repaired = [], ""
-    if stop.converged and settle:
+    if stop.converged and settle is not Settle.NONE:
 
         def refit(state, branch, max_iterations):
             state, again, _ = iterate(
@@ -279,7 +313,7 @@ def update(
             )
             return state, again
 
-        if settle == "quick":  # a candidate's refit in a diagnosis: only re-pairings that pay at once
+        if settle is Settle.QUICK:  # a candidate's refit in a diagnosis: only re-pairings that pay at once
             current, repaired, notes = quick_repair(objective, current, history, refit)
         else:
             current, repaired, notes, twins = settle_pairings(objective, current, history, refit)
@@ -288,7 +322,7 @@ def update(
             progress(history[-1])
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
-    if settle:
+    if settle is not Settle.NONE:
         uncertainty, merged = uncertainty.with_merged_peaks(
             objective, current, lone_close_modes(objective, current)
         )

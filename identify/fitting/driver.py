@@ -29,7 +29,7 @@ from ..engine.peak_lists import fit_peak_list, matching_cost, model_error
 from ..engine.result import FitResult, FitStatus, Iteration
 from ..engine.statistics import ASSUMED_SCATTER_REL
 from ..engine.ties import Tied, plain
-from ..engine.updating import FitOptions, update
+from ..engine.updating import FitOptions, Follow, Settle, update
 from ..measurements import Measurements
 from .budget import with_budget
 from .causes import with_causes
@@ -42,6 +42,7 @@ from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
 
 #: Iterations of a refit with an effect (from the fit without it).
 EFFECT_ITERATIONS = 40
+_EFFECT_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS)
 #: Independent refits run in parallel processes only after a baseline fit of at least
 #: this long [s]: starting a worker costs about 1 s.
 PARALLEL_FROM_S = 0.5
@@ -161,22 +162,15 @@ def fit(
             effect(kind)  # unknown kinds fail before any work
             if options is not None and options.use_shapes:
                 _shapes_fit(model, kind)
-        return with_damping(
-            with_budget(
-                fit_with_effects(
-                    model,
-                    measurements,
-                    list(effects),
-                    progress=progress,
-                    parameters=parameters,
-                    options=options,
-                    workers=workers,
-                )
-            )
-        )
-    return with_damping(
-        with_budget(fit_layers(model, measurements, parameters, options or FitOptions(), progress))
-    )
+        started = time.perf_counter()
+        baseline = fit_holding_bounds(model, measurements, parameters, options)
+        independent = any(effect(k).independent_starts for k in effects) or not measurements.ranked
+        worth_it = independent and time.perf_counter() - started >= PARALLEL_FROM_S
+        with independent_refits(workers, worth_it) as pool:
+            refit = Refit(baseline, measurements, model.specimen, options or _EFFECT_OPTIONS, pool=pool)
+            return with_damping(with_budget(fit_with_effects(model, list(effects), refit, progress)))
+    fitted = fit_layers(model, measurements, parameters, options or FitOptions(), progress=progress)
+    return with_damping(with_budget(with_causes(fitted)))
 
 
 def _shapes_fit(model: SpecimenModel, kind: str) -> None:
@@ -205,51 +199,34 @@ def fit_layers(
     measurements: Measurements,
     parameters=None,
     options: FitOptions | None = None,
+    follow: Follow = Follow(),
     progress: Callable[[Iteration], None] | None = None,
-    effect_of: dict | None = None,
-    like: FitResult | None = None,
-    explain: bool = True,
-    settle: bool | str = True,
-    pairings: dict | None = None,
 ) -> FitResult:
     """The multi-model updating of ranked measurements, or of a peak list (matched to the
-    model's modes as it goes).  ``like``: a fit of the same peak list whose final matching
-    starts this one (an effect's refit starts from its baseline's).  ``explain``: give a
-    poor fit its likely causes (``causes``).  ``settle``: the pairing check at the solution
-    of ranked data, ``pairings``: a fit's to follow from the start (``updating.update``);
-    ``options`` default ``FitOptions()``."""
+    model's modes as it goes).  ``follow``: what the fit takes over from an earlier one
+    (``Follow.on``: its pairings, its peak matching, which effect each parameter belongs
+    to) and the pairing check at the solution of ranked data (a peak list's final fit
+    settles in full); ``options`` default ``FitOptions()``.  The causes of a poor fit are
+    the caller's to add (``with_causes``)."""
     options = options or FitOptions()
     if measurements.ranked:
-        result = update(model, measurements, parameters, options, progress, effect_of, settle, pairings)
-    else:
-        start = like.peaks.matches() if like is not None and like.peaks is not None else None
-        result = fit_peak_list(model, measurements, parameters, options, progress, effect_of, start)
-    return with_causes(result) if explain else result
+        return update(model, measurements, parameters, options, progress, follow)
+    return fit_peak_list(model, measurements, parameters, options, progress, follow)
 
 
 def continued(
     fit: FitResult,
     measurements: Measurements,
     options: FitOptions,
-    settle: bool | str = "quick",
-    effect_of: dict | None = None,
+    settle: Settle = Settle.QUICK,
     like: FitResult | None = None,
 ) -> FitResult:
     """``fit`` iterated on from where it stopped: its model, parameters, effects and
-    pairing (``effect_of`` default its own); causes of a poor fit are left to the caller.
-    ``like``: the fit whose peak matching a peak list starts from (default ``fit``; a fit
-    made on ``matched_peaks`` has none: the fit whose matching it was made on)."""
-    return fit_layers(
-        fit.model,
-        measurements,
-        list(fit.parameters),
-        options,
-        effect_of=fit.effect_of if effect_of is None else effect_of,
-        like=like or fit,
-        explain=False,
-        settle=settle,
-        pairings=fit.pairings,
-    )
+    pairing; causes of a poor fit are left to the caller.  ``like``: the fit whose peak
+    matching a peak list starts from (default ``fit``; a fit made on ``matched_peaks`` has
+    none: the fit whose matching it was made on)."""
+    follow = replace(Follow.on(like or fit, settle, fit.effect_of), pairings=fit.pairings)
+    return fit_layers(fit.model, measurements, list(fit.parameters), options, follow)
 
 
 def matched_peaks(fit: FitResult, measurements: Measurements) -> Measurements:
@@ -310,57 +287,7 @@ def _matched_again(job: dict) -> FitResult:
     if like is not None:
         # a peak list's final fit checks the pairing in full
         return continued(fit, measurements, options, like=like)
-    return fit_layers(
-        fit.model, measurements, list(fit.parameters), options, effect_of=fit.effect_of, explain=False
-    )
-
-
-def fit_with_effects(
-    model: SpecimenModel,
-    measurements: Measurements,
-    kinds: list[str],
-    comparison=None,
-    progress: Callable[[str], None] | None = None,
-    *,
-    parameters=None,
-    options: FitOptions | None = None,
-    workers: int | None = 1,
-) -> FitResult:
-    """The fit with ``kinds`` switched on, their parameters free, starting from the
-    baseline fit's layer properties (``comparison.fitted`` of a ``compare``, fitted here
-    when not given), one
-    effect after the other (``add_effect``); the last refit checks the pairing in full.
-
-    A point mass starts at each of the positions the residual scan suggests and on a grid
-    over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
-    well are reported.  The transverse-shear effects free the G13 and G23 that the data
-    can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
-    determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
-    not an iteration.  ``parameters``: the layer parameters of the baseline fit (default
-    every identified material's); ``options``: of every fit (default: the baseline's
-    ``FitOptions()``, the refits' ``EFFECT_ITERATIONS`` iterations); ``workers``: processes
-    for the refits that are independent of each other (a point mass's starts, a peak
-    list's two matchings; ``independent_refits``).
-    """
-    if comparison is not None and parameters is not None:
-        raise LayerIdError(
-            "fit_with_effects: give either parameters (the baseline is fitted with them) or a "
-            "comparison (its fit is the baseline), not both"
-        )
-    started = time.perf_counter()
-    if comparison is None:
-        baseline = fit_holding_bounds(model, measurements, parameters, options)
-        hints = point_mass_hints(baseline)
-    else:
-        baseline = comparison.fitted
-        hints = point_mass_starts(
-            baseline.model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy
-        )
-    worth_it = (any(effect(k).independent_starts for k in kinds) or not measurements.ranked) and (
-        comparison is not None or time.perf_counter() - started >= PARALLEL_FROM_S
-    )
-    with independent_refits(workers, worth_it) as pool:
-        return _fit_with_effects(model, measurements, kinds, baseline, hints, progress, options, pool)
+    return fit_layers(fit.model, measurements, list(fit.parameters), options, Follow(fit.effect_of))
 
 
 @contextmanager
@@ -387,47 +314,35 @@ def worker_pool(n: int) -> cf.ProcessPoolExecutor:
     return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
 
 
-def _fit_with_effects(
-    model: SpecimenModel,
-    measurements: Measurements,
-    kinds: list[str],
-    baseline: FitResult,
-    hints,
-    progress,
-    options,
-    pool,
+def fit_with_effects(
+    model: SpecimenModel, kinds: list[str], refit: Refit, progress: Callable[[str], None] | None = None
 ) -> FitResult:
+    """The fit with ``kinds`` switched on, their parameters free, starting from the
+    baseline fit (``refit.state``, of the spec's ``model`` to ``refit.measurements``), one
+    effect after the other (``add_effect``); the last refit checks the pairing in full.
+
+    A point mass starts at each of the positions the residual scan suggests and on a grid
+    over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
+    well are reported.  The transverse-shear effects free the G13 and G23 that the data
+    can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
+    determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
+    not an iteration.  ``refit.options``: of every refit; ``refit.pool``: where the refits
+    that are independent of each other run (a point mass's starts, a peak list's two
+    matchings; ``independent_refits``).
+    """
+    measurements, baseline, options, pool = refit.measurements, refit.state, refit.options, refit.pool
     respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
+    hints = point_mass_hints(baseline)
     state, notes = baseline, []
     for number, kind in enumerate(kinds):
         data = matched_peaks(state, measurements)
-        settle = True if number == len(kinds) - 1 and data is measurements else "quick"
+        last = number == len(kinds) - 1 and data is measurements
+        step = replace(refit, state=state, measurements=data, settle=Settle.FULL if last else Settle.QUICK)
         hints = hints if state is baseline else point_mass_hints(state)
-        added = add_effect(
-            state,
-            kind,
-            data,
-            model.specimen,
-            hints,
-            settle=settle,
-            progress=progress,
-            options=options,
-            pool=pool,
-        )
+        added = add_effect(step, kind, hints, progress=progress)
         if restarted_from_spec([kind], state, baseline, respec):
-            again = add_effect(
-                state,
-                kind,
-                data,
-                model.specimen,
-                hints,
-                settle=settle,
-                progress=progress,
-                options=options,
-                prepared=prepare_effect(state, kind, hints, respec),
-                pool=pool,
-            )
-            added = better_start(added, again)
+            from_spec = prepare_effect(state, kind, hints, respec)
+            added = better_start(added, add_effect(step, kind, hints, prepared=from_spec, progress=progress))
         if added.result is None:
             advice = (
                 "; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
@@ -437,22 +352,12 @@ def _fit_with_effects(
             )
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
-        state = rematched(
-            added.result, measurements, state, options or FitOptions(max_iterations=EFFECT_ITERATIONS), pool
-        )
+        state = rematched(added.result, measurements, state, options, pool)
     result, reconsidered_notes = with_determined_shear(
-        state, measurements, model.specimen, options, settle=True
+        state, measurements, model.specimen, options, settle=Settle.FULL
     )
     notes += [(kinds[-1], text) for text in reconsidered_notes]
-    result = with_causes(
-        released(
-            result,
-            measurements,
-            baseline,
-            model.specimen,
-            options or FitOptions(max_iterations=EFFECT_ITERATIONS),
-        )
-    )
+    result = with_causes(released(result, measurements, baseline, model.specimen, options))
     return replace(
         result,
         warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
@@ -483,7 +388,7 @@ def fit_holding_bounds(
     off the spec's values, those held at the spec's values (``HOLD_ROUNDS``); the result's
     warnings name each one held.  Only material properties are held, never all of them."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
-    result = fit_layers(model, measurements, parameters, options, explain=False)
+    result = fit_layers(model, measurements, parameters, options)
     held: list[Parameter] = []
     for _ in range(HOLD_ROUNDS):
         bounded = set(at_bounds(result)) | {
@@ -497,9 +402,7 @@ def fit_holding_bounds(
         if not hold or len(hold) >= len(result.parameters):
             break
         held += hold
-        result = fit_layers(
-            model, measurements, [p for p in result.parameters if p not in hold], options, explain=False
-        )
+        result = fit_layers(model, measurements, [p for p in result.parameters if p not in hold], options)
     if not held:
         return result
     notes = tuple(
@@ -524,14 +427,8 @@ def spec_start(model: SpecimenModel, measurements: Measurements, baseline: FitRe
     ]
     if baseline.status is not FitStatus.NOT_CONVERGED and not at_bounds(baseline) and not distorted:
         return None
-    return fit_layers(
-        model,
-        measurements,
-        list(baseline.parameters),
-        FitOptions(max_iterations=0),
-        explain=False,
-        settle=False,
-    )
+    unsettled = Follow(settle=Settle.NONE)
+    return fit_layers(model, measurements, list(baseline.parameters), FitOptions(max_iterations=0), unsettled)
 
 
 def restarted_from_spec(kinds, state: FitResult, baseline: FitResult, respec: FitResult | None) -> list[str]:
@@ -813,20 +710,27 @@ def _describe_start(start) -> str:
 
 @dataclass(frozen=True)
 class Refit:
-    """What the refits of one effect on top of ``state`` share: the data they fit
-    (``measurements``), the spec's specimen their estimates are judged against
-    (``nominal``), the iteration ``options``, the pairing check at the solution
-    (``settle``: True in full, "quick" ``repair``, False none), which effect each
-    parameter belongs to (``effect_of``) and where independent refits may run side by
-    side (``pool``).  Each refit starts from the state's peak matching."""
+    """The context of the refits that add an effect to the fit ``state``: the data they
+    fit (``measurements``), the spec's specimen their estimates are judged against
+    (``nominal``), the iteration ``options`` (default ``EFFECT_ITERATIONS`` iterations),
+    the pairing check at the solution (``settle``), where independent refits may run side
+    by side (``pool``) and which effect each parameter belongs to (``effect_of``, default
+    the state's).  Each refit starts from the state's peak matching."""
 
     state: FitResult
     measurements: Measurements
     nominal: Specimen
-    options: FitOptions
-    settle: bool | str
-    effect_of: dict
+    options: FitOptions = _EFFECT_OPTIONS
+    settle: Settle = Settle.QUICK
     pool: Executor | None = None
+    effect_of: dict | None = None
+
+    def follow(self, pairings: dict, settle: Settle | None = None) -> Follow:
+        """A refit from the state's peak matching, its modes followed from ``pairings``,
+        the pairing check ``settle`` at its solution (default ``self.settle``)."""
+        effect_of = self.state.effect_of if self.effect_of is None else self.effect_of
+        follow = Follow.on(self.state, self.settle if settle is None else settle, effect_of)
+        return replace(follow, pairings=pairings)
 
     def job(self, model: SpecimenModel, parameters, pairings: dict) -> dict:
         """The arguments of one refit of ``model`` with ``parameters`` free, its modes
@@ -836,11 +740,7 @@ class Refit:
             measurements=self.measurements,
             parameters=list(parameters),
             options=self.options,
-            effect_of=self.effect_of,
-            like=self.state,
-            explain=False,
-            settle=self.settle,
-            pairings=pairings,
+            follow=self.follow(pairings),
         )
 
     def fit(self, model: SpecimenModel, parameters, pairings: dict) -> FitResult:
@@ -849,42 +749,32 @@ class Refit:
 
 
 def add_effect(
-    state: FitResult,
+    refit: Refit,
     kind: str,
-    measurements: Measurements,
-    nominal: Specimen,
     hints=(),
     *,
-    settle: bool | str = "quick",
-    progress: Callable[[str], None] | None = None,
-    skip_singular: bool = True,
-    options: FitOptions | None = None,
-    prune_below: float | None = None,
     prepared: Prepared | None = None,
-    pool: Executor | None = None,
+    prune_below: float | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> AddedEffect:
-    """``state`` (a finished fit, its effects on) refitted with effect ``kind`` switched on
-    and its parameters free too.  First one evaluation with the effect (``prepare_effect``,
-    unless ``prepared`` is given): it decides which transverse shear moduli to free and,
-    when the augmented sensitivity matrix is singular (and ``skip_singular``), the refit is
-    not run.  ``hints``: point-mass start positions from the residual scan; ``nominal``: the
-    spec's specimen, against which the estimates' plausibility is judged; ``settle``: the
-    pairing check at the solution (True: in full, "quick": ``repair``); ``options``: of the
-    refit (default ``EFFECT_ITERATIONS`` iterations); ``prune_below``: a reduction of the
-    weighted sum of squares another candidate achieved: a refit whose bound does not come
-    within ``PRUNE_FACTOR`` of it is not run; ``pool``: where a point mass's refits from
-    its several starts run side by side."""
-    options = options or FitOptions(max_iterations=EFFECT_ITERATIONS)
+    """``refit.state`` (a finished fit, its effects on) refitted with effect ``kind``
+    switched on and its parameters free too.  First one evaluation with the effect
+    (``prepare_effect``, unless ``prepared`` is given): it decides which transverse shear
+    moduli to free and, when the augmented sensitivity matrix is singular, the refit is not
+    run.  ``hints``: point-mass start positions from the residual scan; ``prune_below``: a
+    reduction of the weighted sum of squares another candidate achieved: a refit whose
+    bound does not come within ``PRUNE_FACTOR`` of it is not run.  The estimates'
+    plausibility is judged against ``refit.nominal``; a point mass's refits from its
+    several starts run side by side in ``refit.pool``."""
     started = time.perf_counter()
-    ready = prepared or prepare_effect(state, kind, hints)
+    ready = prepared or prepare_effect(refit.state, kind, hints)
     if isinstance(ready, AddedEffect):
         return replace(ready, seconds=time.perf_counter() - started)
-    refit = Refit(state, measurements, nominal, options, settle, state.effect_of, pool)
-    added = _refit(refit, ready, hints, progress, skip_singular, prune_below)
+    added = _refit(refit, ready, hints, progress, prune_below)
     return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
 
 
-def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, prune_below) -> AddedEffect:
+def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> AddedEffect:
     """``add_effect``'s refit of the prepared effect, unless it is singular or pruned."""
     state, kind, new, check, notes = (
         refit.state,
@@ -893,7 +783,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, skip_singular: bool, 
         ready.precheck,
         list(ready.notes),
     )
-    if check.singular and skip_singular:
+    if check.singular:
         return AddedEffect(
             kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
         )
@@ -981,7 +871,7 @@ def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> t
     result: the other ``SHEAR_STARTS`` and the thin-plate limit (``vanishing_shear_start``,
     from where every step can only lower the misfit) are tried, the lowest misfit kept.
     Returns (result, parameters, notes)."""
-    state, measurements, effect_of = refit.state, refit.measurements, refit.effect_of
+    state = refit.state
     shear = shear_moduli_in(new)
     if not shear or not ended_worse(result, state):
         return result, new, []
@@ -991,10 +881,8 @@ def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> t
     def starts():
         for start in _shear_starts(specimen, shear):
             yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
-        model, factor = vanishing_shear_start(state, ready.model, shear, measurements, parameters, effect_of)
-        model, reached = shear_continuation(
-            state, model, shear, factor, measurements, parameters, effect_of, refit.options
-        )
+        model, factor = vanishing_shear_start(refit, ready.model, shear, parameters)
+        model, reached = shear_continuation(refit, model, shear, factor, parameters)
         yield (
             model,
             (
@@ -1012,30 +900,21 @@ def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> t
 
 
 def vanishing_shear_start(
-    state: FitResult, model: SpecimenModel, shear, measurements: Measurements, parameters, effect_of: dict
+    refit: Refit, model: SpecimenModel, shear, parameters
 ) -> tuple[SpecimenModel, float]:
-    """``model`` (``state``'s with a shear theory on) with the ``shear`` moduli at F x G12,
+    """``model`` (``refit.state``'s with a shear theory on) with the ``shear`` moduli at F x G12,
     F so large that its paired frequencies lie within ``VANISHING_SHEAR`` of each
     measurement's scatter of ``state``'s (thin-plate) ones: the shear correction falls as
     1 / G, so two evaluations (``SHEAR_PROBES``) give each mode's f = f_inf + c / F and F
     follows; at most ``SHEAR_BOUND_MARGIN`` of the moduli's upper bound.  What does not
     vanish with the shear (rotary inertia, for the Mindlin and layerwise models) stays.
     Returns (the model, F)."""
-    specimen = model.specimen
+    specimen, measurements = model.specimen, refit.measurements
+    unsettled = refit.follow(refit.state.pairings, Settle.NONE)
 
     def paired_hz(factor: float) -> np.ndarray:
         trial = model.with_values(_shear_values(specimen, shear, (factor, factor)))
-        return fit_layers(
-            trial,
-            measurements,
-            parameters,
-            FitOptions(max_iterations=0),
-            effect_of=effect_of,
-            like=state,
-            explain=False,
-            settle=False,
-            pairings=state.pairings,
-        ).model_hz
+        return fit_layers(trial, measurements, parameters, FitOptions(max_iterations=0), unsettled).model_hz
 
     low, high = SHEAR_PROBES
     c = (paired_hz(low) - paired_hz(high)) / (1 / low - 1 / high)
@@ -1055,14 +934,7 @@ def vanishing_shear_start(
 
 
 def shear_continuation(
-    state: FitResult,
-    model: SpecimenModel,
-    shear,
-    factor: float,
-    measurements: Measurements,
-    parameters,
-    effect_of: dict,
-    options: FitOptions,
+    refit: Refit, model: SpecimenModel, shear, factor: float, parameters
 ) -> tuple[SpecimenModel, float]:
     """From the thin-plate limit (``model``, its ``shear`` moduli at ``factor`` x G12), the
     shear moduli lowered by ``CONTINUATION_STEP`` at a time, the other parameters refitted
@@ -1071,25 +943,18 @@ def shear_continuation(
     there with them undetermined).  Every step kept lowers the misfit.  Returns (the
     model, its factor)."""
     others = [p for p in parameters if p not in shear]
-    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=options.stall_chi2)
+    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=refit.options.stall_chi2)
+    unsettled = refit.follow(refit.state.pairings, Settle.NONE)
 
-    def refit(start: SpecimenModel) -> FitResult:
-        return fit_layers(
-            start,
-            measurements,
-            others,
-            steps,
-            effect_of=effect_of,
-            like=state,
-            explain=False,
-            settle=False,
-            pairings=state.pairings,
-        )
+    def fitted(start: SpecimenModel) -> FitResult:
+        return fit_layers(start, refit.measurements, others, steps, unsettled)
 
-    current = refit(model)
+    current = fitted(model)
     while factor > 1.0:
         lower = max(1.0, factor / CONTINUATION_STEP)
-        trial = refit(current.model.with_values(_shear_values(current.model.specimen, shear, (lower, lower))))
+        trial = fitted(
+            current.model.with_values(_shear_values(current.model.specimen, shear, (lower, lower)))
+        )
         if not trial.statistics.sum_squares < current.statistics.sum_squares:
             break
         current, factor = trial, lower
@@ -1211,7 +1076,7 @@ def with_determined_shear(
     measurements: Measurements,
     nominal: Specimen,
     options: FitOptions | None = None,
-    settle: bool | str = "quick",
+    settle: Settle = Settle.QUICK,
 ) -> tuple[FitResult, list]:
     """The fit refitted until every transverse shear modulus an effect freed is still
     determined at the solution (``shear_moduli.reconsidered``); with the notes saying what
@@ -1225,15 +1090,7 @@ def with_determined_shear(
         parameters, model, note = change
         notes.append(note)
         result = fit_layers(
-            model,
-            measurements,
-            parameters,
-            options or FitOptions(max_iterations=EFFECT_ITERATIONS),
-            effect_of=result.effect_of,
-            like=result,
-            explain=False,
-            settle=settle,
-            pairings=result.pairings,
+            model, measurements, parameters, options or _EFFECT_OPTIONS, Follow.on(result, settle)
         )
     return result, notes
 
@@ -1244,7 +1101,7 @@ def released(
     baseline: FitResult,
     nominal: Specimen,
     options: FitOptions,
-    settle: bool | str = True,
+    settle: Settle = Settle.FULL,
 ) -> FitResult:
     """``result`` refitted with the layer properties the thin-plate fit held
     (``fit_holding_bounds``) free again where the data then determine them: all at once,
@@ -1269,17 +1126,8 @@ def released(
     first_hz = float(result.measurements.table["frequency_hz"].min())
 
     def freeing(fitted: FitResult, free: list[Parameter]) -> FitResult | None:
-        freed = fit_layers(
-            fitted.model,
-            measurements,
-            list(fitted.parameters) + free,
-            options,
-            effect_of=fitted.effect_of,
-            like=fitted,
-            explain=False,
-            settle=settle,
-            pairings=fitted.pairings,
-        )
+        free_too = list(fitted.parameters) + free
+        freed = fit_layers(fitted.model, measurements, free_too, options, Follow.on(fitted, settle))
         if (
             not freed.finished
             or any(p in free for p in at_bounds(freed))

@@ -13,7 +13,7 @@ from fem.specimen import Parameter
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import diagnose
 from identify.fitting import driver
-from identify.fitting.driver import NOT_WORSE_CHI2, add_effect, point_mass_hints
+from identify.fitting.driver import NOT_WORSE_CHI2, Refit, add_effect, point_mass_hints
 from identify.fitting.plausibility import plate_mass
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
@@ -40,7 +40,7 @@ def test_a_suspension_refit_ends_no_worse_than_its_baseline(heavy_sensor_baselin
     zero while the layers lagged; from the vanishing start it ends at or below the
     baseline."""
     model, data, baseline = heavy_sensor_baseline
-    added = add_effect(baseline, "suspension", data, model.specimen)
+    added = add_effect(Refit(baseline, data, model.specimen), "suspension")
     assert added.result.statistics.sum_squares <= baseline.statistics.sum_squares + NOT_WORSE_CHI2
 
 
@@ -60,7 +60,7 @@ def test_a_point_mass_whose_starts_all_end_worse_is_refitted_from_a_vanishing_ma
 
     monkeypatch.setattr(driver, "fit_layers", recording)
     monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
-    added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
+    added = add_effect(Refit(baseline, data, model.specimen), "point_mass", point_mass_hints(baseline))
     vanishing = driver.VANISHING_MASS * plate_mass(model.specimen)
     assert started[-1] == pytest.approx(vanishing) and all(m > 100 * vanishing for m in started[:-1])
     assert added.result.statistics.sum_squares <= baseline.statistics.sum_squares + NOT_WORSE_CHI2

@@ -8,9 +8,15 @@ import pytest
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.compare import compare
-from identify.engine.updating import FitOptions
+from identify.engine.updating import FitOptions, Follow, Settle
 from identify.fitting import driver
-from identify.fitting.driver import add_effect, prepare_effect, shear_continuation, vanishing_shear_start
+from identify.fitting.driver import (
+    Refit,
+    add_effect,
+    prepare_effect,
+    shear_continuation,
+    vanishing_shear_start,
+)
 from identify.fitting.plausibility import CORE_MAX_SHEAR_RATIO, MAX_SHEAR_RATIO, implausible
 from identify.recordings.synthetic import synthetic_measurements
 
@@ -94,7 +100,7 @@ def test_a_balsa_core_s_shear_refit_descends_from_the_thin_plate():
     data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
     start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25)))
     baseline = compare(start, data).fitted
-    added = add_effect(baseline, "thick_plate", data, start.specimen)
+    added = add_effect(Refit(baseline, data, start.specimen), "thick_plate")
     assert added.implausible == ()
     assert added.result.statistics.sum_squares < 0.01 * baseline.statistics.sum_squares
 
@@ -114,7 +120,8 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
     prepared = prepare_effect(baseline, "transverse_shear")
     parameters = list(prepared.base) + list(prepared.added)
     shear = [p for p in prepared.added if p.kind in ("G13", "G23")]
-    model, factor = vanishing_shear_start(baseline, prepared.model, shear, data, parameters, {})
+    context = Refit(baseline, data, start.specimen, FitOptions(), effect_of={})
+    model, factor = vanishing_shear_start(context, prepared.model, shear, parameters)
     assert factor > 100
     misfits = []
     fit_layers = driver.fit_layers
@@ -125,7 +132,7 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
         return result
 
     monkeypatch.setattr(driver, "fit_layers", recording)
-    model, reached = shear_continuation(baseline, model, shear, factor, data, parameters, {}, FitOptions())
+    model, reached = shear_continuation(context, model, shear, factor, parameters)
     # the last step may fail
     kept = misfits[:-1] if len(misfits) > 1 and misfits[-1] >= misfits[-2] else misfits
     assert abs(misfits[0] / baseline.statistics.sum_squares - 1) < 0.01 and reached < factor
@@ -135,10 +142,7 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
         data,
         parameters,
         FitOptions(max_iterations=40),
-        like=baseline,
-        explain=False,
-        settle=False,
-        pairings=baseline.pairings,
+        Follow.on(baseline, Settle.NONE),
     )
     assert np.all(np.diff([it.cost for it in refit.history]) <= 0)
     assert refit.statistics.sum_squares < 0.01 * baseline.statistics.sum_squares
@@ -147,10 +151,7 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends(monkeypatch
         data,
         parameters,
         FitOptions(max_iterations=0),
-        like=baseline,
-        explain=False,
-        settle=False,
-        pairings=baseline.pairings,
+        Follow.on(baseline, Settle.NONE),
     )
     assert np.max(np.abs(at_eight.model_hz / baseline.model_hz - 1)) > 0.01
 
@@ -172,7 +173,7 @@ def test_a_failed_shear_refit_tries_every_start_then_the_continuation(monkeypatc
 
     monkeypatch.setattr(driver, "shear_continuation", recording)
     monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
-    added = add_effect(baseline, "transverse_shear", data, start.specimen)
+    added = add_effect(Refit(baseline, data, start.specimen), "transverse_shear")
     assert continued == [True]
     # The core is no unidirectional ply: its other starts are (1, 1) and (0.25, 0.25) x G12.
     assert any(
@@ -191,6 +192,6 @@ def test_a_hold_that_ends_above_the_thin_plate_is_undone():
     data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
     start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25), e3_gpa=None))
     baseline = compare(start, data).fitted
-    added = add_effect(baseline, "thick_plate", data, start.specimen)
+    added = add_effect(Refit(baseline, data, start.specimen), "thick_plate")
     assert added.implausible and any("stay free" in note for note in added.notes), added.notes
     assert added.result.statistics.sum_squares < 0.01 * baseline.statistics.sum_squares

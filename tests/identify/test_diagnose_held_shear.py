@@ -10,6 +10,7 @@ from fem.specimen import Parameter
 from identify import fit
 from identify.fitting.driver import (
     AddedEffect,
+    Refit,
     add_effect,
     held_shear_moduli,
     point_mass_hints,
@@ -51,7 +52,7 @@ def test_a_point_mass_frees_the_shear_moduli_the_state_holds():
     hints = point_mass_hints(state)
     prepared = prepare_effect(state, "point_mass", hints, free_again=held)
     assert g13 in prepared.added and any("free again with point_mass" in n for n in prepared.notes)
-    combined = add_effect(state, "point_mass", data, model.specimen, hints, prepared=prepared).result
+    combined = add_effect(Refit(state, data, model.specimen), "point_mass", hints, prepared=prepared).result
     assert g13 in combined.parameters and combined.statistics.consistent, combined.statistics.reduced_chi2
     mass = next(p for p in combined.parameters if p.kind == "mass")
     assert abs(combined.value(mass) - 3e-3) < 3 * combined.std(mass)

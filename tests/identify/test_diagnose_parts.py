@@ -17,7 +17,7 @@ from identify import fit
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import diagnose
 from identify.engine import ties
-from identify.fitting.driver import add_effect, prepare_effect
+from identify.fitting.driver import Refit, add_effect, prepare_effect
 from identify.fitting.plausibility import MAX_MASS_SHARE, SENSOR_MASS_MAX, implausible, plate_mass
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
@@ -150,7 +150,7 @@ def test_singular_candidate_is_not_iterated(sensor_baseline):
     prepared = prepare_effect(baseline, "thickness")
     assert prepared.precheck.singular, prepared.precheck.describe()
     assert "not identifiable" in prepared.precheck.describe()
-    added = add_effect(baseline, "thickness", data, model.specimen, prepared=prepared)
+    added = add_effect(Refit(baseline, data, model.specimen), "thickness", prepared=prepared)
     assert added.result is None and "not identifiable" in added.error
 
 
@@ -160,7 +160,7 @@ def test_point_mass_refit_finds_the_sensor_and_is_plausible(sensor_baseline):
     model, data, baseline = sensor_baseline
     from identify.fitting.driver import point_mass_hints
 
-    added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
+    added = add_effect(Refit(baseline, data, model.specimen), "point_mass", point_mass_hints(baseline))
     fit = added.result
     mass = next(p for p in fit.parameters if p.kind == "mass")
     assert fit.value(mass) == pytest.approx(3e-3, rel=0.1)

@@ -11,6 +11,7 @@ import pytest
 
 from fem.spec import parse_spec
 from identify.diagnosis.diagnose import diagnose
+from identify.engine.updating import Settle
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
@@ -83,20 +84,20 @@ def test_fit_with_an_effect_rematches_the_peak_list_once(sensor_peaks):
 def test_held_properties_are_freed_only_in_the_final_refit_of_a_peak_list(sensor_peaks, monkeypatch):
     """On a peak list the properties the thin-plate fit held stay held through the rounds
     and are freed in the final refit (``released`` with the full pairing check); with
-    ranked data they are freed as each effect is chosen (``settle="quick"``)."""
+    ranked data they are freed as each effect is chosen (``Settle.QUICK``)."""
     model, peaks = sensor_peaks
     calls = []
     released = diagnosis.released
 
-    def recording(result, measurements, *args, settle=True, **kwargs):
+    def recording(result, measurements, *args, settle=Settle.FULL, **kwargs):
         calls.append((measurements.ranked, settle))
         return released(result, measurements, *args, settle=settle, **kwargs)
 
     monkeypatch.setattr(diagnosis, "released", recording)
     diagnosis.diagnose(model, peaks, ["point_mass"])
-    assert calls == [(False, True)]
+    assert calls == [(False, Settle.FULL)]
     calls.clear()
     ranked = diagnosis.diagnose(
         model, diagnosis.diagnose(model, peaks, ["point_mass"]).final.measurements, ["point_mass"]
     )
-    assert ranked.selected and (True, "quick") in calls
+    assert ranked.selected and (True, Settle.QUICK) in calls

@@ -14,7 +14,7 @@ from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
 from identify.engine.result import FitStatus
-from identify.fitting.driver import AddedEffect, add_effect, point_mass_hints
+from identify.fitting.driver import AddedEffect, Refit, add_effect, point_mass_hints
 from identify.fitting.precheck import Precheck
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
@@ -28,7 +28,7 @@ def sensor_point_mass():
     data = synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=8, labels="close")
     model = start_model().with_options(modes=8)
     baseline = compare(model, data).fitted
-    added = add_effect(baseline, "point_mass", data, model.specimen, point_mass_hints(baseline))
+    added = add_effect(Refit(baseline, data, model.specimen), "point_mass", point_mass_hints(baseline))
     return baseline, added
 
 
@@ -173,7 +173,7 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 
     monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
-    out = diagnose_module._try(state, ["orientation", "thickness"], None, None, (), None, 1)
+    out = diagnose_module._try(diagnose_module.Round(state, None, None, ()), ["orientation", "thickness"])
     assert refitted == (["thickness"] if pruned else ["thickness", "orientation"])
     assert [c.kind for c in out] == ["thickness", "orientation"]
 
@@ -216,12 +216,13 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
     final = _fit(final_status, rms=2e-4, condition=3e9)
     calls = []
 
-    def refit(state, measurements, baseline, chosen, nominal, say):
+    def refit(problem, state, chosen, like=None):
         calls.append((state, [c.kind for c in chosen]))
         return _fit(FitStatus.POOR_FIT, rms=4e-4, condition=again_condition)
 
     monkeypatch.setattr(diagnose_module, "_final", refit)
-    out = diagnose_module._determined_final(final, steps, selected, None, None, None, lambda text: None)
+    problem = diagnose_module.Problem(None, None, None, lambda text: None)
+    out = diagnose_module._determined_final(problem, final, steps, selected)
     if not dropped:
         assert out is None
         return

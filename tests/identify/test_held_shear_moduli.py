@@ -39,7 +39,7 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
         prepared, model=prepared.model.with_values({steel[0]: 0.25 * g12, steel[1]: 0.25 * g12})
     )
     ran_out = replace(state, model=prepared.model.with_values({steel[0]: 100 * g12}))
-    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
+    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20))
     result, new, notes, held = _held_shear(
         refit, prepared, ran_out, list(prepared.added), list(prepared.base)
     )
@@ -85,21 +85,19 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
     monkeypatch.setattr(diagnose_module, "_add", refit)
     # the round's start: only its criterion is read
     state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))
-    out = diagnose_module._leader_freed_again(
-        [layerwise, leader, other], steel, state, None, None, (), lambda t: None
-    )
+    round_ = diagnose_module.Round(state, None, None, ())
+    out = diagnose_module._leader_freed_again(round_, [layerwise, leader, other], steel, lambda t: None)
     assert calls == [(("point_mass",), steel)]
     assert out[0] is layerwise and out[2] is other
     if kept == "again":
         assert out[1].fit.statistics.sum_squares == 10.0
     else:
         assert out[1].fit is leader.fit and "not lower: kept without them" in out[1].note
-    assert diagnose_module._leader_freed_again([leader], (), None, None, None, (), lambda t: None) == [leader]
+    nowhere = diagnose_module.Round(None, None, None, ())
+    assert diagnose_module._leader_freed_again(nowhere, [leader], (), lambda t: None) == [leader]
     # The data do not see them at this state (nothing of them freed): no refit that would repeat the leader's.
     monkeypatch.setattr(
         diagnose_module, "prepare_effect", lambda *a, **k: SimpleNamespace(kind="point_mass", added=())
     )
     monkeypatch.setattr(diagnose_module, "_add", lambda job: pytest.fail("refitted without freeing anything"))
-    assert diagnose_module._leader_freed_again([leader], steel, state, None, None, (), lambda t: None) == [
-        leader
-    ]
+    assert diagnose_module._leader_freed_again(round_, [leader], steel, lambda t: None) == [leader]

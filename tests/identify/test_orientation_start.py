@@ -59,7 +59,7 @@ def test_the_orientation_refit_starts_on_the_side_the_data_favour(turned_core):
     assert all(prepared.model.value(p) == prepared.model.value(ANGLES[0]) < 0 for p in ANGLES)
     assert any("of 2 starts" in n for n in prepared.notes) and prepared.bound > 20.0  # 2.3 from +3 deg
     assert len(prepared.others) == 1 and prepared.others[0].value(ANGLES[1]) > 0
-    result = add_effect(state, "orientation", data, model.specimen, prepared=prepared).result
+    result = add_effect(Refit(state, data, model.specimen), "orientation", prepared=prepared).result
     assert result.statistics.consistent, result.statistics.reduced_chi2
     assert abs(result.value(ANGLES[1]) - math.radians(-6.0)) < 3 * result.std(ANGLES[1])
 
@@ -73,7 +73,7 @@ def test_a_refit_that_ends_worse_than_its_state_is_refitted_from_the_other_start
     diverged = replace(
         state, statistics=replace(state.statistics, sum_squares=2 * state.statistics.sum_squares)
     )
-    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20), "quick", state.effect_of)
+    refit = Refit(state, data, model.specimen, FitOptions(max_iterations=20))
     result, notes = _other_starts(refit, prepared, diverged, list(prepared.base + prepared.added))
     assert result.statistics.sum_squares <= state.statistics.sum_squares
     assert len(notes) == 1 and "refitted from layer1.angle = 3 deg" in notes[0]
