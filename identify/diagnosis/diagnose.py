@@ -38,45 +38,25 @@ from dataclasses import dataclass, replace
 from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
-from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict
-from fem.specimen import Specimen
+from fem.solver.sensitivity import Verdict
 
 from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions, Settle
-from ..fitting.budget import with_budget
-from ..fitting.causes import with_causes
 from ..fitting.driver import (
     EFFECT_ITERATIONS,
     PARALLEL_FROM_S,
     PRUNE_FACTOR,
     AddedEffect,
-    Prepared,
     Refit,
-    add_effect,
-    better_start,
-    continued,
-    ended_worse,
-    frees_any,
-    held_shear_moduli,
-    matched_peaks,
-    point_mass_hints,
-    point_mass_starts,
-    prepare_effect,
-    released,
-    rematched,
-    restarted_from_spec,
-    shear_moduli_in,
-    spec_start,
-    with_determined_shear,
+    Refitting,
     worker_pool,
 )
-from ..fitting.plausibility import plausible_first
-from ..fitting.precheck import SINGULAR_GROWTH, Precheck
 from ..measurements import Measurements
 from ..reporting.diagnosis_report import diagnosis_text, diagnosis_view
 from .compare import Comparison, compare
+from .ranking import plausible_first
 
 #: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
 #: strong" evidence, 2 ln B > 10).
@@ -130,7 +110,8 @@ class Candidate:
         return self.added.result
 
     @property
-    def precheck(self) -> Precheck | None:
+    def precheck(self):
+        """The conditioning before the refit (a ``fitting.Precheck``; None when not run)."""
         return self.added.precheck
 
     @property
@@ -150,8 +131,7 @@ class Candidate:
         check, fit = self.precheck, self.fit
         if fit is None or check is None:
             return False
-        at = fit.uncertainty.condition_number
-        return bool(not at <= SINGULAR_ABOVE and not at <= SINGULAR_GROWTH * check.base_condition_number)
+        return check.singular_at(fit.uncertainty.condition_number)
 
     @property
     def selectable(self) -> bool:
@@ -523,24 +503,26 @@ def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
 
 @dataclass(frozen=True)
 class Round:
-    """What a round's candidate refits share: the fit they add to (``state``), its data
-    (``measurements``: a peak list's peaks as ``state`` matched them), the spec's specimen
-    the estimates are judged against (``nominal``), the point-mass start positions
-    (``hints``) and the worker processes (``pool``, ``n_workers`` refits at a time; None:
-    all here)."""
+    """What a round's candidate refits share: their context (``refit``: the fit they add
+    to, its data, the spec's specimen, ``CANDIDATE_OPTIONS``), the point-mass start
+    positions (``hints``) and the worker processes (``pool``, ``n_workers`` refits at a
+    time; None: all here)."""
 
-    state: FitResult
-    measurements: Measurements
-    nominal: Specimen
+    refit: Refit
     hints: tuple
     pool: Executor | None = None
     n_workers: int = 1
 
-    def job(self, prepared: Prepared, below: float | None) -> dict:
-        """The keyword arguments of one candidate's refit (``_add``; without the pool: it
-        may run in a worker process); ``below``: ``prune_below``."""
-        refit = Refit(self.state, self.measurements, self.nominal, CANDIDATE_OPTIONS, Settle.QUICK)
-        return dict(refit=refit, kind=prepared.kind, hints=self.hints, prune_below=below, prepared=prepared)
+    @property
+    def state(self) -> FitResult:
+        return self.refit.state
+
+    def job(self, prepared, below: float | None) -> dict:
+        """The keyword arguments of the refit of one ``prepared`` candidate (``_add``;
+        without the pool: it may run in a worker process); ``below``: ``prune_below``."""
+        return dict(
+            refit=self.refit, kind=prepared.kind, hints=self.hints, prune_below=below, prepared=prepared
+        )
 
 
 def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -> list[Candidate]:
@@ -553,14 +535,14 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
     decide the answer (blind13: the point mass alone 12.6 g, 0.72 % RMS, implausible; with
     the plies' G13/G23 free, 4.2 g at the sensor, 0.074 %, consistent)."""
     state = round_.state
-    fitted = [c for c in candidates if c.fit is not None and not shear_moduli_in(c.added.added)]
+    fitted = [c for c in candidates if c.fit is not None and not c.added.shear_moduli]
     if not held or not fitted:
         return candidates
     leader = min(fitted, key=lambda c: c.bic)
-    prepared = prepare_effect(state, leader.kind, round_.hints, free_again=held)
+    prepared = round_.refit.prepare(leader.kind, round_.hints, free_again=held)
     if isinstance(prepared, AddedEffect):
         again = _candidate(state, prepared)
-    elif not frees_any(prepared, held):
+    elif not prepared.frees_any(held):
         return candidates  # the data do not see them here (``choose_shear_moduli``): the refit would repeat
     else:
         say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
@@ -578,8 +560,10 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
 
 
 def _add(job: dict):
-    """One candidate's refit, ``add_effect(**job)`` (module level: runs in a worker process)."""
-    return add_effect(**job)
+    """One candidate's refit, ``Refit.add`` (module level: runs in a worker process)."""
+    return job["refit"].add(
+        job["kind"], job["hints"], prepared=job["prepared"], prune_below=job["prune_below"]
+    )
 
 
 def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again=()) -> list[Candidate]:
@@ -593,7 +577,7 @@ def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again
     at_once = round_.n_workers if pool else 1
     out, ready = [], []
     for kind in kinds:
-        prepared = prepare_effect(state, kind, round_.hints, (starts or {}).get(kind), free_again)
+        prepared = round_.refit.prepare(kind, round_.hints, (starts or {}).get(kind), free_again)
         if isinstance(prepared, AddedEffect):
             out.append(_candidate(state, prepared))
         else:
@@ -653,9 +637,8 @@ def diagnose(
     if comparison.at_noise_level:
         say("the baseline fits at the noise level: no effect refitted")
         return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
-    nominal = model.specimen
     peak_list = measurements
-    respec = spec_start(model, matched_peaks(baseline, peak_list), baseline)
+    refitting = Refitting.from_baseline(model, peak_list, baseline)
     state, selected, steps, closed = baseline, [], [], set()
     # refinement -> (round, chi^2 it explained beyond, of what)
     margins: dict[str, tuple[int, float, str]] = {}
@@ -663,7 +646,6 @@ def diagnose(
     try:
         for number in range(1, len(kinds) + 1):
             round_started = time.perf_counter()
-            measurements = matched_peaks(state, peak_list)  # the candidates' data: the state's matched peaks
             trying = _eligible_kinds(kinds, [c.kind for c in selected], closed)
             if not trying:
                 steps.append(
@@ -677,18 +659,13 @@ def diagnose(
                     )
                 )
                 break
-            hints = (
-                point_mass_starts(
-                    model, comparison.point_mass_hints, comparison.point_map, comparison.node_xy
-                )
-                if state is baseline
-                else point_mass_hints(state)
-            )
+            hints = refitting.hints(state, comparison)
             n_workers = _workers(workers, len(trying), baseline_seconds)
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
-            this_round = Round(state, measurements, nominal, hints, pool, n_workers)
+            # the candidates' data: a peak list's peaks as the state matched them
+            this_round = Round(refitting.refit(state, CANDIDATE_OPTIONS), hints, pool, n_workers)
 
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
                 in_processes = f" in {n_workers} processes" if pool else ""  # noqa: B023
@@ -697,14 +674,14 @@ def diagnose(
 
             names = [c.kind for c in selected]
             candidates = run([k for k in trying if not effect(k).refines])
-            held_by_state = held_shear_moduli(state, [c.added for c in selected])
+            held_by_state = refitting.held_shear(state, [c.added for c in selected])
             candidates = _leader_freed_again(this_round, candidates, held_by_state, say)
-            restart = restarted_from_spec(trying, state, baseline, respec)
+            restart = refitting.restarted(trying, state)
             if restart:
                 # The thin-plate fit ran to its bounds: the shear candidates from the spec's values too.
-                again = {c.kind: c for c in run(restart, {k: respec for k in restart})}
+                again = {c.kind: c for c in run(restart, {k: refitting.respec for k in restart})}
                 candidates = [
-                    _candidate(state, better_start(c.added, again[c.kind].added)) if c.kind in again else c
+                    _candidate(state, c.added.or_from_spec(again[c.kind].added)) if c.kind in again else c
                     for c in candidates
                 ]
             refining = [
@@ -718,12 +695,12 @@ def diagnose(
                 # model's solves cost 6-18 of the single layer's: few iterations from there).
                 candidates += run(refining, {k: _refined_start(k, candidates) for k in refining})
                 margins.update(_margins(refining, candidates, number))
-            candidates = _continue_unfinished(candidates, measurements, state, say)
+            candidates = _continue_unfinished(this_round, candidates, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
             above = tuple(
                 c.kind
                 for c in candidates
-                if c.fit is not None and c.fit.finished and ended_worse(c.fit, state)
+                if c.fit is not None and c.fit.finished and this_round.refit.ended_worse(c.fit)
             )
             finished = [c for c in candidates if c.eligible]
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
@@ -790,12 +767,8 @@ def diagnose(
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = (
-                rematched(best.fit, peak_list, state, FINAL_OPTIONS, pool)
-                if rematch
-                else continued(best.fit, peak_list, FINAL_OPTIONS)
-            )
-            polished, notes = with_determined_shear(polished, peak_list, nominal, FINAL_OPTIONS)
+            polished = refitting.polished(best.fit, state, FINAL_OPTIONS, pool)
+            polished, notes = refitting.with_determined_shear(polished, FINAL_OPTIONS)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
             # that the next round's candidates would take up.  Not on a peak list: there a
@@ -803,9 +776,7 @@ def diagnose(
             # matching follows it, so they stay held until the final refit (the measured
             # case is in docs/diagnosis.md, "Peak lists").
             if not rematch:
-                polished = released(
-                    polished, peak_list, baseline, nominal, FINAL_OPTIONS, settle=Settle.QUICK
-                )
+                polished = refitting.released(polished, FINAL_OPTIONS, settle=Settle.QUICK)
             if rematch or (
                 polished.finished
                 and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares)
@@ -852,11 +823,7 @@ def diagnose(
             pool.shutdown()
     completion_started = time.perf_counter()
     matched = state  # the last state a peak list was matched to (the completion is refitted on its matching)
-    completion = (
-        _completed(state, selected, kinds, matched_peaks(state, peak_list), nominal, say)
-        if selected
-        else None
-    )
+    completion = _completed(refitting, state, selected, kinds, say) if selected else None
     if completion is not None:
         before = tuple(c.kind for c in selected)
         completed = " + ".join(sorted(set(before) & set(effect(completion.kind).completes)))
@@ -880,10 +847,9 @@ def diagnose(
         )
         selected.append(completion)
         state = completion.fit
-    problem = Problem(peak_list, baseline, nominal, say)
-    final = _final(problem, state, selected, like=matched) if selected else None
+    final = _final(refitting, state, selected, say, like=matched) if selected else None
     taken_out = ()
-    determined = _determined_final(problem, final, steps, selected)
+    determined = _determined_final(refitting, final, steps, selected, say)
     if determined is not None:
         final, step = determined
         steps.append(step)
@@ -895,7 +861,7 @@ def diagnose(
 
 
 def _determined_final(
-    problem: Problem, final: FitResult | None, steps: list[Step], selected: list[Candidate]
+    refitting: Refitting, final: FitResult | None, steps: list[Step], selected: list[Candidate], say
 ) -> tuple[FitResult, Step] | None:
     """When the final refit fits the frequencies but does not determine its parameters
     (``not_identifiable``: the sensitivity matrix singular at the solution), the last
@@ -912,11 +878,11 @@ def _determined_final(
         return None
     last = selected[-1]
     before = next(s for s in reversed(steps) if s.chosen is last)
-    problem.say(
+    say(
         f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without "
         f"{last.kind}"
     )
-    again = _final(problem, before.start, selected[:-1])
+    again = _final(refitting, before.start, selected[:-1], say)
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
     reason = (
@@ -929,9 +895,7 @@ def _determined_final(
     return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
 
 
-def _continue_unfinished(
-    candidates: list[Candidate], measurements: Measurements, state: FitResult, say
-) -> list[Candidate]:
+def _continue_unfinished(round_: Round, candidates: list[Candidate], say) -> list[Candidate]:
     """Candidates where one that stopped at the iteration limit with a lower criterion than
     every finished one (its misfit still falling) is continued, each at most once."""
     candidates = list(candidates)
@@ -941,17 +905,16 @@ def _continue_unfinished(
             break
         c = ranked[0]
         say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
-        fit = continued(c.fit, measurements, replace(CANDIDATE_OPTIONS, max_iterations=EFFECT_ITERATIONS))
-        extended = _candidate(state, replace(c.added, result=fit))
+        options = replace(CANDIDATE_OPTIONS, max_iterations=FINAL_OPTIONS.max_iterations)
+        fit = round_.refit.continued(c.fit, options)
+        extended = _candidate(round_.state, replace(c.added, result=fit))
         candidates[candidates.index(c)] = extended
         if not extended.eligible:
             break
     return candidates
 
 
-def _completed(
-    state: FitResult, selected, kinds, measurements: Measurements, nominal, say
-) -> Candidate | None:
+def _completed(refitting: Refitting, state: FitResult, selected, kinds, say) -> Candidate | None:
     """The more complete physics from the selection's end: each effect that ``completes`` a
     selected one (``Effect.completes``), a fuller theory in its place first
     (``Effect.replaces``), then what joins it; the first kept is returned.
@@ -983,9 +946,7 @@ def _completed(
             else "beside {} (the more complete physics)"
         )
         say(f"trying {kind} " + why.format(" + ".join(completed)))
-        candidate = _candidate(
-            state, add_effect(Refit(state, measurements, nominal, CANDIDATE_OPTIONS), kind)
-        )
+        candidate = _candidate(state, refitting.refit(state, CANDIDATE_OPTIONS).add(kind))
         if candidate.fit is None or not candidate.selectable:
             continue
         if not completing.replaces:
@@ -1002,35 +963,21 @@ def _completed(
     return None
 
 
-@dataclass(frozen=True)
-class Problem:
-    """What every step of one diagnosis shares: the data as given (``measurements``: a
-    peak list is matched again by the final refit), the thin-plate ``baseline`` fit of
-    them, the spec's specimen (``nominal``) and where progress is told (``say``)."""
-
-    measurements: Measurements
-    baseline: FitResult
-    nominal: Specimen
-    say: Callable[[str], None]
-
-
-def _final(problem: Problem, state: FitResult, selected, like: FitResult | None = None) -> FitResult:
+def _final(refitting: Refitting, state: FitResult, selected, say, like: FitResult | None = None) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
     check (a peak list matched again from ``like``'s matching, default ``state``'s), the
     layer properties the thin-plate fit held freed again where the data now determine
     them (``released``); its status is its own (converged only when consistent with the
     scatter)."""
-    measurements, baseline = problem.measurements, problem.baseline
-    problem.say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = continued(state, measurements, FINAL_OPTIONS, Settle.FULL, like=like)
-    released_again = released(result, measurements, baseline, problem.nominal, FINAL_OPTIONS)
-    result = with_causes(with_budget(released_again))
+    say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
+    result = refitting.continued(state, FINAL_OPTIONS, Settle.FULL, like=like)
+    result = refitting.explained(refitting.released(result, FINAL_OPTIONS))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(
         result,
         warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
         effect_notes=notes,
-        baseline=baseline,
+        baseline=refitting.baseline,
     )
 
 

@@ -486,6 +486,16 @@ class AddedEffect:
     held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
 
+    @property
+    def shear_moduli(self) -> list[Parameter]:
+        """The transverse shear moduli among the parameters it freed."""
+        return shear_moduli_in(self.added)
+
+    def or_from_spec(self, from_spec: AddedEffect) -> AddedEffect:
+        """Of this refit and the same effect's refit ``from_spec`` (from the spec's values),
+        the one with the lower misfit (``better_start``)."""
+        return better_start(self, from_spec)
+
 
 @dataclass(frozen=True)
 class Prepared:
@@ -505,6 +515,10 @@ class Prepared:
     seconds: float = 0.0
     pairings: dict | None = None  # followed from the start of the refit
     others: tuple = ()  # other start models, most promising first (``Effect.other_starts``)
+
+    def frees_any(self, parameters) -> bool:
+        """Whether the refit moves any of the plain ``parameters``."""
+        return frees_any(self, parameters)
 
 
 def prepare_effect(
@@ -746,6 +760,111 @@ class Refit:
     def fit(self, model: SpecimenModel, parameters, pairings: dict) -> FitResult:
         """One refit (``job``), here."""
         return _fitted(self.job(model, parameters, pairings))
+
+    def prepare(
+        self, kind: str, hints=(), start: FitResult | None = None, free_again=()
+    ) -> Prepared | AddedEffect:
+        """Effect ``kind`` ready to be refitted on top of the state (``prepare_effect``)."""
+        return prepare_effect(self.state, kind, hints, start, free_again)
+
+    def add(self, kind: str, hints=(), **how) -> AddedEffect:
+        """The state refitted with effect ``kind`` on (``add_effect``; ``how``: its
+        ``prepared``, ``prune_below`` and ``progress``)."""
+        return add_effect(self, kind, hints, **how)
+
+    def continued(self, fit: FitResult, options: FitOptions) -> FitResult:
+        """``fit`` (made on this context's data) iterated on from where it stopped."""
+        return continued(fit, self.measurements, options, self.settle)
+
+    def ended_worse(self, result: FitResult) -> bool:
+        """Whether ``result`` ended above the state (``ended_worse``)."""
+        return ended_worse(result, self.state)
+
+
+@dataclass(frozen=True)
+class Refitting:
+    """What the effect refits of one data set share, from one thin-plate fit: the spec's
+    ``model``, the ``measurements`` as given (a peak list's candidate refits are made on
+    its peaks as each state matched them, ``data``), the ``baseline`` fit of them and,
+    where that fit is degenerate, the spec's values as a fit (``respec``, ``spec_start``)."""
+
+    model: SpecimenModel
+    measurements: Measurements
+    baseline: FitResult
+    respec: FitResult | None = None
+
+    @classmethod
+    def from_baseline(
+        cls, model: SpecimenModel, measurements: Measurements, baseline: FitResult
+    ) -> Refitting:
+        """The context of ``baseline``, with its ``respec`` found (one evaluation at most)."""
+        respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
+        return cls(model, measurements, baseline, respec)
+
+    @property
+    def nominal(self) -> Specimen:
+        """The spec's specimen, against which estimates are judged."""
+        return self.model.specimen
+
+    def data(self, state: FitResult) -> Measurements:
+        """What an effect's refit on top of ``state`` fits (``matched_peaks``)."""
+        return matched_peaks(state, self.measurements)
+
+    def refit(
+        self, state: FitResult, options: FitOptions = _EFFECT_OPTIONS, settle: Settle = Settle.QUICK
+    ) -> Refit:
+        """The context of the refits that add an effect to ``state``, on its data."""
+        return Refit(state, self.data(state), self.nominal, options, settle)
+
+    def hints(self, state: FitResult, comparison=None) -> tuple:
+        """Point-mass start positions for a refit on top of ``state``: from the residual
+        scan of ``comparison`` (a ``compare`` of the baseline) when ``state`` is the
+        baseline, else from ``state``'s own (``point_mass_hints``)."""
+        if comparison is None or state is not self.baseline:
+            return point_mass_hints(state)
+        scan = comparison
+        return point_mass_starts(self.model, scan.point_mass_hints, scan.point_map, scan.node_xy)
+
+    def restarted(self, kinds, state: FitResult) -> list[str]:
+        """Of ``kinds`` added to ``state``, those refitted from the spec's values too
+        (``restarted_from_spec``)."""
+        return restarted_from_spec(kinds, state, self.baseline, self.respec)
+
+    def held_shear(self, state: FitResult, selected: Sequence[AddedEffect]) -> tuple[Parameter, ...]:
+        """The shear moduli ``state`` holds because they ran out (``held_shear_moduli``)."""
+        return held_shear_moduli(state, selected)
+
+    def polished(self, fit: FitResult, state: FitResult, options: FitOptions, pool=None) -> FitResult:
+        """A chosen refit (made on ``data(state)``) taken on on the data as given: a peak
+        list's peaks matched again (``rematched``), ranked data iterated on (``continued``)."""
+        if self.measurements.ranked:
+            return continued(fit, self.measurements, options)
+        return rematched(fit, self.measurements, state, options, pool)
+
+    def continued(
+        self,
+        fit: FitResult,
+        options: FitOptions,
+        settle: Settle = Settle.QUICK,
+        like: FitResult | None = None,
+    ) -> FitResult:
+        """``fit`` iterated on, on the data as given (``continued``)."""
+        return continued(fit, self.measurements, options, settle, like=like)
+
+    def with_determined_shear(
+        self, result: FitResult, options: FitOptions, settle: Settle = Settle.QUICK
+    ) -> tuple[FitResult, list]:
+        """``result`` refitted until its freed shear moduli are determined (``with_determined_shear``)."""
+        return with_determined_shear(result, self.measurements, self.nominal, options, settle)
+
+    def released(self, result: FitResult, options: FitOptions, settle: Settle = Settle.FULL) -> FitResult:
+        """``result`` with the properties the baseline held freed where determined (``released``)."""
+        return released(result, self.measurements, self.baseline, self.nominal, options, settle=settle)
+
+    @staticmethod
+    def explained(result: FitResult) -> FitResult:
+        """A final fit with its uncertainty budget and the likely causes of a poor fit."""
+        return with_causes(with_budget(result))
 
 
 def add_effect(

@@ -113,9 +113,15 @@ class Precheck:
 
     @property
     def singular(self) -> bool:
+        return self.singular_at(self.condition_number)
+
+    def singular_at(self, condition_number: float) -> bool:
+        """Whether a refit that ends at ``condition_number`` is singular by the same rule as
+        its start: above the paper's limit and ``SINGULAR_GROWTH`` times the start's
+        without the effect."""
         return bool(
-            not self.condition_number <= SINGULAR_ABOVE
-            and not self.condition_number <= SINGULAR_GROWTH * self.base_condition_number
+            not condition_number <= SINGULAR_ABOVE
+            and not condition_number <= SINGULAR_GROWTH * self.base_condition_number
         )
 
     def describe(self) -> str:

@@ -12,6 +12,7 @@ import pytest
 from fem.spec import parse_spec
 from identify.diagnosis.diagnose import diagnose
 from identify.engine.updating import Settle
+from identify.fitting import driver
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
@@ -87,13 +88,13 @@ def test_held_properties_are_freed_only_in_the_final_refit_of_a_peak_list(sensor
     ranked data they are freed as each effect is chosen (``Settle.QUICK``)."""
     model, peaks = sensor_peaks
     calls = []
-    released = diagnosis.released
+    released = driver.released
 
     def recording(result, measurements, *args, settle=Settle.FULL, **kwargs):
         calls.append((measurements.ranked, settle))
         return released(result, measurements, *args, settle=settle, **kwargs)
 
-    monkeypatch.setattr(diagnosis, "released", recording)
+    monkeypatch.setattr(driver, "released", recording)
     diagnosis.diagnose(model, peaks, ["point_mass"])
     assert calls == [(False, Settle.FULL)]
     calls.clear()

@@ -14,6 +14,7 @@ from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
 from identify.engine.result import FitStatus
+from identify.fitting import driver
 from identify.fitting.driver import AddedEffect, Refit, add_effect, point_mass_hints
 from identify.fitting.precheck import Precheck
 from identify.recordings.synthetic import synthetic_measurements
@@ -171,9 +172,11 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
         )
         return AddedEffect(kind, SimpleNamespace(statistics=statistics, finished=True))
 
-    monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
+    monkeypatch.setattr(driver, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
-    out = diagnose_module._try(diagnose_module.Round(state, None, None, ()), ["orientation", "thickness"])
+    out = diagnose_module._try(
+        diagnose_module.Round(Refit(state, None, None), ()), ["orientation", "thickness"]
+    )
     assert refitted == (["thickness"] if pruned else ["thickness", "orientation"])
     assert [c.kind for c in out] == ["thickness", "orientation"]
 
@@ -216,13 +219,12 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
     final = _fit(final_status, rms=2e-4, condition=3e9)
     calls = []
 
-    def refit(problem, state, chosen, like=None):
+    def refit(refitting, state, chosen, say, like=None):
         calls.append((state, [c.kind for c in chosen]))
         return _fit(FitStatus.POOR_FIT, rms=4e-4, condition=again_condition)
 
     monkeypatch.setattr(diagnose_module, "_final", refit)
-    problem = diagnose_module.Problem(None, None, None, lambda text: None)
-    out = diagnose_module._determined_final(problem, final, steps, selected)
+    out = diagnose_module._determined_final(None, final, steps, selected, lambda text: None)
     if not dropped:
         assert out is None
         return
@@ -283,10 +285,10 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     def refitted(*args, **kwargs):
         raise AssertionError("layerwise refitted in place of the single shear layer it is")
 
-    monkeypatch.setattr(diagnose_module, "add_effect", refitted)
+    monkeypatch.setattr(driver, "add_effect", refitted)
     state = SimpleNamespace(model=single.with_options(transverse_shear=True, rotary_inertia=True))
     selected = [SimpleNamespace(kind="thick_plate")]
-    assert _completed(state, selected, ["thick_plate", "layerwise"], None, None, print) is None
+    assert _completed(None, state, selected, ["thick_plate", "layerwise"], print) is None
 
 
 def test_a_user_registered_effect_takes_part_in_a_diagnosis(paper_model):

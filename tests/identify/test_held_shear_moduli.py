@@ -13,7 +13,8 @@ from identify import fit
 from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.diagnose import Candidate
 from identify.engine.updating import FitOptions
-from identify.fitting.driver import AddedEffect, Refit, _held_shear, prepare_effect
+from identify.fitting import driver
+from identify.fitting.driver import AddedEffect, Prepared, Refit, _held_shear, prepare_effect
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
@@ -76,16 +77,16 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
 
     def prepare(state, kind, hints=(), start=None, free_again=()):
         calls.append(((kind,), tuple(free_again)))
-        return SimpleNamespace(kind=kind, added=tuple(free_again))
+        return Prepared(kind, None, (), tuple(free_again), None, (), 0.0)
 
     def refit(job):
         return _candidate(job["kind"], again_sum_squares, job["prepared"].added).added
 
-    monkeypatch.setattr(diagnose_module, "prepare_effect", prepare)
+    monkeypatch.setattr(driver, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
     # the round's start: only its criterion is read
     state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))
-    round_ = diagnose_module.Round(state, None, None, ())
+    round_ = diagnose_module.Round(Refit(state, None, None), ())
     out = diagnose_module._leader_freed_again(round_, [layerwise, leader, other], steel, lambda t: None)
     assert calls == [(("point_mass",), steel)]
     assert out[0] is layerwise and out[2] is other
@@ -93,11 +94,11 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
         assert out[1].fit.statistics.sum_squares == 10.0
     else:
         assert out[1].fit is leader.fit and "not lower: kept without them" in out[1].note
-    nowhere = diagnose_module.Round(None, None, None, ())
+    nowhere = diagnose_module.Round(Refit(None, None, None), ())
     assert diagnose_module._leader_freed_again(nowhere, [leader], (), lambda t: None) == [leader]
     # The data do not see them at this state (nothing of them freed): no refit that would repeat the leader's.
     monkeypatch.setattr(
-        diagnose_module, "prepare_effect", lambda *a, **k: SimpleNamespace(kind="point_mass", added=())
+        driver, "prepare_effect", lambda *a, **k: Prepared("point_mass", None, (), (), None, (), 0.0)
     )
     monkeypatch.setattr(diagnose_module, "_add", lambda job: pytest.fail("refitted without freeing anything"))
     assert diagnose_module._leader_freed_again(round_, [leader], steel, lambda t: None) == [leader]
