@@ -210,7 +210,7 @@ def run_compare(args) -> int:
     """Where the model fails: residuals per mode and the patterns that point at causes."""
     from .diagnosis.compare import compare
     from .reporting.plots import plot_comparison, plot_point_map
-    from .reporting.report import write_analysis_report
+    from .reporting.report import AnalysisReport, write_analysis_report
 
     if args.report:
         check_report_folder(args.report)
@@ -219,15 +219,17 @@ def run_compare(args) -> int:
     if args.report:
         shown = comparison.fitted.model if comparison.fitted else model
         modes = int(comparison.table["mode"].max()) + 3
-        write_analysis_report(
-            args.report,
-            f"Model against measurement: {model.name}",
-            "compare (identify-layers compare)",
-            model,
-            measurements,
-            comparison.report(),
-            {"comparison.txt": comparison.report(), "comparison.csv": comparison.table.to_csv(index=False)},
-            [
+        report = AnalysisReport(
+            title=f"Model against measurement: {model.name}",
+            analysis="compare (identify-layers compare)",
+            model=model,
+            measurements=measurements,
+            text=comparison.report(),
+            files={
+                "comparison.txt": comparison.report(),
+                "comparison.csv": comparison.table.to_csv(index=False),
+            },
+            figures=[
                 (
                     lambda path: plot_comparison(comparison, shown.with_options(modes=modes), path),
                     "residuals_with_shapes.png",
@@ -239,8 +241,9 @@ def run_compare(args) -> int:
                     "share of the misfit a point mass would explain at each point",
                 ),
             ],
-            comparison,
+            comparison=comparison,
         )
+        write_analysis_report(args.report, report)
         _say(f"report written to {args.report}/")
     print(to_json(comparison.to_dict()) if args.json else comparison.report())
     return 0
@@ -251,7 +254,7 @@ def run_diagnose(args) -> int:
     are then explained (at the noise level, or the refit with the selection converged)."""
     from .diagnosis.diagnose import diagnose
     from .reporting.plots import plot_before_after, plot_point_map
-    from .reporting.report import write_analysis_report
+    from .reporting.report import AnalysisReport, write_analysis_report
 
     if args.report:
         check_report_folder(args.report)
@@ -276,17 +279,17 @@ def run_diagnose(args) -> int:
                     f"error per mode without and with {chain}",
                 ),
             )
-        write_analysis_report(
-            args.report,
-            f"Diagnosis: {model.name}",
-            "diagnose (identify-layers diagnose)",
-            model,
-            measurements,
-            result.report(),
-            {"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
-            figures,
-            result.comparison,
+        report = AnalysisReport(
+            title=f"Diagnosis: {model.name}",
+            analysis="diagnose (identify-layers diagnose)",
+            model=model,
+            measurements=measurements,
+            text=result.report(),
+            files={"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
+            figures=figures,
+            comparison=result.comparison,
         )
+        write_analysis_report(args.report, report)
         _say(f"report written to {args.report}/")
     print(to_json(result.to_dict()) if args.json else result.report())
     return 0 if result.explained else 1

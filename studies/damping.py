@@ -32,7 +32,7 @@ from fem.specimen import Configuration, Specimen
 from identify.fitting.damping import identify_damping
 from identify.fitting.driver import fit
 from identify.measurements import Measurements
-from identify.recordings.synthetic import synthetic_measurements
+from identify.recordings.synthetic import AlsoMeasured, synthetic_measurements
 
 from .common import report_folder, start_model, true_model, write_text
 
@@ -85,7 +85,11 @@ def start() -> SpecimenModel:
 def simulate(seed: int) -> Measurements:
     """10 modes of each configuration with 0.05 % frequency and 3 % damping scatter."""
     return synthetic_measurements(
-        truth(), modes=MODES, noise_rel=FREQUENCY_STD_REL, seed=seed, damping_std_rel=DAMPING_STD_REL
+        truth(),
+        modes=MODES,
+        noise_rel=FREQUENCY_STD_REL,
+        seed=seed,
+        also=AlsoMeasured(damping_std_rel=DAMPING_STD_REL),
     )
 
 

@@ -40,7 +40,7 @@ from identify.engine.pairing import ModePairing, mac_matrix
 from identify.examples import COATED_PLATE_MEASURED
 from identify.measured_shapes import parse_shapes, shapes_frame
 from identify.measurements import Measurements, load_measurements
-from identify.recordings.synthetic import synthetic_measurements
+from identify.recordings.synthetic import AlsoMeasured, synthetic_measurements
 
 from . import blind_diagnosis
 from .common import start_model, true_model, write_text
@@ -62,9 +62,7 @@ def hidden_sensor_data(seed: int, grid: tuple[int, int] = GRID) -> Measurements:
         modes=MODES,
         noise_rel=5e-4,
         seed=seed,
-        shape_grid=grid,
-        shape_noise_rel=SHAPE_NOISE,
-        hammer_std_mm=HAMMER_STD_MM,
+        also=AlsoMeasured(shape_grid=grid, shape_noise_rel=SHAPE_NOISE, hammer_std_mm=HAMMER_STD_MM),
     )
     return Measurements(data.table.assign(mode=0), data.source, data.shapes)
 
@@ -201,9 +199,7 @@ def write_example_shapes(path: Path) -> Path:
         truth,
         modes=int(measured.table["mode"].max()),
         seed=EXAMPLE_SEED,
-        shape_grid=GRID,
-        shape_noise_rel=SHAPE_NOISE,
-        hammer_std_mm=HAMMER_STD_MM,
+        also=AlsoMeasured(shape_grid=GRID, shape_noise_rel=SHAPE_NOISE, hammer_std_mm=HAMMER_STD_MM),
     )
     frame = shapes_frame(made.shapes)
     # Name each shape by the bundled peak of its configuration and rank.

@@ -18,6 +18,7 @@ from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
 from identify.recordings.tap_simulation import (
     Modes,
+    RovingSetup,
     Session,
     TapOptions,
     roving_hits,
@@ -80,11 +81,8 @@ def _roving_test(folder: Path) -> list[str]:
         [300.0, 520.0],
         [0.01, 0.01],
         shapes,
-        (20.0, 15.0),
         points,
-        hits=2,
-        seed=1,
-        options=TapOptions(sample_rate=4000.0, duration_s=1.0),
+        RovingSetup((20.0, 15.0), hits=2, seed=1, options=TapOptions(sample_rate=4000.0, duration_s=1.0)),
     )
     write_roving(hits, folder)
     points.to_csv(folder / "points.csv", index=False)

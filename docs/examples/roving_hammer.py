@@ -27,7 +27,7 @@ import identify
 from fem.solver.mode_shapes import deflection_operator
 from identify.cli import main as identify_layers
 from identify.examples import COATED_PLATE
-from identify.recordings.tap_simulation import TapOptions, roving_hits, write_roving
+from identify.recordings.tap_simulation import RovingSetup, TapOptions, roving_hits, write_roving
 
 TABLE_1 = {
     "bottom_coating": (68.0, 71.0, 24.0, 0.32),
@@ -68,11 +68,8 @@ def tap(truth, configuration: str, points: pd.DataFrame, folder: Path, seed: int
         solution.frequencies_hz[:MODES],
         damping,
         [shape(r) for r in range(MODES)],
-        (SENSOR["x_mm"], SENSOR["y_mm"]),
         points,
-        hits=2,
-        seed=seed,
-        options=RECORDING,
+        RovingSetup((SENSOR["x_mm"], SENSOR["y_mm"]), hits=2, seed=seed, options=RECORDING),
     )
     write_roving(hits, folder)
     points.to_csv(folder / "points.csv", index=False)

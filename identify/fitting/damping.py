@@ -64,6 +64,9 @@ LARGE_LOSS = 0.05
 #: ... and when, at the first-order solution, the complex eigenproblem differs from it by
 #: more than this share of a row's std (one complex solve per configuration decides).
 REFINE_SHARE = 0.1
+#: The refinement on the complex eigenproblem takes at most this many Gauss-Newton steps
+#: (fewer when a step moves no loss factor by more than 0.1 % of its value).
+REFINE_STEPS = 6
 #: A loss factor whose std would exceed this (half the allowed range 0..2) is not
 #: determined by the data: the result is ``not_identifiable``, with no values.
 UNDETERMINED_STD = 0.5 * MAX_LOSS_FACTOR
@@ -445,13 +448,14 @@ def _complex_rows(model: SpecimenModel, rows: _Rows) -> np.ndarray:
     return out
 
 
-def _complex_refit(model, rows: _Rows, targets, start, weighted, sigma, iterations: int = 6):
-    """Least squares on the complex eigenproblem by Gauss-Newton steps with the first-order
-    columns as the Jacobian (exact to O(eta^2), so each step gains a factor ~eta^2; the
-    bounds kept by ``lsq_linear``).  Returns the values and the model loss factors."""
+def _complex_refit(model, rows: _Rows, targets, start, weighted, sigma):
+    """Least squares on the complex eigenproblem by at most ``REFINE_STEPS`` Gauss-Newton
+    steps with the first-order columns as the Jacobian (exact to O(eta^2), so each step
+    gains a factor ~eta^2; the bounds kept by ``lsq_linear``).  Returns the values and the
+    model loss factors."""
     measured = rows.combine(rows.table["eta"].to_numpy())
     x = start
-    for _ in range(iterations):
+    for _ in range(REFINE_STEPS):
         model_eta = _complex_rows(_with_losses(model, targets, x), rows)
         r = (measured - rows.combine(model_eta)) / sigma
         step = lsq_linear(weighted, r, bounds=(-x, MAX_LOSS_FACTOR - x), method="bvls").x

@@ -757,10 +757,10 @@ def extract_peaks(
     _note_below_band(frf, band, notes)
     diagram = stabilisation(frf, sub_bands(frf, band, picked, max_order))
     seeds = _columns(diagram)
-    pole, snr, guided = _refine(frf, seeds, notes)
+    found = _refine(frf, seeds, notes)
     if guide is not None:
-        pole, snr, guided = _look_near_guides(frf, guide, picked, diagram, pole, snr, notes)
-    table = _table(frf, band, lines, pole, snr, guided, picked, notes)
+        found = _look_near_guides(frf, guide, picked, diagram, found, notes)
+    table = _table(frf, lines, found, picked, notes)
     if frf.n_hits == 1:
         notes.append("one hit: std_hz cannot be estimated (NaN); repeat the hit for a scatter")
     return PeakList(configuration, table, frf, band, frf.rejected, tuple(notes), diagram)
@@ -777,7 +777,19 @@ def _note_below_band(frf: AveragedFRF, band, notes: list[str]) -> None:
             )
 
 
-def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
+@dataclass(frozen=True)
+class _Poles:
+    """The modes found: their poles [rad/s] as fitted on the windowed H1 (s = -sigma +
+    i omega; ``correct_for_window`` gives frequency and damping), each one's SNR [-] (its
+    peak over the local fit's residual) and whether each was found only by looking near
+    a guide frequency."""
+
+    pole: np.ndarray
+    snr: np.ndarray
+    guided: np.ndarray
+
+
+def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]) -> _Poles:
     """Fit the stable columns on H1; drop weak or duplicated ones and refit."""
     cache: dict = {}
     while True:
@@ -791,7 +803,7 @@ def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
                 dup[a if snr[a] < snr[b] else b] = True
         drop = bad | dup
         if not drop.any():
-            return pole, snr, np.zeros(len(pole), dtype=bool)
+            return _Poles(pole, snr, np.zeros(len(pole), dtype=bool))
         w = int(np.argmin(np.where(drop, snr, np.inf)))
         reason = (
             "the local fit failed"
@@ -806,12 +818,12 @@ def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]):
         seeds = np.delete(seeds, w)
 
 
-def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
-    """For guide frequencies with no mode within GUIDE_REL: fit the best nearby picked
-    peak, or the diagram's most persistent pole nearby, with the modes found as its
+def _look_near_guides(frf, guide, picked, diagram, found: _Poles, notes) -> _Poles:
+    """For guide frequencies with no mode ``found`` within GUIDE_REL: fit the best nearby
+    picked peak, or the diagram's most persistent pole nearby, with the modes found as its
     neighbours; keep it at SNR >= SNR_GUIDED when the hits confirm it (flag "guided")."""
+    pole, snr, guided = found.pole, found.snr, found.guided
     f, _ = correct_for_window(pole, frf.decay_rate)
-    guided = np.zeros(len(pole), dtype=bool)
     for g in guide:
         if len(f) and np.min(np.abs(f / g - 1)) < GUIDE_REL:
             continue
@@ -842,7 +854,7 @@ def _look_near_guides(frf, guide, picked, diagram, pole, snr, notes):
             notes.append(f"mode at {fn[0]:.2f} Hz found only by looking near the guide frequency {g:.1f} Hz")
         else:
             notes.append(f"nothing found near the guide frequency {g:.1f} Hz (node at the sensor?)")
-    return pole, snr, guided
+    return _Poles(pole, snr, guided)
 
 
 def _on_the_hits(frf: AveragedFRF, pole: np.ndarray) -> bool:
@@ -944,9 +956,9 @@ def _std(frf: AveragedFRF, per_hit: np.ndarray, frequency_hz: np.ndarray) -> tup
     return std, n
 
 
-def _table(frf, band, lines, pole, snr, guided, picked, notes) -> pd.DataFrame:
-    order = np.argsort(pole.imag)
-    pole, snr, guided = pole[order], snr[order], guided[order]
+def _table(frf, lines, found: _Poles, picked, notes) -> pd.DataFrame:
+    order = np.argsort(found.pole.imag)
+    pole, snr, guided = found.pole[order], found.snr[order], found.guided[order]
     f, zeta = correct_for_window(pole, frf.decay_rate)
     per_hit_f, per_hit_zeta = _per_hit(frf, pole)
     std, n = _std(frf, per_hit_f, pole.imag / (2 * np.pi))

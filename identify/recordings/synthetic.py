@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -42,29 +42,40 @@ def _measured_shape(
     return rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 2.0) * (w + noise)
 
 
+@dataclass(frozen=True)
+class AlsoMeasured:
+    """What a virtual experiment measures besides the frequencies (by default nothing).
+
+    damping_std_rel: when given, each mode's damping ratio from the complex eigenproblem of
+    the materials' loss factors (``fem.solver.complex_modes``), with Gaussian noise of this
+    relative std [-] (also written as ``damping_std`` when > 0).
+    shape_grid: when given (nx, ny), every mode's shape measured on that roving-hammer
+    grid (``grid_points``, ``_measured_shape``), with noise of ``shape_noise_rel`` [-] of
+    the largest amplitude, each hit landing ``hammer_std_mm`` [mm] (std per direction)
+    off its grid point.
+    """
+
+    damping_std_rel: float | None = None
+    shape_grid: tuple[int, int] | None = None
+    shape_noise_rel: float = 0.0
+    hammer_std_mm: float = 0.0
+
+
 def synthetic_measurements(
     truth: SpecimenModel,
     modes: int = 5,
     noise_rel: float = 0.0,
     seed: int = 0,
     labels: str = "none",
-    configurations: list[str] | None = None,
-    damping_std_rel: float | None = None,
-    shape_grid: tuple[int, int] | None = None,
-    shape_noise_rel: float = 0.0,
-    hammer_std_mm: float = 0.0,
+    also: AlsoMeasured = AlsoMeasured(),
 ) -> Measurements:
     """The first ``modes`` elastic frequencies of every configuration of ``truth`` (the
-    model that generates the data: its specimen, mesh and effects).
+    model that generates the data: its specimen, mesh and effects; for some configurations
+    only, ``truth.with_configurations(...)``), and what ``also`` says.
 
     noise_rel: relative std of Gaussian noise added (also written as ``std_hz`` when > 0).
     labels: "none", "close" (nodal-line labels of modes within 1 % of a neighbour, as a lab
     would identify close modes by their shapes) or "all".
-    damping_std_rel: when given, each mode's damping ratio from the complex eigenproblem of
-    the materials' loss factors (``fem.solver.complex_modes``), with Gaussian noise of this
-    relative std (also written as ``damping_std`` when > 0).
-    shape_grid: when given (nx, ny), every mode's shape measured on that roving-hammer
-    grid (``grid_points``, ``_measured_shape``: ``shape_noise_rel``, ``hammer_std_mm``).
     """
     solver = truth.with_options(modes=max(modes, truth.options.modes))
     specimen = truth.specimen
@@ -72,10 +83,8 @@ def synthetic_measurements(
     # its own stream: shapes leave the frequencies' noise as it was
     shape_rng = np.random.default_rng([seed, 1])
     rows, shapes = [], []
-    xy = None if shape_grid is None else grid_points(specimen.length, specimen.width, shape_grid)
+    xy = None if also.shape_grid is None else grid_points(specimen.length, specimen.width, also.shape_grid)
     for c in specimen.configurations:
-        if configurations is not None and c.name not in configurations:
-            continue
         solution = solver.solve(c.name)
         f = solution.frequencies_hz[:modes]
         close = np.zeros(modes, dtype=bool)
@@ -96,16 +105,18 @@ def synthetic_measurements(
                         c.name,
                         float(noisy[i]),
                         xy,
-                        _measured_shape(solution, i, xy, shape_rng, shape_noise_rel, 1e-3 * hammer_std_mm),
+                        _measured_shape(
+                            solution, i, xy, shape_rng, also.shape_noise_rel, 1e-3 * also.hammer_std_mm
+                        ),
                     )
                 )
-        if damping_std_rel is not None:
+        if also.damping_std_rel is not None:
             zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
-            noisy_zeta = zeta * (1 + damping_std_rel * rng.standard_normal(modes))
+            noisy_zeta = zeta * (1 + also.damping_std_rel * rng.standard_normal(modes))
             for row, z, z_noisy in zip(rows[-modes:], zeta, noisy_zeta):
                 row["damping_ratio"] = z_noisy
-                if damping_std_rel > 0:
-                    row["damping_std"] = damping_std_rel * z
+                if also.damping_std_rel > 0:
+                    row["damping_std"] = also.damping_std_rel * z
     frame = pd.DataFrame(rows)
     if labels != "none" and "label" not in frame:
         frame["label"] = ""

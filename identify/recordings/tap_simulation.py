@@ -155,36 +155,45 @@ def varied(options: TapOptions, rng: np.random.Generator, amplitude_spread: floa
     )
 
 
+@dataclass(frozen=True)
+class RovingSetup:
+    """How a roving-hammer test is run: the sensor fixed at ``sensor_mm`` (x, y) [mm],
+    ``hits`` hits at each point, each landing off its point by a normal scatter of
+    ``position_std_mm`` [mm] per axis; every hit recorded with ``options``, its amplitude
+    and pre-trigger varied by :func:`varied` (``amplitude_spread``: std of the log
+    amplitude [-]); ``seed`` seeds the random draws."""
+
+    sensor_mm: tuple[float, float]
+    hits: int = 3
+    position_std_mm: float = 1.0
+    seed: int = 0
+    options: TapOptions = TapOptions()
+    amplitude_spread: float = 0.3
+
+
 def roving_hits(
-    frequencies_hz,
-    damping_ratios,
-    shapes,
-    sensor_mm: tuple[float, float],
-    points: pd.DataFrame,
-    hits: int = 3,
-    position_std_mm: float = 1.0,
-    seed: int = 0,
-    options: TapOptions = TapOptions(),
-    amplitude_spread: float = 0.3,
+    frequencies_hz, damping_ratios, shapes, points: pd.DataFrame, setup: RovingSetup
 ) -> dict[str, list[Hit]]:
-    """A roving-hammer test: the sensor fixed at ``sensor_mm`` (x, y) [mm], ``hits`` hits
-    at each point of ``points`` (columns point, x_mm, y_mm).  ``shapes``: one callable
-    shape(x_mm, y_mm) per mode, mass-normalised, so that a hit at (x, y) has the modal
-    constants shape_r(x, y) shape_r(sensor) (response unit per force unit).  Each hit
-    lands off its point by a normal scatter of ``position_std_mm`` [mm] per axis, and its
-    modal constants are the shapes' values where it landed; otherwise each hit is
-    :func:`simulate_hit` with :func:`varied` options (seeded by ``seed``)."""
-    rng = np.random.default_rng(seed)
-    at_sensor = np.array([shape(*sensor_mm) for shape in shapes], dtype=float)
+    """A roving-hammer test run as ``setup`` says: its hits at each point of ``points``
+    (columns point, x_mm, y_mm).  ``shapes``: one callable shape(x_mm, y_mm) per mode,
+    mass-normalised, so that a hit at (x, y) has the modal constants shape_r(x, y)
+    shape_r(sensor) (response unit per force unit).  Each hit's modal constants are the
+    shapes' values where it landed; otherwise each hit is :func:`simulate_hit` with
+    :func:`varied` options."""
+    rng = np.random.default_rng(setup.seed)
+    at_sensor = np.array([shape(*setup.sensor_mm) for shape in shapes], dtype=float)
     out = {}
     for point, x, y in points[["point", "x_mm", "y_mm"]].itertuples(index=False):
         out[str(point)] = []
-        for k in range(hits):
-            landed = (x, y) + position_std_mm * rng.standard_normal(2)
+        for k in range(setup.hits):
+            landed = (x, y) + setup.position_std_mm * rng.standard_normal(2)
             constants = np.array([shape(*landed) for shape in shapes], dtype=float) * at_sensor
             modes = Modes(frequencies_hz, damping_ratios, constants)
             hit = simulate_hit(
-                modes, rng, varied(options, rng, amplitude_spread), source=f"{point}/hit{k + 1}"
+                modes,
+                rng,
+                varied(setup.options, rng, setup.amplitude_spread),
+                source=f"{point}/hit{k + 1}",
             )
             out[str(point)].append(hit)
     return out
@@ -218,15 +227,31 @@ def write_wav(hit: Hit, path: str | Path, force_channel: bool = True) -> None:
         wavfile.write(tmp, round(hit.sample_rate), data.astype(np.float32))
 
 
-def _uff58(
-    func_type: int, data, x_min: float, x_inc: float, ordinate: int, denominator: int, name: str
-) -> dict:
+@dataclass(frozen=True)
+class _Record:
+    """What a UFF58 record holds: its function type (``UFF_TIME`` or ``UFF_FRF``), the
+    data type codes of its ordinate and of the ordinate's denominator (12 acceleration,
+    13 force, 0 none) and its name (id1)."""
+
+    func_type: int
+    ordinate: int
+    denominator: int
+    name: str
+
+
+_FORCE = _Record(UFF_TIME, 13, 0, "force")
+_ACCELERATION = _Record(UFF_TIME, 12, 0, "acceleration")
+_ACCELERANCE = _Record(UFF_FRF, 12, 13, "accelerance")
+
+
+def _uff58(record: _Record, data, x_min: float, x_inc: float) -> dict:
+    """One UFF58 record of ``data`` on the abscissa ``x_min + k x_inc`` [s or Hz]."""
     import pyuff
 
     return pyuff.prepare_58(
         binary=0,
-        func_type=func_type,
-        id1=name,
+        func_type=record.func_type,
+        id1=record.name,
         rsp_node=1,
         rsp_dir=3,
         ref_node=1,
@@ -236,9 +261,9 @@ def _uff58(
         abscissa_spacing=1,
         abscissa_min=x_min,
         abscissa_inc=x_inc,
-        abscissa_spec_data_type=17 if func_type == UFF_TIME else 18,
-        ordinate_spec_data_type=ordinate,
-        orddenom_spec_data_type=denominator,
+        abscissa_spec_data_type=17 if record.func_type == UFF_TIME else 18,
+        ordinate_spec_data_type=record.ordinate,
+        orddenom_spec_data_type=record.denominator,
     )
 
 
@@ -252,12 +277,12 @@ def write_uff(
     if hit is not None:
         dt = 1 / hit.sample_rate
         sets = [
-            _uff58(UFF_TIME, hit.force, 0.0, dt, 13, 0, "force"),
-            _uff58(UFF_TIME, hit.response, 0.0, dt, 12, 0, "acceleration"),
+            _uff58(_FORCE, hit.force, 0.0, dt),
+            _uff58(_ACCELERATION, hit.response, 0.0, dt),
         ]
     else:
         f, h = frf
-        sets = [_uff58(UFF_FRF, h, f[0], f[1] - f[0], 12, 13, "accelerance")]
+        sets = [_uff58(_ACCELERANCE, h, f[0], f[1] - f[0])]
     with atomic_path(path) as tmp:
         tmp.unlink()
         pyuff.UFF(str(tmp)).write_sets(sets, mode="overwrite")

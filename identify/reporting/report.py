@@ -7,6 +7,7 @@ from __future__ import annotations
 import html
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -471,32 +472,40 @@ def shape_figures(correlations: dict, solver, folder: Path, shape_map=None) -> l
     return out
 
 
-def write_analysis_report(
-    folder: str | Path,
-    title: str,
-    analysis: str,
-    model,
-    measurements,
-    text: str,
-    files: dict[str, str],
-    figures: list[tuple[Callable[[Path], Path], str, str]],
-    comparison=None,
-) -> Path:
-    """A compare or diagnose report folder, written whole or not at all: ``text`` as a
-    .txt and as the body of report.html (with the provenance header and the figures
-    embedded), ``files`` (name -> content) beside it, each figure drawn by its callable
-    into the file named (callable(path) -> path, file name, caption), and the measured
-    shapes' figures of a ``comparison`` that has them (``shape_figures``)."""
+@dataclass(frozen=True)
+class AnalysisReport:
+    """What a compare or diagnose report shows: the page's ``title``; its provenance header
+    names the ``analysis``, the ``model``'s specimen and the sources of the ``model`` and
+    the ``measurements``; ``text`` is its body, ``files`` (name -> content) are written
+    beside it, each of the ``figures`` (callable(path) -> path, file name, caption) is
+    drawn by its callable into the file named, and a ``comparison`` that has measured
+    shapes adds their figures (``shape_figures``)."""
+
+    title: str
+    analysis: str
+    model: object
+    measurements: object
+    text: str
+    files: dict[str, str]
+    figures: list[tuple[Callable[[Path], Path], str, str]]
+    comparison: object = None
+
+
+def write_analysis_report(folder: str | Path, report: AnalysisReport) -> Path:
+    """A compare or diagnose report folder, written whole or not at all: the report's
+    ``text`` as the body of report.html (with the provenance header and the figures
+    embedded), its files and figures beside it."""
+    comparison, model = report.comparison, report.model
     with report_folder(folder) as tmp:
-        for name, content in files.items():
+        for name, content in report.files.items():
             write_text(tmp / name, content)
-        drawn = [(draw(tmp / name), caption) for draw, name, caption in figures]
+        drawn = [(draw(tmp / name), caption) for draw, name, caption in report.figures]
         if comparison is not None and comparison.shapes:
             drawn += shape_figures(comparison.shapes, comparison.solver, tmp, comparison.shape_map)
-        header = h.provenance(analysis, model.specimen.name, model.source, measurements.source)
+        header = h.provenance(report.analysis, model.specimen.name, model.source, report.measurements.source)
         sections = [
-            ("Report", f"<pre>{html.escape(text)}</pre>"),
+            ("Report", f"<pre>{html.escape(report.text)}</pre>"),
             ("Figures", "".join(h.figure(path, caption) for path, caption in drawn)),
         ]
-        write_text(tmp / "report.html", h.document(title, header, None, sections))
+        write_text(tmp / "report.html", h.document(report.title, header, None, sections))
     return Path(folder)

@@ -18,7 +18,7 @@ from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED, COATED_PLATE_
 from identify.fitting.driver import fit
 from identify.measured_shapes import load_shapes, parse_shapes, shapes_frame
 from identify.measurements import Measurements, load_measurements
-from identify.recordings.synthetic import synthetic_measurements
+from identify.recordings.synthetic import AlsoMeasured, synthetic_measurements
 from studies import measured_shapes as study
 
 SENSOR = PointMass(3e-3, 0.125, 0.110)
@@ -94,7 +94,7 @@ def test_synthetic_shapes_are_the_model_s_at_the_grid(paper_model):
     """Noise-free, the synthetic roving-hammer shapes are the model's own at the grid
     (MAC 1 to round-off, whatever scale and sign were drawn): the generator the other
     tests stand on."""
-    data = synthetic_measurements(paper_model, modes=5, seed=1, shape_grid=(5, 4))
+    data = synthetic_measurements(paper_model, modes=5, seed=1, also=AlsoMeasured(shape_grid=(5, 4)))
     solution = paper_model.solve("original")
     for k, shape in enumerate(data.shapes_of(data.of("original"))):
         assert point_mac(shape_at_points(solution, shape), shape.amplitude)[k] == pytest.approx(
@@ -153,9 +153,7 @@ def test_mac_paired_fit_of_a_peak_list_with_the_sensor_known(example_spec, paper
         modes=8,
         noise_rel=5e-4,
         seed=4,
-        shape_grid=(5, 4),
-        shape_noise_rel=0.01,
-        hammer_std_mm=1.0,
+        also=AlsoMeasured(shape_grid=(5, 4), shape_noise_rel=0.01, hammer_std_mm=1.0),
     )
     peaks = Measurements(data.table.assign(mode=0), data.source, data.shapes)
     result = fit(example_spec.with_attachments([SENSOR]), peaks)
@@ -270,7 +268,11 @@ def _wood_data(truth, seed: int):
     """6 modes at 0.3 % scatter, their shapes on a 5 x 4 roving-hammer grid: 1 % noise,
     each hit 1 mm (std per axis) off its point."""
     return synthetic_measurements(
-        truth, modes=6, noise_rel=3e-3, seed=seed, shape_grid=(5, 4), shape_noise_rel=0.01, hammer_std_mm=1.0
+        truth,
+        modes=6,
+        noise_rel=3e-3,
+        seed=seed,
+        also=AlsoMeasured(shape_grid=(5, 4), shape_noise_rel=0.01, hammer_std_mm=1.0),
     )
 
 
@@ -334,7 +336,7 @@ def test_a_configuration_whose_shaped_peaks_are_all_left_out(paper_model, tmp_pa
     and the figures are still made."""
     from identify.reporting.shape_plots import plot_shape_maps, shape_lines
 
-    data = synthetic_measurements(paper_model, modes=5, seed=1, shape_grid=(5, 4))
+    data = synthetic_measurements(paper_model, modes=5, seed=1, also=AlsoMeasured(shape_grid=(5, 4)))
     shapes = data.shapes_of(data.of("original"))
     correlation = shape_correlation(paper_model.solve("original"), shapes, np.full(len(shapes), -1))
     assert correlation.worst_point is None and np.isnan(correlation.paired_mac).all()

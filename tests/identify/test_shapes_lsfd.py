@@ -16,7 +16,7 @@ from fem.solver.mode_shapes import deflection_operator
 from fem.spec import load_spec
 from identify.cli import main as identify_layers
 from identify.recordings.shapes import CSV_COLUMNS, estimate_shapes, lsfd, mpc, normalised
-from identify.recordings.tap_simulation import Modes, TapOptions, roving_hits, write_roving
+from identify.recordings.tap_simulation import Modes, RovingSetup, TapOptions, roving_hits, write_roving
 
 EPS = np.finfo(float).eps
 
@@ -165,9 +165,8 @@ def roving(tmp_path_factory):
         ],
         columns=["point", "x_mm", "y_mm"],
     )
-    hits = roving_hits(
-        frequencies, damping, shapes, SENSOR_MM, points, hits=3, position_std_mm=1.0, seed=4, options=OPTIONS
-    )
+    setup = RovingSetup(SENSOR_MM, hits=3, position_std_mm=1.0, seed=4, options=OPTIONS)
+    hits = roving_hits(frequencies, damping, shapes, points, setup)
     paths = write_roving(hits, folder / "recordings")
     exact = deflection_operator(solution.units, points["x_mm"] / 1000, points["y_mm"] / 1000) @ field
     estimate = estimate_shapes(paths, points, "original", band_hz=BAND_HZ)
@@ -264,12 +263,8 @@ def test_roving_hits_land_off_the_point():
             [300.0],
             [0.01],
             [lambda x, y: x / 100],
-            (100.0, 20.0),
             points,
-            hits=8,
-            position_std_mm=std_mm,
-            seed=5,
-            options=options,
+            RovingSetup((100.0, 20.0), hits=8, position_std_mm=std_mm, seed=5, options=options),
         )["A"]
         line = 300  # 300 Hz on the 1 Hz lines of a 1-s record
         return np.array([abs(np.fft.rfft(h.response)[line] / np.fft.rfft(h.force)[line]) for h in hits])
@@ -332,10 +327,8 @@ def test_response_only_recordings_are_refused():
         [300.0],
         [0.01],
         [lambda x, y: x / 100],
-        (100.0, 20.0),
         points,
-        hits=2,
-        options=TapOptions(sample_rate=8000.0, duration_s=0.5),
+        RovingSetup((100.0, 20.0), hits=2, options=TapOptions(sample_rate=8000.0, duration_s=0.5)),
     )
     silent = {p: [replace(h, force=None) for h in hs] for p, hs in hits.items()}
     with pytest.raises(MeasurementError, match="point 'A': its recordings have no force channel"):
