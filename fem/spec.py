@@ -457,7 +457,41 @@ def parse_spec(data: dict[str, Any], source: str = "<spec>") -> SpecimenModel:
 
 
 def load_spec(path: str | Path) -> SpecimenModel:
-    """Read and validate a spec file: the model every command and API function takes."""
+    """Read and validate a spec file: the model every command and API function takes.
+
+    The spec (TOML, UTF-8) gives the specimen, its materials and configurations in the
+    spec's units (GPa, mm, kg/m^3); the model holds them in SI (Pa, m, kg) with the spec's
+    fixed ``[[effects]]`` switched on, the ``[model]`` options and the validated
+    ``[design]`` table.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The spec file.
+
+    Returns
+    -------
+    SpecimenModel
+        The specimen, its effects, model options and design space (SI inside).
+
+    Raises
+    ------
+    SpecError
+        The file cannot be read, is not UTF-8 text or not valid TOML, or a table or key
+        is invalid (the message names the field, the value and what is allowed).
+    DesignError
+        The ``[design]`` table is invalid.
+
+    Examples
+    --------
+    >>> from fem.spec import load_spec
+    >>> from identify.examples import COATED_PLATE
+    >>> model = load_spec(COATED_PLATE)
+    >>> [c.name for c in model.specimen.configurations]
+    ['original', 'brass_bottom', 'brass_top']
+    >>> round(model.specimen.length, 3)  # 150 mm in the spec, metres inside
+    0.15
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")

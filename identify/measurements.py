@@ -302,7 +302,39 @@ def read_table(path: str | Path, what: str) -> pd.DataFrame:
 
 
 def load_measurements(path: str | Path, model: SpecimenModel) -> Measurements:
-    """Read a measurement CSV and validate it against the model's configurations."""
+    """Read a measurement CSV and validate it against the model's configurations.
+
+    The file is UTF-8 CSV (``#`` lines are comments) with one row per measured frequency
+    [Hz]; every row's configuration must be one of the model's, and rows are reported by
+    their line number in the file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The measurement CSV.
+    model : SpecimenModel
+        The model the measurements are checked against (``fem.load_spec``).
+
+    Returns
+    -------
+    Measurements
+        The validated table (frequencies in Hz).
+
+    Raises
+    ------
+    MeasurementError
+        The file does not exist, cannot be read or is not UTF-8 text, or a row does not
+        match the header or the model's configurations.
+
+    Examples
+    --------
+    >>> import identify
+    >>> from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+    >>> model = identify.load_spec(COATED_PLATE)
+    >>> data = identify.load_measurements(COATED_PLATE_MEASURED, model)
+    >>> data.configurations, len(data.table)
+    (['original', 'brass_bottom', 'brass_top'], 15)
+    """
     return parse_measurements(read_table(path, "measurement file"), model, str(path))
 
 

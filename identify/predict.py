@@ -78,8 +78,39 @@ class Prediction:
 
 
 def predict(model: SpecimenModel, modes: int | None = None) -> Prediction:
-    """The first ``modes`` (default: the model's) elastic frequencies of every
-    configuration, with the spec's fixed effects."""
+    """The first ``modes`` elastic frequencies of every configuration.
+
+    The frequencies are computed with the model's options (mesh, plate theory) and the
+    spec's fixed effects.
+
+    Parameters
+    ----------
+    model : SpecimenModel
+        The model (``fem.load_spec``).
+    modes : int, optional
+        How many elastic modes, from 1 to ``MAX_MODES`` (60); default (None): the model's
+        ``[model] modes``.
+
+    Returns
+    -------
+    Prediction
+        Per configuration the frequencies [Hz] and the modes' nodal-line labels.
+
+    Raises
+    ------
+    SpecError
+        ``modes`` is not a whole number from 1 to 60.
+
+    Examples
+    --------
+    >>> import identify
+    >>> from identify.examples import COATED_PLATE
+    >>> prediction = identify.predict(identify.load_spec(COATED_PLATE), modes=2)
+    >>> prediction.frequencies_hz["original"].round(0)  # Hz
+    array([148., 234.])
+    >>> prediction.labels["original"]
+    ('(1,1)', '(0,2)-(2,0)')
+    """
     if modes is not None:
         model = model.with_options(modes=whole(modes, "--modes", 1, MAX_MODES, ""))
     solutions = {c.name: model.solve(c.name) for c in model.specimen.configurations}

@@ -155,7 +155,36 @@ class Comparison:
 
 
 def compare(model: SpecimenModel, measurements: Measurements, refit: bool = True) -> Comparison:
-    """Fit the layer properties (unless ``refit`` is False) and analyse what remains."""
+    """Fit the layer properties (unless ``refit`` is False) and analyse what remains.
+
+    The relative error of every configuration and mode is scored against the signatures
+    of the effects a Kirchhoff free-plate model leaves out (the residual patterns); a peak
+    list's peaks are matched to the model's modes first.
+
+    Parameters
+    ----------
+    model : SpecimenModel
+        The model (``fem.load_spec``).
+    measurements : Measurements
+        The measured frequencies (``load_measurements``).
+    refit : bool, default True
+        Fit the layer properties first; False: compare at the spec's values.
+
+    Returns
+    -------
+    Comparison
+        Measured against model per configuration and mode [Hz, %], the misfit statistics,
+        the residual patterns and the fit (None without ``refit``).
+
+    Examples
+    --------
+    >>> import identify
+    >>> from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+    >>> model = identify.load_spec(COATED_PLATE)
+    >>> comparison = identify.compare(model, identify.load_measurements(COATED_PLATE_MEASURED, model))
+    >>> comparison.at_noise_level, round(100 * comparison.rms_rel_error, 3)  # RMS error in %
+    (True, 0.024)
+    """
     fitted = fit_holding_bounds(model, measurements) if refit else None
     if fitted is not None:
         now, model_hz, statistics = fitted.model, fitted.model_hz, fitted.statistics
