@@ -621,11 +621,50 @@ def diagnose(
     progress: Callable[[str], None] | None = None,
     workers: int | None = 1,
 ) -> Diagnosis:
-    """Find the effects the model misses: forward selection over ``kinds`` (default: every
-    registered effect), see the module doc.  ``workers``: processes for the candidate
-    refits (1: all here, the default; None: 2 when a round has several and the fit is not
-    trivial, as the command line does).  Workers are spawned and import the main module:
-    a script that asks for them needs the ``if __name__ == "__main__":`` guard."""
+    """Find the effects the model misses: a forward selection over ``kinds``.
+
+    The baseline (layer properties fitted, no effect) is compared with refits that switch
+    one more effect on, judged by the Bayesian information criterion (BIC = chi^2 + k ln n),
+    until the misfit is at the noise level or no effect pays for itself; the module doc of
+    ``identify.diagnosis.diagnose`` gives the rules, ``docs/diagnosis.md`` every threshold.
+    A baseline already at the noise level stops there, with no effect refitted.
+
+    Parameters
+    ----------
+    model : SpecimenModel
+        The model (``fem.load_spec``).
+    measurements : Measurements
+        The measured frequencies (``load_measurements``).
+    kinds : list of str, optional
+        The effect kinds to try; default (None): every registered effect.
+    progress : callable, optional
+        Called with a line of text as the selection goes (each round's candidates).
+    workers : int or None, default 1
+        Processes for the candidate refits: 1, all here; None, 2 when a round has several
+        and the fit is not trivial, as the command line does.  Workers are spawned and
+        import the main module: a script that asks for them needs the
+        ``if __name__ == "__main__":`` guard.
+
+    Returns
+    -------
+    Diagnosis
+        The baseline and its residual patterns, the selection's steps, the first round's
+        ranking and the final refit with the selected effects (None when none).
+
+    Raises
+    ------
+    SpecError
+        A kind is not a registered effect (before any work).
+
+    Examples
+    --------
+    >>> import identify
+    >>> from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+    >>> model = identify.load_spec(COATED_PLATE)
+    >>> diagnosis = identify.diagnose(model, identify.load_measurements(COATED_PLATE_MEASURED, model))
+    >>> diagnosis.selected, diagnosis.explained  # the baseline fits at the noise level
+    ((), True)
+    """
     kinds = list(kinds) if kinds is not None else list(REGISTRY)
     for kind in kinds:
         effect(kind)  # unknown kinds fail before any work

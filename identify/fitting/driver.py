@@ -134,22 +134,62 @@ def fit(
     progress: Callable[[Iteration | str], None] | None = None,
     workers: int | None = 1,
 ) -> FitResult:
-    """Identify E1, E2, G12, nu12 of every identified material of ``model`` (or the given
-    ``parameters``) from the measured frequencies of all configurations at once.
+    """Identify the layers: E1, E2, G12, nu12 of every identified material at once.
 
-    effects: kinds switched on with their parameters free (e.g. ``["point_mass"]``): the
-    layers (``parameters``) are fitted first, then again with the effects' parameters
-    added; the result's ``baseline`` is the fit without them.  options: the iteration
-    control of every fit (default ``FitOptions()``; the refits with effects
-    ``EFFECT_ITERATIONS`` iterations).  Values are SI inside; ``report()`` and
-    ``to_dict()`` print in the spec's units (GPa, mm, g).  ``progress`` is called with
-    every accepted iteration (or, with effects, a line of text per refit).  When the spec
-    states the known inputs' std, the result carries the uncertainty budget and its std
-    includes them.
-    When materials have ``identify_damping``, the result's ``damping`` holds their loss
-    factors, found after the stiffness from the measured damping ratios.  ``workers``:
-    processes for the independent refits of the effects (1: all here, the default; None:
-    two where it pays, as the command line does; ``independent_refits``).
+    The parameters of every identified material of ``model`` (or the given
+    ``parameters``) are fitted to the measured frequencies of all configurations at once.
+    Values are SI inside (Pa); ``report()`` and ``to_dict()`` print in the spec's units
+    (GPa, mm, g).  When the spec states the known inputs' std, the result carries the
+    uncertainty budget and its std includes them.  When materials have
+    ``identify_damping``, the result's ``damping`` holds their loss factors, found after
+    the stiffness from the measured damping ratios.
+
+    Parameters
+    ----------
+    model : SpecimenModel
+        The model (``fem.load_spec``).
+    measurements : Measurements
+        The measured frequencies (``load_measurements``).
+    effects : sequence of str, default ()
+        Effect kinds switched on with their parameters free (e.g. ``["point_mass"]``): the
+        layers (``parameters``) are fitted first, then again with the effects' parameters
+        added; the result's ``baseline`` is the fit without them.
+    parameters : sequence of Parameter, optional
+        What to fit; default (None): E1, E2, G12, nu12 of every identified material.
+    options : FitOptions, optional
+        The iteration control of every fit; default (None): ``FitOptions()``, and for the
+        refits with effects ``EFFECT_ITERATIONS`` (40) iterations.
+    progress : callable, optional
+        Called with every accepted ``Iteration`` (or, with effects, a line of text per
+        refit).
+    workers : int or None, default 1
+        Processes for the independent refits of the effects (``independent_refits``): 1,
+        all here; None, two where it pays, as the command line does.  Workers are spawned
+        and import the main module: a script that asks for them needs the
+        ``if __name__ == "__main__":`` guard.
+
+    Returns
+    -------
+    FitResult
+        The fitted values (SI) with their std, the status and the misfit statistics.
+
+    Raises
+    ------
+    LayerIdError
+        ``effects`` is a string instead of a list, ``options`` is not a ``FitOptions``,
+        or an effect's refit cannot use the measured shapes ``options.use_shapes`` asks
+        for (an attachment's parameters, the layerwise theory); all before any fit.
+    SpecError
+        An effect kind is unknown (before any work).
+
+    Examples
+    --------
+    >>> import identify
+    >>> from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+    >>> model = identify.load_spec(COATED_PLATE)
+    >>> result = identify.fit(model, identify.load_measurements(COATED_PLATE_MEASURED, model))
+    >>> result.status.value, f"RMS error {100 * result.statistics.rms_rel_error:.3f} %"
+    ('converged', 'RMS error 0.024 %')
     """
     if isinstance(effects, str):
         raise LayerIdError(f"effects = {effects!r}: give a list of effect kinds, e.g. [{effects!r}]")
