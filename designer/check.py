@@ -130,10 +130,44 @@ def mode_warnings(problem: Problem, solved: Solved) -> list[str]:
 def check(
     problem: Problem | SpecimenModel, configurations=None, pool=None, progress: Progress | None = None
 ) -> CheckResult:
-    """Score the spec's configurations (or the given ones) as one test set (over the
-    prior range too when ``[design] prior_range_rel`` is set).  ``problem``: a planning
-    problem, or a model (its ``[design]`` table makes the problem).  The result's
-    ``test_sheet`` tells how to carry out the test."""
+    """Score the spec's configurations (or the given ones) as one test set.
+
+    The set is scored by the conditioning of its sensitivity matrix at the spec's values
+    (over the prior range too when ``[design] prior_range_rel`` is set), and checked
+    against the lab's limits; the result's ``test_sheet`` tells how to carry out the test.
+
+    Parameters
+    ----------
+    problem : Problem or SpecimenModel
+        A planning problem, or a model (its ``[design]`` table makes the problem).
+    configurations : sequence of Configuration, optional
+        The test set; default (None): the spec's configurations.
+    pool : concurrent.futures.Executor, optional
+        Where to solve the configurations not cached (None: in this process).
+    progress : Progress, optional
+        Where a progress bar goes for long runs (None: nowhere).
+
+    Returns
+    -------
+    CheckResult
+        The scored design, the Poisson-plate rule, warnings (close modes, modes outside the
+        band, too few frequencies), violations of the lab's limits and the test sheet.
+
+    Raises
+    ------
+    DesignError
+        A configuration has no mode that would be measured (all outside ``band_hz``, or
+        none separable).
+
+    Examples
+    --------
+    >>> import designer
+    >>> from identify.examples import COATED_PLATE
+    >>> from fem import load_spec
+    >>> result = designer.check(load_spec(COATED_PLATE))
+    >>> result.feasible, round(result.design.scores.condition_number, 1)
+    (True, 25.6)
+    """
     problem = Problem.of(problem)
     configurations = tuple(configurations or problem.specimen.configurations)
     at_points = solve_points(problem.points(), configurations, pool=pool, progress=progress)

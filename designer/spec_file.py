@@ -244,7 +244,48 @@ def design_document(problem: Problem, design: Design) -> dict:
 
 
 def write_spec(problem: Problem, design: Design, path: str | Path) -> Path:
-    """Write ``design`` as a complete spec at ``path`` (atomically); returns the path."""
+    """Write ``design`` as a complete spec at ``path`` (atomically).
+
+    The spec is the source spec (or the model) with its configurations replaced by the
+    design's, the bonded materials defined and the problem's options; it is checked by
+    reading it back, and a header comment gives its scores and how to check it.
+
+    Parameters
+    ----------
+    problem : Problem
+        The planning problem the design was scored in (``Problem.of(model)``).
+    design : Design
+        The design to write, e.g. ``recommend(...).best``.
+    path : str or pathlib.Path
+        The spec file to write.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    DesignError
+        The design would not read back as written (the model was changed in code after
+        loading), or a model with effects has no spec file to copy their tables from.
+    OutputError
+        ``path`` is a folder or its folder is not writable.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import designer
+    >>> from identify.examples import COATED_PLATE
+    >>> from fem import load_spec
+    >>> problem = designer.Problem.of(load_spec(COATED_PLATE))
+    >>> best = designer.recommend(problem, top=1).best
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = designer.write_spec(problem, best, Path(folder) / "plan.toml")
+    ...     [c.name for c in load_spec(path).specimen.configurations]
+    ['original', 'steel_stock_1mm_top', 'steel_stock_1mm_bottom']
+    """
     data = design_document(problem, design)
     sc = design.scores
     robust = ""

@@ -324,8 +324,41 @@ def sweep(
     pool=None,
     progress: Progress | None = None,
 ) -> SweepResult:
-    """Score the spec's design and every one-at-a-time variation of it; ``variables`` as
-    ``Variable`` or as the command line gives them (e.g. ``"thickness=0.5:3:6"``)."""
+    """Score the spec's design and every one-at-a-time variation of it.
+
+    Parameters
+    ----------
+    problem : Problem or SpecimenModel
+        A planning problem, or a model (its ``[design]`` table makes the problem).
+    variables : list of Variable or str
+        What to vary, as ``Variable`` or as the command line gives them
+        (``KIND[=VALUES]`` or ``CONFIG.KIND[=VALUES]``, e.g. ``"thickness=0.5:3:6"``; KIND:
+        thickness, adhesive_thickness [mm], material, placement, modes).
+    pool : concurrent.futures.Executor, optional
+        Where to solve the configurations not cached (None: in this process).
+    progress : Progress, optional
+        Where a progress bar goes for long runs (None: nowhere).
+
+    Returns
+    -------
+    SweepResult
+        The spec's design (``base``) and every varied design, variable by variable.
+
+    Raises
+    ------
+    DesignError
+        A variable is unknown or its values invalid, or a configuration of the spec's
+        design has no mode that would be measured.
+
+    Examples
+    --------
+    >>> import designer
+    >>> from identify.examples import COATED_PLATE
+    >>> from fem import load_spec
+    >>> result = designer.sweep(load_spec(COATED_PLATE), ["thickness=0.5,1"])  # mm
+    >>> [(p.value, round(p.design.scores.condition_number, 1)) for p in result.points]
+    [(0.5, 54.7), (1.0, 25.6)]
+    """
     problem = Problem.of(problem)
     variables = [v if isinstance(v, Variable) else parse_variable(v, problem) for v in variables]
     plan = [("base", "", problem, problem.specimen.configurations)]

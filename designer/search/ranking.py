@@ -290,11 +290,49 @@ def recommend(
     progress: Progress | None = None,
 ) -> Recommendation:
     """The ``top`` best sets of ``space.size - 1`` candidates for the original plate.
-    ``problem``: a planning problem, or a model (its ``[design]`` table makes the problem).
 
-    With ``[design] prior_range_rel`` every set is scored over the prior samples too and
-    ranked by its worst case; mirror designs of a mid-plane symmetric specimen are shown
-    once."""
+    The candidates are the added plates of the ``[design]`` table (materials x
+    thicknesses x placements, within the lab's limits); each set is ranked by the
+    table's criterion.  With ``[design] prior_range_rel`` every set is scored over the
+    prior samples too and ranked by its worst case; mirror designs of a mid-plane
+    symmetric specimen are shown once.
+
+    Parameters
+    ----------
+    problem : Problem or SpecimenModel
+        A planning problem, or a model (its ``[design]`` table makes the problem).
+    top : int, default 5
+        How many designs to return (a whole number >= 1).
+    method : {"auto", "exhaustive", "relaxation"}, default "auto"
+        The search; "auto": exhaustive up to ``EXHAUSTIVE_LIMIT`` (50 000) sets, else the
+        relaxation.
+    pool : concurrent.futures.Executor, optional
+        Where to solve the candidates not cached (None: in this process).
+    progress : Progress, optional
+        Where a progress bar goes for long runs (None: nowhere).
+
+    Returns
+    -------
+    Recommendation
+        The ranked designs (best first), the spec's own set scored alike and how the
+        search got them.
+
+    Raises
+    ------
+    DesignError
+        ``method`` or ``top`` is not allowed, every set would be singular (too few
+        frequencies for the parameters), the original plate has no measurable mode, or
+        the design space offers too few usable candidates.
+
+    Examples
+    --------
+    >>> import designer
+    >>> from identify.examples import COATED_PLATE
+    >>> from fem import load_spec
+    >>> result = designer.recommend(load_spec(COATED_PLATE), top=1)
+    >>> result.best.names, round(result.best.scores.condition_number, 1)
+    (('original', 'steel_stock_1mm_top', 'steel_stock_1mm_bottom'), 19.3)
+    """
     problem = Problem.of(problem)
     start = time.perf_counter()
     space = problem.space
