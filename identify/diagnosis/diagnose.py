@@ -45,9 +45,7 @@ from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions, Settle
 from ..fitting.driver import (
-    EFFECT_ITERATIONS,
-    PARALLEL_FROM_S,
-    PRUNE_FACTOR,
+    REFIT_POLICY,
     AddedEffect,
     Refit,
     Refitting,
@@ -70,7 +68,7 @@ CANDIDATE_OPTIONS = FitOptions(max_iterations=20, stall_chi2=0.1)
 #: The chosen refit and the final one: to convergence, or until chi^2 falls by less than
 #: 0.01 per step (three in a row) where a weakly determined direction only creeps (its std
 #: then says so).
-FINAL_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS, stall_chi2=0.01)
+FINAL_OPTIONS = FitOptions(max_iterations=REFIT_POLICY.effect_iterations, stall_chi2=0.01)
 #: A candidate that is another one with physics every real plate has besides (rotary
 #: inertia: thick_plate against transverse_shear; a soft layer's own shear: layerwise
 #: against both), with no more free parameters, is preferred unless the lesser one's
@@ -89,7 +87,7 @@ COMPLETE_MARGIN = 6.0
 #: model of the bond line's own shear, was never tried.
 FAR_FROM_NOISE = 25.0
 #: Candidate refits run in parallel processes when there are at least this many in a round
-#: and the baseline fit took at least ``fitting.driver.PARALLEL_FROM_S``.
+#: and the baseline fit took at least ``RefitPolicy.parallel_from_s``.
 PARALLEL_FROM = 3
 
 
@@ -399,9 +397,16 @@ def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int
     return out
 
 
-def _held_back(refining: list[str], margins: dict, state: FitResult, candidates) -> dict[str, str]:
+def _held_back(
+    refining: list[str],
+    margins: dict,
+    state: FitResult,
+    candidates,
+    factor: float = REFIT_POLICY.prune_factor,
+) -> dict[str, str]:
     """Refinements not refitted again this round, each with its note: what one explained
-    beyond what it refines when last refitted is less than 1 / ``PRUNE_FACTOR`` of what
+    beyond what it refines when last refitted is less than 1 / ``factor`` (the pruning
+    rule's own, ``RefitPolicy.prune_factor``) of what
     another candidate explains now, so it cannot be this round's choice (the layerwise
     refit is 70 % of a round on a thick 3-D plate, 140-160 s, and in a later round it
     only repeated its earlier margin)."""
@@ -415,11 +420,11 @@ def _held_back(refining: list[str], margins: dict, state: FitResult, candidates)
     best, by = max(explained)
     held = {}
     for kind in refining:
-        if kind in margins and margins[kind][1] * PRUNE_FACTOR < best:
+        if kind in margins and margins[kind][1] * factor < best:
             number, margin, of = margins[kind]
             held[kind] = (
                 f"; {kind} not refitted again: in round {number} it explained a chi^2 of {margin:.4g} beyond "
-                f"{of}, less than 1/{PRUNE_FACTOR:g} of the {best:.4g} {by} explains now"
+                f"{of}, less than 1/{factor:g} of the {best:.4g} {by} explains now"
             )
     return held
 
@@ -493,10 +498,11 @@ def _candidate(state: FitResult, added: AddedEffect) -> Candidate:
     return Candidate(added.kind, note, added, gain, scaled)
 
 
-def _workers(requested: int | None, tasks: int, baseline_seconds: float) -> int:
+def _workers(requested: int | None, tasks: int, baseline_seconds: float, policy) -> int:
+    """Worker processes for a round of ``tasks`` candidate refits (``diagnose``'s ``workers``)."""
     if requested is not None:
         return max(1, requested)
-    if tasks < PARALLEL_FROM or baseline_seconds < PARALLEL_FROM_S:
+    if tasks < PARALLEL_FROM or baseline_seconds < policy.parallel_from_s:
         return 1
     return max(1, min(2, os.cpu_count() or 1, tasks))
 
@@ -569,7 +575,7 @@ def _add(job: dict):
 def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again=()) -> list[Candidate]:
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
     (here), then refitted most promising first (by the linearised bound), each only when
-    it could come near what the best so far explained (``fitting.PRUNE_FACTOR``); with a
+    it could come near what the best so far explained (``RefitPolicy.prune_factor``); with a
     pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from;
     ``free_again``: shear moduli ``state`` holds, freed again with effects that free none
     themselves (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
@@ -699,7 +705,7 @@ def diagnose(
                 )
                 break
             hints = refitting.hints(state, comparison)
-            n_workers = _workers(workers, len(trying), baseline_seconds)
+            n_workers = _workers(workers, len(trying), baseline_seconds, refitting.policy)
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
@@ -727,7 +733,7 @@ def diagnose(
                 k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state)
             ]
             skipped = [k for k in trying if effect(k).refines and k not in refining]
-            held = _held_back(refining, margins, state, candidates)
+            held = _held_back(refining, margins, state, candidates, refitting.policy.prune_factor)
             refining = [k for k in refining if k not in held]
             if refining:
                 # A refinement starts where the best of what it refines ended (the layerwise

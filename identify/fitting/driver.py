@@ -40,12 +40,32 @@ from .point_mass_screen import PointMassScreen
 from .precheck import Precheck, Sensitivities, precheck
 from .shear_moduli import choose_shear_moduli, reconsidered, with_shear_moduli
 
-#: Iterations of a refit with an effect (from the fit without it).
-EFFECT_ITERATIONS = 40
-_EFFECT_OPTIONS = FitOptions(max_iterations=EFFECT_ITERATIONS)
-#: Independent refits run in parallel processes only after a baseline fit of at least
-#: this long [s]: starting a worker costs about 1 s.
-PARALLEL_FROM_S = 0.5
+
+@dataclass(frozen=True)
+class RefitPolicy:
+    """The numbers that govern how effects are refitted; a study or a test passes another
+    to vary them (``Refit.policy``, ``Refitting.policy``).
+
+    ``effect_iterations``: iterations of a refit with an effect (from the fit without it).
+    ``prune_factor``: a candidate whose refit could explain, by its linearised estimate (or
+    a point mass by the residual scan), less than 1 / ``prune_factor`` of what another one
+    explained is not refitted.  ``parallel_from_s`` [s]: independent refits run in worker
+    processes only after a baseline fit of at least this long (starting a worker costs
+    about 1 s)."""
+
+    effect_iterations: int = 40
+    prune_factor: float = 2.0
+    parallel_from_s: float = 0.5
+
+    @property
+    def options(self) -> FitOptions:
+        """The iteration control of a refit with an effect."""
+        return FitOptions(max_iterations=self.effect_iterations)
+
+
+#: The documented defaults (docs/diagnosis.md).
+REFIT_POLICY = RefitPolicy()
+_EFFECT_OPTIONS = REFIT_POLICY.options
 #: Point-mass starts: the residual scan's best position and a 3 x 3 grid over its quarter
 #: of the plate, ranked by the share of the misfit the scan gives a mass there; the best
 #: ``POINT_MASS_STARTS`` are ranked again by one linearised step each, and the best
@@ -93,9 +113,6 @@ SHEAR_BOUND_MARGIN = 0.5
 #: (at most ``CONTINUATION_ITERATIONS`` iterations) at each, while the misfit falls.
 CONTINUATION_STEP = 4.0
 CONTINUATION_ITERATIONS = 6
-#: A candidate whose refit could explain, by its linearised estimate (or a point mass by the
-#: residual scan), less than 1 / PRUNE_FACTOR of what another one explained is not refitted.
-PRUNE_FACTOR = 2.0
 #: Two effect estimates whose chi^2 differ by less than this (about 2 std) are rivals.
 RIVAL_CHI2 = 4.0
 #: The thin-plate fit a diagnosis starts from holds the layer properties that run to their
@@ -158,7 +175,7 @@ def fit(
         What to fit; default (None): E1, E2, G12, nu12 of every identified material.
     options : FitOptions, optional
         The iteration control of every fit; default (None): ``FitOptions()``, and for the
-        refits with effects ``EFFECT_ITERATIONS`` (40) iterations.
+        refits with effects ``RefitPolicy.effect_iterations`` (40) iterations.
     progress : callable, optional
         Called with every accepted ``Iteration`` (or, with effects, a line of text per
         refit).
@@ -205,7 +222,7 @@ def fit(
         started = time.perf_counter()
         baseline = fit_holding_bounds(model, measurements, parameters, options)
         independent = any(effect(k).independent_starts for k in effects) or not measurements.ranked
-        worth_it = independent and time.perf_counter() - started >= PARALLEL_FROM_S
+        worth_it = independent and time.perf_counter() - started >= REFIT_POLICY.parallel_from_s
         with independent_refits(workers, worth_it) as pool:
             refit = Refit(baseline, measurements, model.specimen, options or _EFFECT_OPTIONS, pool=pool)
             return with_damping(with_budget(fit_with_effects(model, list(effects), refit, progress)))
@@ -334,7 +351,7 @@ def _matched_again(job: dict) -> FitResult:
 def independent_refits(workers: int | None, worth_it: bool):
     """A pool of ``workers`` processes for refits that do not depend on each other (None:
     two, where the cores allow and the work is ``worth_it``: a baseline fit of at least
-    ``PARALLEL_FROM_S``; 1: none, all here).  Workers are spawned and import the main
+    ``RefitPolicy.parallel_from_s``; 1: none, all here).  Workers are spawned and import the main
     module: a script that asks for them needs the ``if __name__ == "__main__":`` guard."""
     n = (min(2, os.cpu_count() or 1) if worth_it else 1) if workers is None else max(1, workers)
     if n == 1:
@@ -766,10 +783,11 @@ def _describe_start(start) -> str:
 class Refit:
     """The context of the refits that add an effect to the fit ``state``: the data they
     fit (``measurements``), the spec's specimen their estimates are judged against
-    (``nominal``), the iteration ``options`` (default ``EFFECT_ITERATIONS`` iterations),
-    the pairing check at the solution (``settle``), where independent refits may run side
-    by side (``pool``) and which effect each parameter belongs to (``effect_of``, default
-    the state's).  Each refit starts from the state's peak matching."""
+    (``nominal``), the iteration ``options`` (default ``RefitPolicy.effect_iterations``
+    iterations), the pairing check at the solution (``settle``), where independent refits
+    may run side by side (``pool``), which effect each parameter belongs to (``effect_of``,
+    default the state's) and the numbers of the refit rules (``policy``).  Each refit
+    starts from the state's peak matching."""
 
     state: FitResult
     measurements: Measurements
@@ -778,6 +796,7 @@ class Refit:
     settle: Settle = Settle.QUICK
     pool: Executor | None = None
     effect_of: dict | None = None
+    policy: RefitPolicy = REFIT_POLICY
 
     def follow(self, pairings: dict, settle: Settle | None = None) -> Follow:
         """A refit from the state's peak matching, its modes followed from ``pairings``,
@@ -826,20 +845,26 @@ class Refitting:
     """What the effect refits of one data set share, from one thin-plate fit: the spec's
     ``model``, the ``measurements`` as given (a peak list's candidate refits are made on
     its peaks as each state matched them, ``data``), the ``baseline`` fit of them and,
-    where that fit is degenerate, the spec's values as a fit (``respec``, ``spec_start``)."""
+    where that fit is degenerate, the spec's values as a fit (``respec``, ``spec_start``),
+    and the numbers of the refit rules (``policy``)."""
 
     model: SpecimenModel
     measurements: Measurements
     baseline: FitResult
     respec: FitResult | None = None
+    policy: RefitPolicy = REFIT_POLICY
 
     @classmethod
     def from_baseline(
-        cls, model: SpecimenModel, measurements: Measurements, baseline: FitResult
+        cls,
+        model: SpecimenModel,
+        measurements: Measurements,
+        baseline: FitResult,
+        policy: RefitPolicy = REFIT_POLICY,
     ) -> Refitting:
         """The context of ``baseline``, with its ``respec`` found (one evaluation at most)."""
         respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
-        return cls(model, measurements, baseline, respec)
+        return cls(model, measurements, baseline, respec, policy)
 
     @property
     def nominal(self) -> Specimen:
@@ -851,10 +876,12 @@ class Refitting:
         return matched_peaks(state, self.measurements)
 
     def refit(
-        self, state: FitResult, options: FitOptions = _EFFECT_OPTIONS, settle: Settle = Settle.QUICK
+        self, state: FitResult, options: FitOptions | None = None, settle: Settle = Settle.QUICK
     ) -> Refit:
-        """The context of the refits that add an effect to ``state``, on its data."""
-        return Refit(state, self.data(state), self.nominal, options, settle)
+        """The context of the refits that add an effect to ``state``, on its data
+        (``options`` default the policy's)."""
+        options = self.policy.options if options is None else options
+        return Refit(state, self.data(state), self.nominal, options, settle, policy=self.policy)
 
     def hints(self, state: FitResult, comparison=None) -> tuple:
         """Point-mass start positions for a refit on top of ``state``: from the residual
@@ -922,7 +949,7 @@ def add_effect(
     moduli to free and, when the augmented sensitivity matrix is singular, the refit is not
     run.  ``hints``: point-mass start positions from the residual scan; ``prune_below``: a
     reduction of the weighted sum of squares another candidate achieved: a refit whose
-    bound does not come within ``PRUNE_FACTOR`` of it is not run.  The estimates'
+    bound does not come within ``refit.policy.prune_factor`` of it is not run.  The estimates'
     plausibility is judged against ``refit.nominal``; a point mass's refits from its
     several starts run side by side in ``refit.pool``."""
     started = time.perf_counter()
@@ -946,7 +973,8 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
         return AddedEffect(
             kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
         )
-    if prune_below is not None and PRUNE_FACTOR * ready.bound < prune_below:
+    factor = refit.policy.prune_factor
+    if prune_below is not None and factor * ready.bound < prune_below:
         return AddedEffect(
             kind,
             None,
@@ -956,7 +984,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             pruned=True,
             error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
             f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
-            f"{PRUNE_FACTOR:g} of the {prune_below:.4g} another effect explained in this round",
+            f"{factor:g} of the {prune_below:.4g} another effect explained in this round",
         )
     base = list(ready.base)
     refit = replace(

@@ -67,7 +67,7 @@ def test_a_candidate_singular_at_its_solution_is_not_selectable(sensor_point_mas
 
 def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     """What a refinement explained beyond what it refines, when last refitted, against what
-    the best candidate explains now: below 1/PRUNE_FACTOR of it, the refinement is held
+    the best candidate explains now: below 1/``RefitPolicy.prune_factor`` of it, the refinement is held
     back with a note; above, it is refitted."""
     from types import SimpleNamespace
 
@@ -327,3 +327,18 @@ def test_a_user_registered_effect_takes_part_in_a_diagnosis(paper_model):
     final = result.final
     std = float(final.uncertainty.std[list(final.parameters).index(mass)])
     assert np.isfinite(std) and abs(final.value(mass) - 2e-3) < 3 * std, (final.value(mass), std)
+
+
+def test_the_refit_policy_is_read_not_the_module_defaults():
+    """The pruning rule reads the refit context's ``RefitPolicy``: a candidate whose
+    linearised bound is 1/1.5 of what another explained is kept by the default factor 2
+    (2/1.5 > 1) but pruned by a policy of factor 0.5, and the note states the factor used."""
+    from identify.fitting.driver import REFIT_POLICY, Prepared, RefitPolicy
+
+    prepared = Prepared("orientation", None, (), (), SimpleNamespace(singular=False), (), 100.0)
+    strict = Refit(None, None, None, policy=RefitPolicy(prune_factor=0.5))
+    added = add_effect(strict, "orientation", prepared=prepared, prune_below=150.0)
+    assert added.pruned and "less than 1/0.5 of the 150" in added.error
+    assert REFIT_POLICY.prune_factor * prepared.bound >= 150.0  # the default would refit it
+    default = Refit(None, None, None)
+    assert add_effect(default, "orientation", prepared=prepared, prune_below=300.0).pruned  # 2 x 100 < 300
