@@ -224,8 +224,9 @@ def fit(
         independent = any(effect(k).independent_starts for k in effects) or not measurements.ranked
         worth_it = independent and time.perf_counter() - started >= REFIT_POLICY.parallel_from_s
         with independent_refits(workers, worth_it) as pool:
-            refit = Refit(baseline, measurements, model.specimen, options or _EFFECT_OPTIONS, pool=pool)
-            return with_damping(with_budget(fit_with_effects(model, list(effects), refit, progress)))
+            refitting = Refitting.from_baseline(model, measurements, baseline)
+            result = fit_with_effects(refitting, list(effects), options or _EFFECT_OPTIONS, pool, progress)
+            return with_damping(with_budget(result))
     fitted = fit_layers(model, measurements, parameters, options or FitOptions(), progress=progress)
     return with_damping(with_budget(with_causes(fitted)))
 
@@ -372,34 +373,36 @@ def worker_pool(n: int) -> cf.ProcessPoolExecutor:
 
 
 def fit_with_effects(
-    model: SpecimenModel, kinds: list[str], refit: Refit, progress: Callable[[str], None] | None = None
+    refitting: Refitting,
+    kinds: list[str],
+    options: FitOptions,
+    pool: Executor | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
-    baseline fit (``refit.state``, of the spec's ``model`` to ``refit.measurements``), one
-    effect after the other (``add_effect``); the last refit checks the pairing in full.
+    baseline fit (``refitting.baseline``), one effect after the other (``add_effect``);
+    the last refit checks the pairing in full.
 
     A point mass starts at each of the positions the residual scan suggests and on a grid
     over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
     well are reported.  The transverse-shear effects free the G13 and G23 that the data
     can identify (``shear_moduli``).  An effect whose parameters the frequencies cannot
     determine with the others (a singular sensitivity matrix, ``precheck``) is an error,
-    not an iteration.  ``refit.options``: of every refit; ``refit.pool``: where the refits
-    that are independent of each other run (a point mass's starts, a peak list's two
-    matchings; ``independent_refits``).
+    not an iteration.  ``options``: of every refit; ``pool``: where the refits that are
+    independent of each other run (a point mass's starts, a peak list's two matchings;
+    ``independent_refits``).
     """
-    measurements, baseline, options, pool = refit.measurements, refit.state, refit.options, refit.pool
-    respec = spec_start(model, matched_peaks(baseline, measurements), baseline)
-    hints = point_mass_hints(baseline)
-    state, notes = baseline, []
+    measurements = refitting.measurements
+    state, notes = refitting.baseline, []
     for number, kind in enumerate(kinds):
-        data = matched_peaks(state, measurements)
-        last = number == len(kinds) - 1 and data is measurements
-        step = replace(refit, state=state, measurements=data, settle=Settle.FULL if last else Settle.QUICK)
-        hints = hints if state is baseline else point_mass_hints(state)
+        step = refitting.refit(state, options, pool=pool)
+        if number == len(kinds) - 1 and step.measurements is measurements:
+            step = replace(step, settle=Settle.FULL)
+        hints = refitting.hints(state)
         added = add_effect(step, kind, hints, progress=progress)
-        if restarted_from_spec([kind], state, baseline, respec):
-            from_spec = prepare_effect(state, kind, hints, respec)
-            added = better_start(added, add_effect(step, kind, hints, prepared=from_spec, progress=progress))
+        if refitting.restarted([kind], state):
+            from_spec = prepare_effect(state, kind, hints, refitting.respec)
+            added = added.or_from_spec(add_effect(step, kind, hints, prepared=from_spec, progress=progress))
         if added.result is None:
             advice = (
                 "; fix one of the parameters in that combination (e.g. give the layer's thickness or density "
@@ -410,16 +413,14 @@ def fit_with_effects(
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
         state = rematched(added.result, measurements, state, options, pool)
-    result, reconsidered_notes = with_determined_shear(
-        state, measurements, model.specimen, options, settle=Settle.FULL
-    )
+    result, reconsidered_notes = refitting.with_determined_shear(state, options, Settle.FULL)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
-    result = with_causes(released(result, measurements, baseline, model.specimen, options))
+    result = with_causes(refitting.released(result, options))
     return replace(
         result,
         warnings=tuple(dict.fromkeys(result.warnings + tuple(text for _, text in notes))),
         effect_notes=tuple(notes),
-        baseline=baseline,
+        baseline=refitting.baseline,
     )
 
 
@@ -497,32 +498,6 @@ def restarted_from_spec(kinds, state: FitResult, baseline: FitResult, respec: Fi
     )
 
 
-def better_start(first: AddedEffect, second: AddedEffect) -> AddedEffect:
-    """Of an effect refitted from two starts (``second`` from the spec's values), the one
-    with the lower misfit, the other's start named in its notes."""
-
-    def misfit(a: AddedEffect) -> float:
-        return a.result.statistics.sum_squares if a.result is not None and a.result.finished else float("inf")
-
-    seconds = first.seconds + second.seconds
-    if misfit(second) < misfit(first):
-        note = (
-            "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values "
-            "too, "
-            f"which left the lower misfit ({100 * second.result.rms_rel_error:.3g} % against "
-            f"{100 * first.result.rms_rel_error:.3g} %)"
-            if first.result is not None
-            else "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values"
-        )
-        return replace(
-            second,
-            notes=second.notes + (note,),
-            seconds=seconds,
-            result=replace(second.result, warnings=second.result.warnings + (note,)),
-        )
-    return replace(first, seconds=seconds)
-
-
 @dataclass(frozen=True)
 class AddedEffect:
     """An effect added to a fit: ``result`` the refit with it (None when not run: not
@@ -550,8 +525,30 @@ class AddedEffect:
 
     def or_from_spec(self, from_spec: AddedEffect) -> AddedEffect:
         """Of this refit and the same effect's refit ``from_spec`` (from the spec's values),
-        the one with the lower misfit (``better_start``)."""
-        return better_start(self, from_spec)
+        the one with the lower misfit, the other's start named in its notes."""
+
+        def misfit(a: AddedEffect) -> float:
+            finished = a.result is not None and a.result.finished
+            return a.result.statistics.sum_squares if finished else float("inf")
+
+        seconds = self.seconds + from_spec.seconds
+        if misfit(from_spec) < misfit(self):
+            restarted = (
+                "the thin-plate fit ran to its bounds (or did not converge): refitted from the spec's values"
+            )
+            note = (
+                f"{restarted} too, which left the lower misfit ({100 * from_spec.result.rms_rel_error:.3g} % "
+                f"against {100 * self.result.rms_rel_error:.3g} %)"
+                if self.result is not None
+                else restarted
+            )
+            return replace(
+                from_spec,
+                notes=from_spec.notes + (note,),
+                seconds=seconds,
+                result=replace(from_spec.result, warnings=from_spec.result.warnings + (note,)),
+            )
+        return replace(self, seconds=seconds)
 
 
 @dataclass(frozen=True)
@@ -575,7 +572,7 @@ class Prepared:
 
     def frees_any(self, parameters) -> bool:
         """Whether the refit moves any of the plain ``parameters``."""
-        return frees_any(self, parameters)
+        return bool(_covered(self.added) & set(parameters))
 
 
 def prepare_effect(
@@ -744,11 +741,6 @@ def held_shear_moduli(state: FitResult, selected: Sequence[AddedEffect]) -> tupl
     return tuple(dict.fromkeys(p for added in selected for p in added.held if p not in free))
 
 
-def frees_any(prepared: Prepared, parameters) -> bool:
-    """Whether the refit ``prepared`` moves any of the plain ``parameters``."""
-    return bool(_covered(prepared.added) & set(parameters))
-
-
 def _covered(parameters) -> set[Parameter]:
     """The plain parameters ``parameters`` move (a tied scale's lead and followers)."""
     return {plain(p) for p in parameters} | {
@@ -876,12 +868,16 @@ class Refitting:
         return matched_peaks(state, self.measurements)
 
     def refit(
-        self, state: FitResult, options: FitOptions | None = None, settle: Settle = Settle.QUICK
+        self,
+        state: FitResult,
+        options: FitOptions | None = None,
+        settle: Settle = Settle.QUICK,
+        pool: Executor | None = None,
     ) -> Refit:
         """The context of the refits that add an effect to ``state``, on its data
         (``options`` default the policy's)."""
         options = self.policy.options if options is None else options
-        return Refit(state, self.data(state), self.nominal, options, settle, policy=self.policy)
+        return Refit(state, self.data(state), self.nominal, options, settle, pool, policy=self.policy)
 
     def hints(self, state: FitResult, comparison=None) -> tuple:
         """Point-mass start positions for a refit on top of ``state``: from the residual
@@ -1538,7 +1534,6 @@ __all__ = [
     "with_determined_shear",
     "spec_start",
     "restarted_from_spec",
-    "better_start",
     "fit_holding_bounds",
     "released",
 ]
