@@ -313,6 +313,38 @@ def test_commands_run_with_one_blas_thread(monkeypatch):
     assert seen and set(seen) == {1}
 
 
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+def test_fit_and_diagnose_run_with_one_blas_thread():
+    """Through the API too (studies, notebooks, the test suite's parallel workers): two
+    diagnoses side by side on two cores took 148 s each with BLAS's default threads, 121 s
+    with one.  Seen from inside the run (its progress calls), and restored after it."""
+    import identify
+    from identify.examples import COATED_PLATE, COATED_PLATE_MEASURED
+
+    model = identify.load_spec(COATED_PLATE)
+    data = identify.load_measurements(COATED_PLATE_MEASURED, model)
+    before, seen = _blas_threads(), []
+    identify.fit(model, data, progress=lambda _: seen.extend(_blas_threads()))
+    identify.diagnose(model, data, ["rotary_inertia"], progress=lambda _: seen.extend(_blas_threads()))
+    assert seen and set(seen) == {1}
+    assert _blas_threads() == before
+
+
+def test_refit_workers_run_with_one_blas_thread():
+    """The spawned processes that run a diagnosis's candidates and a point mass's starts
+    (``worker_pool``) limit themselves: they are where two processes share the cores."""
+    from identify.fitting.driver import worker_pool
+
+    with worker_pool(1) as pool:
+        seen = pool.submit(_blas_threads).result()
+    assert seen and set(seen) == {1}
+
+
 @pytest.mark.parametrize("command", [["predict", "--modes", "30"], ["predict"]])
 def test_output_into_a_closed_pipe_is_not_a_traceback(command):
     """``identify-layers peaks rec.wav | head -4`` ended in a BrokenPipeError traceback

@@ -39,6 +39,7 @@ from fem.effects import REGISTRY, effect
 from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.sensitivity import Verdict
+from fem.solver.threads import one_blas_thread
 
 from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
@@ -620,6 +621,7 @@ def _added(jobs: list[dict], pool) -> list:
     return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
 
 
+@one_blas_thread
 def diagnose(
     model: SpecimenModel,
     measurements: Measurements,

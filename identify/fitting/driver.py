@@ -21,6 +21,7 @@ from fem.inputs import InputStd
 from fem.laminates.material import MATERIAL_PARAMETERS, SHEAR_MODULI
 from fem.model import SpecimenModel
 from fem.solver.attachments import ATTACHMENT_PARAMETERS
+from fem.solver.threads import one_blas_thread, one_blas_thread_process
 from fem.specimen import Parameter, Specimen
 
 from ..engine.objective import solving_model
@@ -141,6 +142,7 @@ HANDBOOK_STD_REL = 0.2
 DISTORTED = 3.0
 
 
+@one_blas_thread
 def fit(
     model: SpecimenModel,
     measurements: Measurements,
@@ -368,8 +370,11 @@ def independent_refits(workers: int | None, worth_it: bool):
 def worker_pool(n: int) -> cf.ProcessPoolExecutor:
     """``n`` spawned worker processes for refits and candidates (the diagnosis's and
     ``independent_refits``'); they import the main module, so a script that asks for them
-    needs the ``if __name__ == "__main__":`` guard."""
-    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"))
+    needs the ``if __name__ == "__main__":`` guard.  Each runs BLAS on one thread, as
+    ``fit`` and ``diagnose`` do (``fem.solver.threads``)."""
+    return cf.ProcessPoolExecutor(
+        max_workers=n, mp_context=mp.get_context("spawn"), initializer=one_blas_thread_process
+    )
 
 
 def fit_with_effects(
