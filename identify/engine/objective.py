@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from fem.model import LaminateSolution, SpecimenModel
 from fem.solver.mode_shapes import deflection_operator
@@ -121,6 +122,10 @@ class Objective:
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
         """The modes of one configuration of ``specimen``: a full solve (cached by content)."""
         return self.solved.with_specimen(specimen).solve(configuration)
+
+    def modes_at(self, e: Evaluation) -> dict[str, np.ndarray]:
+        """The mode shapes (n_dofs, modes) of every configuration at ``e`` (full solves)."""
+        return {name: self.solution(e.model.specimen, name).modes.shapes for name in self.configurations}
 
     def differentiated(self, e: Evaluation) -> Evaluation:
         """``e`` with its sensitivities (the solves are cached: no new eigen-solve)."""
@@ -302,22 +307,66 @@ class ShapeObjective(Objective):
 class RitzObjective(Objective):
     """``objective`` evaluated on Ritz models of every configuration
     (``fem.solver.reduced_basis``) at the point ``at`` (full solves), their bases
-    enlarged by the modes at the point ``also``; assembled at each point (a screen
-    evaluates a few: projecting every unit matrix of the layerwise element costs one to
-    three full solves a configuration, as much as the trials a screen saves)."""
+    enlarged by the ``extra`` fields of each configuration (the modes at other points on
+    the same mesh: ``Objective.modes_at``).  ``assembled``: each point's K and M are
+    assembled and projected (a screen evaluates a few: projecting every unit matrix of the
+    layerwise element costs one to three full solves a configuration, as much as the
+    trials a screen saves); else the unit matrices are projected once and a point costs
+    milliseconds, its sensitivities included (the pairing screen's refits,
+    ``ambiguity.RITZ_SCREEN_CHI2``)."""
 
-    def __init__(self, objective: Objective, at: Evaluation, also: Evaluation):
+    def __init__(self, objective: Objective, at: Evaluation, extra: dict, assembled: bool = True):
         self.__dict__.update(objective.__dict__)
         solved = objective.solved.with_specimen(at.model.specimen)
         self.reanalyses = {
-            name: Reanalysis.of(
-                solved, name, objective.solution(also.model.specimen, name).modes.shapes, assembled=True
-            )
+            name: Reanalysis.of(solved, name, extra.get(name), assembled=assembled)
             for name in self.configurations
         }
+        self._anchors: dict[str, tuple] = {}
 
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
         return self.reanalyses[configuration].solve(specimen)
+
+    def _anchor(self, pairing: ModePairing) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For following modes from ``pairing``'s shapes a (n_dofs, m): a^T W V, a^T W a
+        and V^T W V, W the first unit mass, V the basis (the MAC of ``mac_matrix`` then
+        costs products of the basis's size, with no shape expanded)."""
+        name = pairing.configuration
+        if name not in self._anchors or self._anchors[name][0] is not pairing.shapes:
+            basis = self.reanalyses[name].basis
+            weight = self.reanalyses[name].base.units.first_unit_mass
+            a, wv = pairing.shapes, weight @ basis
+            self._anchors[name] = (a, a.T @ wv, np.einsum("ij,ij->j", a, weight @ a), basis.T @ wv)
+        return self._anchors[name][1:]
+
+    def evaluate(
+        self,
+        values: np.ndarray,
+        pairings: dict[str, ModePairing],
+        track: bool = True,
+        differentiate: bool = True,
+    ) -> Evaluation:
+        """``Objective.evaluate`` on the Ritz models, the modes followed from ``pairings``
+        (which a Ritz evaluation passes on unchanged: every point of the Ritz iteration
+        follows its modes from its full start) by MAC in the basis's coordinates."""
+        specimen = ties.apply(self.model.specimen, self.space.parameters, values)
+        model_hz = np.empty(len(self.measured_hz))
+        derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
+        new_pairings = {}
+        for name in self.configurations:
+            solution, rows, pairing = self.solution(specimen, name), self.rows[name], pairings[name]
+            indices, lowest = pairing.indices, pairing.lowest_mac
+            if track:
+                cross, norms, gram = self._anchor(pairing)
+                y = solution.modes.coordinates
+                mac = (cross @ y) ** 2 / np.outer(norms, np.einsum("ij,ij->j", y, gram @ y))
+                assigned, columns = linear_sum_assignment(-mac)
+                indices, lowest = columns[np.argsort(assigned)], float(mac[assigned, columns].min())
+            new_pairings[name] = ModePairing(name, indices, pairing.shapes, lowest)
+            model_hz[rows] = solution.frequencies_hz[indices]
+            if differentiate:
+                derivatives[rows] = ties.derivatives(solution, self.space.parameters)[indices]
+        return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(specimen))
 
 
 @dataclass(frozen=True)
@@ -346,7 +395,8 @@ class TrialScreen:
         """The screen of the iteration at ``current`` whose trial ``rejected`` raised the misfit."""
         # The screen compares frequency misfits (a Ritz model's shapes at the points are
         # not worth the screen's while); the full solve decides with the whole objective.
-        return cls(RitzObjective(objective, current, rejected), current, objective.frequency_cost(current))
+        ritz = RitzObjective(objective, current, objective.modes_at(rejected))
+        return cls(ritz, current, objective.frequency_cost(current))
 
     def descends(self, values: np.ndarray) -> bool:
         """The Ritz misfit at ``values`` is not above the current one (True also where the

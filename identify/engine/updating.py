@@ -307,10 +307,12 @@ def update(
     twins, repaired = [], ""
     if stop.converged and settle is not Settle.NONE:
 
-        def refit(state, branch, max_iterations):
-            state, again, _ = iterate(
-                objective, state, branch, replace(options, max_iterations=max_iterations)
+        def refit(state, branch, max_iterations, on=None):
+            """``on``: another objective (Ritz models, which screen no trials of their own)."""
+            refitted = replace(
+                options, max_iterations=max_iterations, reanalysis=on is None and options.reanalysis
             )
+            state, again, _ = iterate(on or objective, state, branch, refitted)
             return state, again
 
         if settle is Settle.QUICK:  # a candidate's refit in a diagnosis: only re-pairings that pay at once
