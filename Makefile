@@ -19,7 +19,7 @@ demo: $(STAMP)
 	$(BIN)/identify-layers fit --report reports/demo
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/pytest -n auto --dist loadfile
+	MPLBACKEND=Agg $(BIN)/pytest -n auto --dist loadfile --durations=20
 
 lint: $(STAMP)
 	$(BIN)/ruff format --check fem identify designer studies benchmarks tests docs/examples
