@@ -780,8 +780,8 @@ def _describe_start(start) -> str:
 class Refit:
     """The context of the refits that add an effect to the fit ``state``: the data they
     fit (``measurements``), the spec's specimen their estimates are judged against
-    (``nominal``), the iteration ``options`` (default ``RefitPolicy.effect_iterations``
-    iterations), the pairing check at the solution (``settle``), where independent refits
+    (``nominal``), the iteration ``options`` (default the ``policy``'s: its
+    ``effect_iterations``), the pairing check at the solution (``settle``), where independent refits
     may run side by side (``pool``), which effect each parameter belongs to (``effect_of``,
     default the state's) and the numbers of the refit rules (``policy``).  Each refit
     starts from the state's peak matching."""
@@ -789,11 +789,15 @@ class Refit:
     state: FitResult
     measurements: Measurements
     nominal: Specimen
-    options: FitOptions = _EFFECT_OPTIONS
+    options: FitOptions | None = None
     settle: Settle = Settle.QUICK
     pool: Executor | None = None
     effect_of: dict | None = None
     policy: RefitPolicy = REFIT_POLICY
+
+    def __post_init__(self):
+        if self.options is None:
+            object.__setattr__(self, "options", self.policy.options)
 
     def follow(self, pairings: dict, settle: Settle | None = None) -> Follow:
         """A refit from the state's peak matching, its modes followed from ``pairings``,

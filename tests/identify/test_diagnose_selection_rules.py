@@ -342,3 +342,7 @@ def test_the_refit_policy_is_read_not_the_module_defaults():
     assert REFIT_POLICY.prune_factor * prepared.bound >= 150.0  # the default would refit it
     default = Refit(None, None, None)
     assert add_effect(default, "orientation", prepared=prepared, prune_below=300.0).pruned  # 2 x 100 < 300
+    # The iteration budget too: a context built with a policy and no options iterates as
+    # the policy says, the default context as the documented default.
+    assert Refit(None, None, None, policy=RefitPolicy(effect_iterations=7)).options.max_iterations == 7
+    assert default.options == REFIT_POLICY.options
