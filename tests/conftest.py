@@ -35,14 +35,6 @@ def table1_values() -> dict:
     return out
 
 
-def pytest_collection_modifyitems(items):
-    """The files marked ``heavy`` first, the rest in their order: ``make test`` hands whole
-    files to its two workers in this order (``--dist loadfile``), and a file of minute-long
-    diagnoses collected last ran alone on one worker while the other idled (the suite's
-    last 10 % took 6 of its 13 minutes)."""
-    items.sort(key=lambda item: item.get_closest_marker("heavy") is None)
-
-
 @pytest.fixture(autouse=True, scope="session")
 def private_solve_cache(tmp_path_factory):
     """plan-tests keeps solves in $XDG_CACHE_HOME: the tests' own, not the user's."""

@@ -10,8 +10,6 @@ from identify.cli import main as identify_layers
 
 from .walk import check_clean_end, run, strict_json, write_files
 
-pytestmark = pytest.mark.heavy
-
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):

@@ -17,14 +17,11 @@ from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from tests.fem import solid3d
 
-pytestmark = [
-    pytest.mark.heavy,
-    pytest.mark.skipif(
-        not solid3d.available("foam_sandwich"),
-        reason="3-D reference tests/data/solid3d/foam_sandwich.json not generated yet "
-        "(python tests/data/solid3d/generate.py --case foam_sandwich)",
-    ),
-]
+pytestmark = pytest.mark.skipif(
+    not solid3d.available("foam_sandwich"),
+    reason="3-D reference tests/data/solid3d/foam_sandwich.json not generated yet "
+    "(python tests/data/solid3d/generate.py --case foam_sandwich)",
+)
 
 NOISE = 5e-4
 TRUE = {

@@ -10,8 +10,6 @@ from identify.examples import COATED_PLATE
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import true_model
 
-pytestmark = pytest.mark.heavy
-
 
 @pytest.fixture(scope="module")
 def sensor_csv(tmp_path_factory):

@@ -5,8 +5,6 @@ refit on a thick shear model is about a minute, run beside the other diagnosis t
 
 from dataclasses import replace
 
-import pytest
-
 from fem.solver.attachments import PointMass
 from fem.specimen import Parameter
 from identify import fit
@@ -21,8 +19,6 @@ from identify.fitting.driver import (
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 from studies.hidden_effect import thick
-
-pytestmark = pytest.mark.heavy
 
 
 def test_a_point_mass_frees_the_shear_moduli_the_state_holds():

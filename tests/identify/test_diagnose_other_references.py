@@ -7,8 +7,6 @@ import pytest
 
 from studies import hidden_effect
 
-pytestmark = pytest.mark.heavy
-
 
 @pytest.mark.parametrize(
     "case,selected,measured",

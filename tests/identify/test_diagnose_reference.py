@@ -17,8 +17,6 @@ import pytest
 from fem.specimen import Parameter
 from studies import hidden_effect
 
-pytestmark = pytest.mark.heavy
-
 SHEAR = {"transverse_shear", "thick_plate", "layerwise"}
 
 

@@ -32,8 +32,6 @@ import pytest
 from fem.specimen import Parameter
 from studies import hidden_effect
 
-pytestmark = pytest.mark.heavy
-
 CASE = "spruce_plate"
 SHEAR = {"transverse_shear", "thick_plate", "layerwise"}
 

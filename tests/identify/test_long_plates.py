@@ -16,8 +16,6 @@ from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from studies import long_plates
 
-pytestmark = pytest.mark.heavy
-
 TRUTH = {"E1": 12.2e9, "E2": 0.74e9, "G12": 0.67e9, "nu12": 0.36}
 
 

@@ -6,8 +6,6 @@ import pytest
 
 from studies import hidden_effect
 
-pytestmark = pytest.mark.heavy
-
 CANDIDATES = ["transverse_shear", "rotary_inertia", "point_mass", "suspension"]
 
 
