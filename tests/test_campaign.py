@@ -292,31 +292,29 @@ def test_ctrl_c_while_the_command_loads_is_one_line(monkeypatch, capsys):
     assert capsys.readouterr().err == "interrupted\ninterrupted\n"
 
 
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
 def test_commands_run_with_one_blas_thread(monkeypatch):
     """A 60-mode fit spent 21 % of its time in shape comparisons whose BLAS product took
     270 ms instead of 35 ms while the other core was busy (a second BLAS thread waits for
     it): the console scripts run the whole command on one BLAS thread."""
     from types import SimpleNamespace
 
-    from threadpoolctl import threadpool_info
-
     from identify import entry
 
     seen = []
 
     def command():
-        seen.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+        seen.extend(_blas_threads())
         return 0
 
     monkeypatch.setattr(entry, "import_module", lambda name: SimpleNamespace(main=command))
     assert entry.identify_layers() == 0
     assert seen and set(seen) == {1}
-
-
-def _blas_threads() -> list[int]:
-    from threadpoolctl import threadpool_info
-
-    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
 
 
 def test_fit_and_diagnose_run_with_one_blas_thread():

@@ -885,7 +885,6 @@ class Refitting:
     ) -> Refit:
         """The context of the refits that add an effect to ``state``, on its data
         (``options`` default the policy's)."""
-        options = self.policy.options if options is None else options
         return Refit(state, self.data(state), self.nominal, options, settle, pool, policy=self.policy)
 
     def hints(self, state: FitResult, comparison=None) -> tuple:
