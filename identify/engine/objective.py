@@ -59,6 +59,10 @@ def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes:
 class Objective:
     """Evaluates the model for parameter values and pairs its modes with the measurements."""
 
+    #: Whether the damped iteration screens its trial steps on Ritz models of this
+    #: objective (``TrialScreen``; ``FitOptions.reanalysis``).
+    trials_screened = True
+
     def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
         self.model = model
         self.measurements = measurements
@@ -87,37 +91,38 @@ class Objective:
         ``differentiate`` the sensitivities are left out (a trial step that may be
         rejected; ``differentiated`` adds them)."""
         specimen = ties.apply(self.model.specimen, self.space.parameters, values)
-        weight = None
         model_hz = np.empty(len(self.measured_hz))
         derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
         new_pairings = {}
         for name in self.configurations:
-            solution = self.solution(specimen, name)
-            rows = self.rows[name]
-            group = self.measurements.table.iloc[rows]
-            previous = None if pairings is None else pairings[name].shapes
-            if previous is None or (track and previous.shape[0] != solution.modes.shapes.shape[0]):
-                # Afresh; also when the pairing to follow is of another model (another plate theory).
-                pairing = ModePairing.initial(
-                    name,
-                    solution,
-                    group["mode"].to_numpy(),
-                    group["label"].tolist(),
-                    self.measurements.shapes_of(group),
-                )
-            elif not track:
-                indices = pairings[name].indices
-                pairing = ModePairing(name, indices, solution.modes.shapes[:, indices])
-            else:
-                units = solution.units
-                if weight is None or weight.shape[0] != units.n_dofs:  # the layerwise DOFs differ per stack
-                    weight = units.first_unit_mass
-                pairing = pairings[name].track(solution.modes, weight)
+            solution, rows = self.solution(specimen, name), self.rows[name]
+            pairing = self._paired(name, solution, None if pairings is None else pairings[name], track)
             new_pairings[name] = pairing
             model_hz[rows] = solution.frequencies_hz[pairing.indices]
             if differentiate:
                 derivatives[rows] = ties.derivatives(solution, self.space.parameters)[pairing.indices]
         return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(specimen))
+
+    def _paired(self, name: str, solution, previous: ModePairing | None, track: bool) -> ModePairing:
+        """The pairing of one configuration's modes in ``solution`` (``evaluate``): afresh
+        where there is no ``previous`` pairing to follow or it is of another model (another
+        plate theory), its model modes kept (``track`` False), else followed by shape."""
+        if (
+            previous is None
+            or previous.shapes is None
+            or (track and previous.shapes.shape[0] != solution.modes.shapes.shape[0])
+        ):
+            group = self.measurements.table.iloc[self.rows[name]]
+            return ModePairing.initial(
+                name,
+                solution,
+                group["mode"].to_numpy(),
+                group["label"].tolist(),
+                self.measurements.shapes_of(group),
+            )
+        if not track:
+            return ModePairing(name, previous.indices, solution.modes.shapes[:, previous.indices])
+        return previous.track(solution.modes, solution.units.first_unit_mass)
 
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
         """The modes of one configuration of ``specimen``: a full solve (cached by content)."""
@@ -315,6 +320,9 @@ class RitzObjective(Objective):
     milliseconds, its sensitivities included (the pairing screen's refits,
     ``ambiguity.RITZ_SCREEN_CHI2``)."""
 
+    #: Its own trials cost what a screen's do.
+    trials_screened = False
+
     def __init__(self, objective: Objective, at: Evaluation, extra: dict, assembled: bool = True):
         self.__dict__.update(objective.__dict__)
         solved = objective.solved.with_specimen(at.model.specimen)
@@ -339,34 +347,18 @@ class RitzObjective(Objective):
             self._anchors[name] = (a, a.T @ wv, np.einsum("ij,ij->j", a, weight @ a), basis.T @ wv)
         return self._anchors[name][1:]
 
-    def evaluate(
-        self,
-        values: np.ndarray,
-        pairings: dict[str, ModePairing],
-        track: bool = True,
-        differentiate: bool = True,
-    ) -> Evaluation:
-        """``Objective.evaluate`` on the Ritz models, the modes followed from ``pairings``
-        (which a Ritz evaluation passes on unchanged: every point of the Ritz iteration
-        follows its modes from its full start) by MAC in the basis's coordinates."""
-        specimen = ties.apply(self.model.specimen, self.space.parameters, values)
-        model_hz = np.empty(len(self.measured_hz))
-        derivatives = np.empty((len(self.measured_hz), len(values))) if differentiate else None
-        new_pairings = {}
-        for name in self.configurations:
-            solution, rows, pairing = self.solution(specimen, name), self.rows[name], pairings[name]
-            indices, lowest = pairing.indices, pairing.lowest_mac
-            if track:
-                cross, norms, gram = self._anchor(pairing)
-                y = solution.modes.coordinates
-                mac = (cross @ y) ** 2 / np.outer(norms, np.einsum("ij,ij->j", y, gram @ y))
-                assigned, columns = linear_sum_assignment(-mac)
-                indices, lowest = columns[np.argsort(assigned)], float(mac[assigned, columns].min())
-            new_pairings[name] = ModePairing(name, indices, pairing.shapes, lowest)
-            model_hz[rows] = solution.frequencies_hz[indices]
-            if differentiate:
-                derivatives[rows] = ties.derivatives(solution, self.space.parameters)[indices]
-        return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(specimen))
+    def _paired(self, name: str, solution, previous: ModePairing, track: bool) -> ModePairing:
+        """The Ritz modes followed from ``previous`` by MAC in the basis's coordinates; the
+        pairing passes ``previous``'s shapes on unchanged, so every point of a Ritz
+        iteration follows its modes from its full start."""
+        indices, lowest = previous.indices, previous.lowest_mac
+        if track:
+            cross, norms, gram = self._anchor(previous)
+            y = solution.modes.coordinates
+            mac = (cross @ y) ** 2 / np.outer(norms, np.einsum("ij,ij->j", y, gram @ y))
+            assigned, columns = linear_sum_assignment(-mac)
+            indices, lowest = columns[np.argsort(assigned)], float(mac[assigned, columns].min())
+        return ModePairing(name, indices, previous.shapes, lowest)
 
 
 @dataclass(frozen=True)

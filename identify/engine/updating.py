@@ -199,7 +199,7 @@ def iterate(
                     # back to Gauss-Newton
                     damping = damping / DAMPING_FACTOR if damping > UNDAMPED * s[0] ** 2 else 0.0
                     break
-                if options.reanalysis and screen is None:
+                if options.reanalysis and objective.trials_screened and screen is None:
                     screen = TrialScreen.of(objective, current, trial)
             damping = max(DAMPING_FACTOR * damping, FIRST_DAMPING * s[0] ** 2)
         if accepted is None:
@@ -308,11 +308,10 @@ def update(
     if stop.converged and settle is not Settle.NONE:
 
         def refit(state, branch, max_iterations, on=None):
-            """``on``: another objective (Ritz models, which screen no trials of their own)."""
-            refitted = replace(
-                options, max_iterations=max_iterations, reanalysis=on is None and options.reanalysis
+            """``on``: another objective (Ritz models)."""
+            state, again, _ = iterate(
+                on or objective, state, branch, replace(options, max_iterations=max_iterations)
             )
-            state, again, _ = iterate(on or objective, state, branch, refitted)
             return state, again
 
         if settle is Settle.QUICK:  # a candidate's refit in a diagnosis: only re-pairings that pay at once
