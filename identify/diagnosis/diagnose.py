@@ -55,6 +55,7 @@ from ..fitting.driver import (
 from ..measurements import Measurements
 from ..reporting.diagnosis_report import diagnosis_text, diagnosis_view
 from .compare import Comparison, compare
+from .leads import Lead, leads
 from .ranking import plausible_first
 
 #: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
@@ -274,11 +275,32 @@ class Diagnosis:
         return self.at_noise_level or (self.final is not None and self.final.converged)
 
     @property
+    def leads(self) -> tuple[Lead, ...]:
+        """Where to look (``leads.leads``) when the data are not explained and the misfit the
+        selection ends with is ``FAR_FROM_NOISE`` times the (stated or assumed) scatter;
+        empty otherwise."""
+        if self.explained or not self.steps:
+            return ()
+        st = (self.final or self.baseline).statistics
+        if st.dof <= 0 or st.chi2_against_scatter / st.dof <= FAR_FROM_NOISE:
+            return ()
+        step = self.steps[-1]
+        return leads(step, step.above_start)
+
+    @property
     def verdict(self) -> str:
         if self.at_noise_level:
             return "nothing beyond the measurement scatter remains: no effect is needed"
         if not self.selected:
-            return "no candidate effect explains the misfit well enough to pay for its parameters"
+            text = "no candidate effect explains the misfit well enough to pay for its parameters"
+            if self.leads:
+                st = self.baseline.statistics
+                text += (
+                    f"; the misfit left is far from the noise (RMS {100 * st.rms_rel_error:.3g} %, "
+                    f"{st.chi2_against_scatter / st.dof:.3g} x the scatter in chi^2): something is "
+                    "missing, see where to look"
+                )
+            return text
         final = self.final
         chain = " + ".join(c.kind for c in self.selected)
         text = (
@@ -327,6 +349,7 @@ class Diagnosis:
             else {"effects": [c.kind for c in self.selected], **final.to_dict()},
             "dropped": list(self.dropped),
             "above_start": list(self.above_start),
+            "leads": [lead.to_dict() for lead in self.leads],
             "seconds": finite_or_none(self.seconds),
         }
 

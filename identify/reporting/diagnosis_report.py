@@ -43,10 +43,11 @@ def diagnosis_view(diagnosis) -> str:
         for s in diagnosis.steps
     ]
     good = diagnosis.explained
+    leads = [("Where to look", "".join(h.paragraph(lead.text) for lead in diagnosis.leads))]
     return h.view(
         "Diagnosis",
         ("explained" if good else "not explained", diagnosis.verdict, good),
-        rounds + diagnosis.comparison.sections(),
+        (leads if diagnosis.leads else []) + rounds + diagnosis.comparison.sections(),
     )
 
 
@@ -62,6 +63,8 @@ def diagnosis_text(diagnosis) -> str:
         f"baseline: RMS relative error {100 * diagnosis.baseline.rms_rel_error:.4f} %, "
         f"reduced chi^2 {base.reduced_chi2:.3g}",
     ]
+    if diagnosis.leads:
+        lines += ["", "where to look"] + [f"  - {lead.text}" for lead in diagnosis.leads]
     if diagnosis.at_noise_level:
         lines += [
             "no effect was refitted: the residual patterns below (a score test) show what each would explain"

@@ -20,6 +20,7 @@ def test_true_effect_ranked_first_and_error_falls(case):
     assert o.ranked_first == o.true_effects[0]
     assert o.selected == o.true_effects, o.diagnosis.report()
     assert o.diagnosis.final.converged and o.diagnosis.explained
+    assert not o.diagnosis.leads, "explained: nothing to point at"
     assert o.rms_before / o.rms_after >= 5
     assert o.rms_after <= 2 * hidden_effect.NOISE
     assert o.max_z < 3
