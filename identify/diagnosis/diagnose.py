@@ -220,7 +220,7 @@ class Step:
     reason: str
     skipped: tuple[str, ...] = ()  # refinements not tried (what they refine did not pay)
     seconds: float = float("nan")  # the round's wall time
-    # candidates whose refit ended above ``start`` (``fitting.ended_worse``)
+    # candidates whose refit ended above the fit it contains (``AddedEffect.ended_above``)
     above_start: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
@@ -262,10 +262,12 @@ class Diagnosis:
 
     @property
     def above_start(self) -> tuple[str, ...]:
-        """Candidates whose refit ended above the misfit of the state they were added to
-        (``Step.above_start``), as "round N: kind".  At the limit where its effect
-        vanishes each is that state (with rotary inertia, for the kinds that bring it), so
-        this is a failed refit to report, not a normal event: the count should be 0."""
+        """Candidates whose refit ended above the fit it contains (``Step.above_start``,
+        ``AddedEffect.ended_above``), as "round N: kind": at the limit where the effect's
+        parameters vanish the refit is the state it was added to (with rotary inertia, for
+        the kinds that keep it, where that is higher), so this is a failed refit to report,
+        not a normal event: the count should be 0.  An effect that frees no parameter
+        (rotary inertia alone) has no such limit and is never counted."""
         return tuple(f"round {s.number}: {kind}" for s in self.steps for kind in s.above_start)
 
     @property
@@ -770,7 +772,7 @@ def diagnose(
             above = tuple(
                 c.kind
                 for c in candidates
-                if c.fit is not None and c.fit.finished and this_round.refit.ended_worse(c.fit)
+                if c.fit is not None and c.fit.finished and c.added.ended_above(this_round.refit.state)
             )
             finished = [c for c in candidates if c.eligible]
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0

@@ -522,6 +522,19 @@ class AddedEffect:
     pruned: bool = False  # not refitted: another effect explained clearly more (``prune_below``)
     held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
+    # chi^2 of the fit the refit contains where that is not the state's: the thin plate
+    # with rotary inertia, when it lies above the state (``_restarted``)
+    contained: float | None = None
+
+    def ended_above(self, state: FitResult) -> bool:
+        """The refit ended above the fit it contains (``ended_worse``): ``state``, or the
+        higher ``contained``; never for an effect that freed no parameter (rotary inertia
+        switched on: no limit where it is the state, its misfit is its answer)."""
+        result = self.result
+        if result is None or not self.added or not ended_worse(result, state):
+            return False
+        slack = NOT_WORSE_CHI2 * state.statistics.chi2_unit
+        return self.contained is None or result.statistics.sum_squares > self.contained + slack
 
     @property
     def shear_moduli(self) -> list[Parameter]:
@@ -836,10 +849,6 @@ class Refit:
         """``fit`` (made on this context's data) iterated on from where it stopped."""
         return continued(fit, self.measurements, options, self.settle)
 
-    def ended_worse(self, result: FitResult) -> bool:
-        """Whether ``result`` ended above the state (``ended_worse``)."""
-        return ended_worse(result, self.state)
-
 
 @dataclass(frozen=True)
 class Refitting:
@@ -996,6 +1005,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
     )
     if progress:
         progress(f"fitting with {kind}")
+    contained = None
     try:
         if effect(kind).independent_starts:
             result, rivals = _from_starts(refit, kind, hints, base + shear_moduli_in(new), progress)
@@ -1003,7 +1013,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
         else:
             result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
             if effect(kind).frees_shear:
-                result, new, restarted = _restarted(refit, ready, result, new, base)
+                result, new, restarted, contained = _restarted(refit, ready, result, new, base)
                 notes += restarted
             result, restarted = _other_starts(refit, ready, result, base + new)
             notes += restarted
@@ -1022,6 +1032,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
         tuple(notes),
         reasons,
         held=ran_out,
+        contained=contained,
     )
 
 
@@ -1057,15 +1068,47 @@ def ended_worse(result: FitResult, state: FitResult) -> bool:
     return not result.statistics.sum_squares <= state.statistics.sum_squares + slack
 
 
-def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> tuple[FitResult, list, list]:
-    """A transverse-shear refit that ended worse than ``state`` is a failed start, not a
-    result: the other ``SHEAR_STARTS`` and the thin-plate limit (``vanishing_shear_start``,
-    from where every step can only lower the misfit) are tried, the lowest misfit kept.
-    Returns (result, parameters, notes)."""
+def with_rotary_inertia(refit: Refit, model: SpecimenModel, base) -> FitResult | None:
+    """Where the effect switched on in ``model`` brings rotary inertia to a single-layer
+    ``state`` (``thick_plate``), the fit its refit contains in the limit of vanishing shear:
+    the thin plate with rotary inertia, ``base`` refitted from the state (at most
+    ``CONTINUATION_ITERATIONS``, on the thin plate's mesh); None for the other effects,
+    whose limit is the state itself."""
+    state = refit.state
+    before, after = state.model.options, model.options
+    if not after.rotary_inertia or before.rotary_inertia or after.theory != before.theory:
+        return None
+    thin = state.model.with_options(rotary_inertia=True)
+    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=refit.options.stall_chi2)
+    return fit_layers(thin, refit.measurements, list(base), steps, refit.follow(state.pairings, Settle.NONE))
+
+
+def _restarted(
+    refit: Refit, ready: Prepared, result: FitResult, new, base
+) -> tuple[FitResult, list, list, float | None]:
+    """A transverse-shear refit that ended worse than the fit it contains is a failed
+    start, not a result: the other ``SHEAR_STARTS`` and the thin-plate limit
+    (``vanishing_shear_start``, from where every step can only lower the misfit) are tried
+    until one is not worse, the lowest misfit kept.  The fit it contains is ``state``, or
+    for an effect that brings rotary inertia the thin plate with it
+    (``with_rotary_inertia``) where that is higher: rotary inertia then raises the misfit,
+    and a refit that ends between the two has not failed.  Returns (result, parameters,
+    notes, the chi^2 of the fit it contains where that is not the state's, else None)."""
     state = refit.state
     shear = shear_moduli_in(new)
     if not shear or not ended_worse(result, state):
-        return result, new, []
+        return result, new, [], None
+    contained, floor = state, None
+    inertia = with_rotary_inertia(refit, ready.model, base)
+    if inertia is not None and inertia.statistics.sum_squares > state.statistics.sum_squares:
+        contained, floor = inertia, inertia.statistics.sum_squares
+        if not ended_worse(result, inertia):
+            note = (
+                f"the refit ended above the fit without {ready.kind}, but not above the thin plate with "
+                f"rotary inertia it contains (RMS {100 * inertia.rms_rel_error:.3g} %): rotary inertia "
+                "raises the misfit here, the refit did not fail"
+            )
+            return result, new, [note], floor
     specimen = ready.model.specimen
     parameters = base + list(new)
 
@@ -1082,12 +1125,12 @@ def _restarted(refit: Refit, ready: Prepared, result: FitResult, new, base) -> t
             ),
         )
 
-    best, where, count = _first_not_worse(refit, ready, result, starts(), parameters)
+    best, where, count = _first_not_worse(refit, ready, result, starts(), parameters, contained)
     note = (
         f"the refit from the screened start ended worse than without the effect (a failed start); "
         f"restarted {count} time(s), kept {where or 'the screened start'}"
     )
-    return best, new, [note]
+    return best, new, [note], floor
 
 
 def vanishing_shear_start(
@@ -1152,15 +1195,17 @@ def shear_continuation(
     return current.model, factor
 
 
-def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, parameters):
+def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, parameters, contained=None):
     """``result`` (a failed refit) refitted from each of ``starts`` ((model, description)
-    pairs) in turn until one ends no worse than ``state``; returns (the lowest misfit, its
-    start's description or "" for ``result``, the number of refits)."""
+    pairs) in turn until one ends no worse than the fit it contains (``contained``,
+    default ``state``); returns (the lowest misfit, its start's description or "" for
+    ``result``, the number of refits)."""
     state = refit.state
+    contained = contained or state
     tried = [(result, "")]
     for model, where in starts:
         tried.append((refit.fit(model, parameters, ready.pairings or state.pairings), where))
-        if not ended_worse(tried[-1][0], state):
+        if not ended_worse(tried[-1][0], contained):
             break
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
     return best, where, len(tried) - 1
