@@ -10,16 +10,16 @@ Forward selection: the effect that lowers the criterion most is added, the other
 tried again on top of it, and so on, until the misfit is at the noise level or nothing
 pays for itself: its gain, divided by the over-dispersion c = max(1, reduced chi^2) the
 refit leaves (a misfit made of model error, not noise, shrinks every chi^2 difference's
-weight), must exceed ``MIN_GAIN``.  Before a refit one evaluation checks the conditioning
+weight), must exceed ``SelectionPolicy.min_gain``.  Before a refit one evaluation checks the conditioning
 of the augmented sensitivity matrix (``precheck``): a singular candidate is reported as not
 identifiable and never iterated.  An estimate that is physically unlikely
 (``plausibility``), or whose refit ends singular (``Candidate.singular``), is never
 selected whatever its gain, nor may it keep another candidate from being refitted: it is
 reported as a sign of what is missing (``Effect.sign``; ``docs/diagnosis.md`` states every rule
 and threshold).  Implausible estimates are also ranked behind plausible rivals whose
-criterion is within ``PLAUSIBILITY_MARGIN`` (in units of c); of two candidates with the same free
+criterion is within ``plausibility_margin`` (in units of c); of two candidates with the same free
 parameters, the one with more of the physics every plate has (``thick_plate`` over
-``transverse_shear``) is preferred unless the other is better by ``COMPLETE_MARGIN``.
+``transverse_shear``) is preferred unless the other is better by ``complete_margin``.
 Candidates are refitted with the pairing re-checked at their solution (``repair``), in
 parallel processes when that pays; the selection is finally refitted in full
 (iterations, pairing check), and that refit's own status says whether the data are now
@@ -46,9 +46,9 @@ from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions, Settle
 from ..fitting.driver import (
-    REFIT_POLICY,
     AddedEffect,
     Refit,
+    RefitPolicy,
     Refitting,
     worker_pool,
 )
@@ -58,39 +58,59 @@ from .compare import Comparison, compare
 from .leads import Lead, leads
 from .ranking import plausible_first
 
-#: An effect is selected when its BIC gain / c exceeds this (Kass and Raftery's "very
-#: strong" evidence, 2 ln B > 10).
-MIN_GAIN = 10.0
-#: An implausible estimate is ranked behind plausible rivals within this many units of c.
-PLAUSIBILITY_MARGIN = 10.0
-#: A candidate's refit: at most this many iterations, and it stops once the misfit falls by
-#: less than 0.1 chi^2 units per step (three in a row): a ranking needs the misfit, not the
-#: last digits of the parameters; the selected effects are refitted in full at the end.
-CANDIDATE_OPTIONS = FitOptions(max_iterations=20, stall_chi2=0.1)
-#: The chosen refit and the final one: to convergence, or until chi^2 falls by less than
-#: 0.01 per step (three in a row) where a weakly determined direction only creeps (its std
-#: then says so).
-FINAL_OPTIONS = FitOptions(max_iterations=REFIT_POLICY.effect_iterations, stall_chi2=0.01)
-#: A candidate that is another one with physics every real plate has besides (rotary
-#: inertia: thick_plate against transverse_shear; a soft layer's own shear: layerwise
-#: against both), with no more free parameters, is preferred unless the lesser one's
-#: criterion is lower by more than this (in units of c; 2 ln B > 6 is Kass and Raftery's
-#: "strong" evidence).  The lesser model is an approximation: where the data cannot tell,
-#: its error is taken up by the moduli (3-D cross-ply reference: G13 23 % low without
-#: rotary inertia; on a soft bond line, G12 2 % = 4 std off with a single shear layer).
-COMPLETE_MARGIN = 6.0
-#: A refinement (``Effect.refines``) is tried in a round only when what it refines paid for
-#: itself in it (or is selected already), or, when nothing paid in the round, what it
-#: refines explained some misfit and the misfit is still this many times the scatter
-#: (reduced chi^2; 25: an RMS five times the scatter): the selection must not stop with
-#: the more complete theory untried.  On a
-#: blind hybrid with a 0.25 mm, 1 GPa bond line (21 x the floor, reduced chi^2 742) every
-#: single-layer candidate stalled at 1.7-1.9 % (gain / c 3-8) and layerwise, the only
-#: model of the bond line's own shear, was never tried.
-FAR_FROM_NOISE = 25.0
-#: Candidate refits run in parallel processes when there are at least this many in a round
-#: and the baseline fit took at least ``RefitPolicy.parallel_from_s``.
-PARALLEL_FROM = 3
+
+@dataclass(frozen=True)
+class SelectionPolicy:
+    """The numbers of the forward selection; a study or a test passes another to vary
+    them (``diagnose(..., policy=...)``).  docs/diagnosis.md gives each with the cases
+    behind it.
+
+    ``min_gain``: an effect is selected when its BIC gain / c exceeds this (Kass and
+    Raftery's "very strong" evidence, 2 ln B > 10).  ``plausibility_margin``: an
+    implausible estimate is ranked behind plausible rivals within this many units of c.
+    ``complete_margin``: a candidate with the physics of another and more that every
+    real plate has (rotary inertia: ``thick_plate`` against ``transverse_shear``; a soft
+    layer's own shear: ``layerwise`` against both), with no more free parameters, is
+    preferred unless the lesser one's criterion is lower by more than this (units of c;
+    2 ln B > 6 is "strong" evidence): where the data cannot tell, the lesser model's
+    error is taken up by the moduli.  ``far_from_noise``: a refinement
+    (``Effect.refines``) is also tried when nothing paid in its round, what it refines
+    explained some misfit and the reduced chi^2 is still above this (25: an RMS five
+    times the scatter), and the diagnosis points where to look when it ends unexplained
+    this far from the noise (``leads``).  ``candidate_iterations``,
+    ``candidate_stall_chi2``: a candidate's refit stops after that many iterations or
+    once chi^2 falls by less than that per step, three in a row (a ranking needs the
+    misfit, not the last digits of the parameters).  ``final_stall_chi2``: the chosen
+    and the final refits run to convergence (``refits.effect_iterations``) or until chi^2
+    falls by less than this per step, three in a row, where a weakly determined
+    direction only creeps (its std then says so).  ``parallel_from``: candidate refits
+    run in worker processes when a round has at least this many and the baseline fit
+    took at least ``refits.parallel_from_s``.  ``refits``: how the effects are refitted
+    (``RefitPolicy``)."""
+
+    min_gain: float = 10.0
+    plausibility_margin: float = 10.0
+    complete_margin: float = 6.0
+    far_from_noise: float = 25.0
+    candidate_iterations: int = 20
+    candidate_stall_chi2: float = 0.1
+    final_stall_chi2: float = 0.01
+    parallel_from: int = 3
+    refits: RefitPolicy = RefitPolicy()
+
+    @property
+    def candidate_options(self) -> FitOptions:
+        """The iteration control of a candidate's refit."""
+        return FitOptions(max_iterations=self.candidate_iterations, stall_chi2=self.candidate_stall_chi2)
+
+    @property
+    def final_options(self) -> FitOptions:
+        """The iteration control of the chosen refit of a round and of the final one."""
+        return FitOptions(max_iterations=self.refits.effect_iterations, stall_chi2=self.final_stall_chi2)
+
+
+#: The documented defaults (docs/diagnosis.md).
+SELECTION_POLICY = SelectionPolicy()
 
 
 @dataclass(frozen=True)
@@ -249,6 +269,7 @@ class Diagnosis:
     final: FitResult | None = None
     seconds: float = float("nan")
     dropped: tuple[str, ...] = ()  # chosen in a round, taken out at the end (``_determined_final``)
+    policy: SelectionPolicy = SELECTION_POLICY
 
     @property
     def at_noise_level(self) -> bool:
@@ -279,12 +300,12 @@ class Diagnosis:
     @property
     def leads(self) -> tuple[Lead, ...]:
         """Where to look (``leads.leads``) when the data are not explained and the misfit the
-        selection ends with is ``FAR_FROM_NOISE`` times the (stated or assumed) scatter;
+        selection ends with is ``policy.far_from_noise`` times the (stated or assumed) scatter;
         empty otherwise."""
         if self.explained or not self.steps:
             return ()
         st = (self.final or self.baseline).statistics
-        if st.dof <= 0 or st.chi2_against_scatter / st.dof <= FAR_FROM_NOISE:
+        if st.dof <= 0 or st.chi2_against_scatter / st.dof <= self.policy.far_from_noise:
             return ()
         step = self.steps[-1]
         return leads(step, step.above_start)
@@ -364,7 +385,7 @@ class Diagnosis:
         return diagnosis_text(self)
 
 
-def _signs(ordered, best) -> str:
+def _signs(ordered, best, policy: SelectionPolicy) -> str:
     """Candidates not selectable (implausible, or singular at their solution) that explain
     more than the chosen one would: reported as signs."""
     floor = best.fit.statistics.sum_squares if best is not None else float("inf")
@@ -374,7 +395,7 @@ def _signs(ordered, best) -> str:
             c.eligible
             and not c.selectable
             and c.fit.statistics.sum_squares < floor
-            and c.scaled_gain > MIN_GAIN
+            and c.scaled_gain > policy.min_gain
         ):
             why = "implausible" if not c.plausible else "singular at its solution"
             out.append(
@@ -391,21 +412,21 @@ def _canonical(kinds) -> frozenset:
     return frozenset(out)
 
 
-def _refine(kind: str, kinds, selected, candidates, state: FitResult) -> bool:
+def _refine(kind: str, kinds, selected, candidates, state: FitResult, policy: SelectionPolicy) -> bool:
     """Is refinement ``kind`` worth a refit in this round: what it refines is not among the
     candidates at all, or is selected already, or paid for itself in this round (even at
-    the noise level: the refinement may be the more complete physics, ``COMPLETE_MARGIN``),
-    or explained some misfit while nothing paid and the misfit is ``FAR_FROM_NOISE`` (the
+    the noise level: the refinement may be the more complete physics, ``complete_margin``),
+    or explained some misfit while nothing paid and the misfit is ``far_from_noise`` (the
     round would stop with the more complete theory untried)."""
     refined = set(effect(kind).refines)
     if not refined & set(kinds) or refined & set(selected):
         return True
-    if any(c.scaled_gain > MIN_GAIN for c in candidates if c.kind in refined):
+    if any(c.scaled_gain > policy.min_gain for c in candidates if c.kind in refined):
         return True
-    nothing_pays = not any(c.selectable and c.scaled_gain > MIN_GAIN for c in candidates)
+    nothing_pays = not any(c.selectable and c.scaled_gain > policy.min_gain for c in candidates)
     return (
         nothing_pays
-        and state.statistics.reduced_chi2 > FAR_FROM_NOISE
+        and state.statistics.reduced_chi2 > policy.far_from_noise
         and any(c.eligible and c.gain > 0 for c in candidates if c.kind in refined)
     )
 
@@ -428,7 +449,7 @@ def _held_back(
     margins: dict,
     state: FitResult,
     candidates,
-    factor: float = REFIT_POLICY.prune_factor,
+    factor: float,
 ) -> dict[str, str]:
     """Refinements not refitted again this round, each with its note: what one explained
     beyond what it refines when last refitted is less than 1 / ``factor`` (the pruning
@@ -462,10 +483,12 @@ def _refined_start(kind: str, candidates) -> FitResult | None:
     return min(refined, key=lambda c: c.bic).fit if refined else None
 
 
-def _more_complete(best: Candidate | None, ordered, selected, c_hat: float) -> Candidate | None:
+def _more_complete(
+    best: Candidate | None, ordered, selected, c_hat: float, margin: float
+) -> Candidate | None:
     """``best``, or an eligible, plausible candidate whose physics strictly contains it
     (with what is ``selected``) with the same number of free parameters and a criterion
-    within ``COMPLETE_MARGIN`` x ``c_hat`` of it."""
+    within ``margin`` x ``c_hat`` of it (``SelectionPolicy.complete_margin``)."""
     if best is None:
         return None
     mine = _canonical(list(selected) + [best.kind])
@@ -476,7 +499,7 @@ def _more_complete(best: Candidate | None, ordered, selected, c_hat: float) -> C
         and c.selectable
         and _canonical(list(selected) + [c.kind]) > mine
         and c.fit.statistics.k == best.fit.statistics.k
-        and c.bic - best.bic < COMPLETE_MARGIN * c_hat
+        and c.bic - best.bic < margin * c_hat
     ]
     return min(fuller, key=lambda c: c.bic) if fuller else best
 
@@ -524,11 +547,11 @@ def _candidate(state: FitResult, added: AddedEffect) -> Candidate:
     return Candidate(added.kind, note, added, gain, scaled)
 
 
-def _workers(requested: int | None, tasks: int, baseline_seconds: float, policy) -> int:
+def _workers(requested: int | None, tasks: int, baseline_seconds: float, policy: SelectionPolicy) -> int:
     """Worker processes for a round of ``tasks`` candidate refits (``diagnose``'s ``workers``)."""
     if requested is not None:
         return max(1, requested)
-    if tasks < PARALLEL_FROM or baseline_seconds < policy.parallel_from_s:
+    if tasks < policy.parallel_from or baseline_seconds < policy.refits.parallel_from_s:
         return 1
     return max(1, min(2, os.cpu_count() or 1, tasks))
 
@@ -536,14 +559,15 @@ def _workers(requested: int | None, tasks: int, baseline_seconds: float, policy)
 @dataclass(frozen=True)
 class Round:
     """What a round's candidate refits share: their context (``refit``: the fit they add
-    to, its data, the spec's specimen, ``CANDIDATE_OPTIONS``), the point-mass start
-    positions (``hints``) and the worker processes (``pool``, ``n_workers`` refits at a
-    time; None: all here)."""
+    to, its data, the spec's specimen, the policy's candidate options), the point-mass
+    start positions (``hints``), the worker processes (``pool``, ``n_workers`` refits at a
+    time; None: all here) and the selection's ``policy``."""
 
     refit: Refit
     hints: tuple
     pool: Executor | None = None
     n_workers: int = 1
+    policy: SelectionPolicy = SELECTION_POLICY
 
     @property
     def state(self) -> FitResult:
@@ -623,7 +647,7 @@ def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again
         explained = [
             state.statistics.sum_squares - c.fit.statistics.sum_squares
             for c in out
-            if c.selectable and c.scaled_gain > MIN_GAIN
+            if c.selectable and c.scaled_gain > round_.policy.min_gain
         ]
         below = max(explained) if explained else None
         jobs = [round_.job(r, below) for r in ready[i : i + at_once]]
@@ -653,6 +677,7 @@ def diagnose(
     kinds: list[str] | None = None,
     progress: Callable[[str], None] | None = None,
     workers: int | None = 1,
+    policy: SelectionPolicy = SELECTION_POLICY,
 ) -> Diagnosis:
     """Find the effects the model misses: a forward selection over ``kinds``.
 
@@ -677,6 +702,8 @@ def diagnose(
         and the fit is not trivial, as the command line does.  Workers are spawned and
         import the main module: a script that asks for them needs the
         ``if __name__ == "__main__":`` guard.
+    policy : SelectionPolicy, default SELECTION_POLICY
+        The numbers of the selection and of its refits (docs/diagnosis.md).
 
     Returns
     -------
@@ -708,9 +735,9 @@ def diagnose(
     baseline_seconds = time.perf_counter() - started
     if comparison.at_noise_level:
         say("the baseline fits at the noise level: no effect refitted")
-        return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started)
+        return Diagnosis(baseline, comparison, (), (), None, time.perf_counter() - started, policy=policy)
     peak_list = measurements
-    refitting = Refitting.from_baseline(model, peak_list, baseline)
+    refitting = Refitting.from_baseline(model, peak_list, baseline, policy.refits)
     state, selected, steps, closed = baseline, [], [], set()
     # refinement -> (round, chi^2 it explained beyond, of what)
     margins: dict[str, tuple[int, float, str]] = {}
@@ -732,12 +759,14 @@ def diagnose(
                 )
                 break
             hints = refitting.hints(state, comparison)
-            n_workers = _workers(workers, len(trying), baseline_seconds, refitting.policy)
+            n_workers = _workers(workers, len(trying), baseline_seconds, policy)
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
             # the candidates' data: a peak list's peaks as the state matched them
-            this_round = Round(refitting.refit(state, CANDIDATE_OPTIONS), hints, pool, n_workers)
+            this_round = Round(
+                refitting.refit(state, policy.candidate_options), hints, pool, n_workers, policy
+            )
 
             def run(batch, starts=None):  # called in this round only: the loop variables are this round's
                 in_processes = f" in {n_workers} processes" if pool else ""  # noqa: B023
@@ -757,7 +786,7 @@ def diagnose(
                     for c in candidates
                 ]
             refining = [
-                k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state)
+                k for k in trying if effect(k).refines and _refine(k, kinds, names, candidates, state, policy)
             ]
             skipped = [k for k in trying if effect(k).refines and k not in refining]
             held = _held_back(refining, margins, state, candidates, refitting.policy.prune_factor)
@@ -779,7 +808,7 @@ def diagnose(
             ordered = plausible_first(
                 [c for c in candidates if c.fit is not None],
                 c_hat,
-                PLAUSIBILITY_MARGIN,
+                policy.plausibility_margin,
                 key=lambda c: c.bic,
                 judged=lambda c: c.plausible,
                 related=lambda a, b: _nested(a.kind, b.kind, names),  # noqa: B023 (used now)
@@ -787,7 +816,7 @@ def diagnose(
             ordered += [c for c in candidates if c.fit is None]
             best = next((c for c in ordered if c.selectable), None)
             plausible_best = best
-            best = _more_complete(best, ordered, names, c_hat)
+            best = _more_complete(best, ordered, names, c_hat, policy.complete_margin)
             if best is not plausible_best:
                 ordered = [best] + [c for c in ordered if c is not best]
             for c in candidates:
@@ -797,14 +826,14 @@ def diagnose(
                     + f" ({c.added.seconds:.1f} s)"
                 )
             before = tuple(c.kind for c in selected)
-            if best is None or not best.scaled_gain > MIN_GAIN:
+            if best is None or not best.scaled_gain > policy.min_gain:
                 reason = (
                     "stop: no plausible, identifiable candidate could be refitted"
                     if best is None
                     else f"stop: the best, {best.kind}, does not pay for itself "
-                    f"(gain / c = {best.scaled_gain:.1f} <= {MIN_GAIN:g})"
+                    f"(gain / c = {best.scaled_gain:.1f} <= {policy.min_gain:g})"
                 )
-                reason += _signs(ordered, best) + "".join(held.values())
+                reason += _signs(ordered, best, policy) + "".join(held.values())
                 steps.append(
                     Step(
                         number,
@@ -826,21 +855,22 @@ def diagnose(
                     f"; preferred to {plausible_best.kind}: the same free parameters and physics a real "
                     "plate "
                     f"has besides, and {plausible_best.kind}'s criterion is only "
-                    f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within {COMPLETE_MARGIN:g}"
+                    f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within "
+                    f"{policy.complete_margin:g}"
                 )
             elif lowest is not best:
                 reason += (
                     f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
                     "whose estimate is implausible or singular"
                 )
-            reason += _signs(ordered, best) + "".join(held.values())
+            reason += _signs(ordered, best, policy) + "".join(held.values())
             # The chosen refit is taken to convergence (the candidates stopped once their misfit
             # settled) before the next round looks again.
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = refitting.polished(best.fit, state, FINAL_OPTIONS, pool)
-            polished, notes = refitting.with_determined_shear(polished, FINAL_OPTIONS)
+            polished = refitting.polished(best.fit, state, policy.final_options, pool)
+            polished, notes = refitting.with_determined_shear(polished, policy.final_options)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
             # that the next round's candidates would take up.  Not on a peak list: there a
@@ -848,7 +878,7 @@ def diagnose(
             # matching follows it, so they stay held until the final refit (the measured
             # case is in docs/diagnosis.md, "Peak lists").
             if not rematch:
-                polished = refitting.released(polished, FINAL_OPTIONS, settle=Settle.QUICK)
+                polished = refitting.released(polished, policy.final_options, settle=Settle.QUICK)
             if rematch or (
                 polished.finished
                 and (notes or polished.statistics.sum_squares <= best.fit.statistics.sum_squares)
@@ -895,7 +925,7 @@ def diagnose(
             pool.shutdown()
     completion_started = time.perf_counter()
     matched = state  # the last state a peak list was matched to (the completion is refitted on its matching)
-    completion = _completed(refitting, state, selected, kinds, say) if selected else None
+    completion = _completed(refitting, state, selected, kinds, say, policy) if selected else None
     if completion is not None:
         before = tuple(c.kind for c in selected)
         completed = " + ".join(sorted(set(before) & set(effect(completion.kind).completes)))
@@ -919,21 +949,33 @@ def diagnose(
         )
         selected.append(completion)
         state = completion.fit
-    final = _final(refitting, state, selected, say, like=matched) if selected else None
+    final = _final(refitting, state, selected, say, policy, like=matched) if selected else None
     taken_out = ()
-    determined = _determined_final(refitting, final, steps, selected, say)
+    determined = _determined_final(refitting, final, steps, selected, say, policy)
     if determined is not None:
         final, step = determined
         steps.append(step)
         taken_out = (step.candidates[0].kind,)
     first = steps[0].candidates if steps else ()
     return Diagnosis(
-        baseline, comparison, tuple(first), tuple(steps), final, time.perf_counter() - started, taken_out
+        baseline,
+        comparison,
+        tuple(first),
+        tuple(steps),
+        final,
+        time.perf_counter() - started,
+        taken_out,
+        policy,
     )
 
 
 def _determined_final(
-    refitting: Refitting, final: FitResult | None, steps: list[Step], selected: list[Candidate], say
+    refitting: Refitting,
+    final: FitResult | None,
+    steps: list[Step],
+    selected: list[Candidate],
+    say,
+    policy: SelectionPolicy,
 ) -> tuple[FitResult, Step] | None:
     """When the final refit fits the frequencies but does not determine its parameters
     (``not_identifiable``: the sensitivity matrix singular at the solution), the last
@@ -954,7 +996,7 @@ def _determined_final(
         f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without "
         f"{last.kind}"
     )
-    again = _final(refitting, before.start, selected[:-1], say)
+    again = _final(refitting, before.start, selected[:-1], say, policy)
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
     reason = (
@@ -976,8 +1018,9 @@ def _continue_unfinished(round_: Round, candidates: list[Candidate], say) -> lis
         if not ranked or ranked[0].fit.status is not FitStatus.NOT_CONVERGED:
             break
         c = ranked[0]
-        say(f"  continuing {c.kind} (not converged in {CANDIDATE_OPTIONS.max_iterations} iterations)")
-        options = replace(CANDIDATE_OPTIONS, max_iterations=FINAL_OPTIONS.max_iterations)
+        policy = round_.policy
+        say(f"  continuing {c.kind} (not converged in {policy.candidate_iterations} iterations)")
+        options = replace(policy.candidate_options, max_iterations=policy.final_options.max_iterations)
         fit = round_.refit.continued(c.fit, options)
         extended = _candidate(round_.state, replace(c.added, result=fit))
         candidates[candidates.index(c)] = extended
@@ -986,15 +1029,17 @@ def _continue_unfinished(round_: Round, candidates: list[Candidate], say) -> lis
     return candidates
 
 
-def _completed(refitting: Refitting, state: FitResult, selected, kinds, say) -> Candidate | None:
+def _completed(
+    refitting: Refitting, state: FitResult, selected, kinds, say, policy: SelectionPolicy
+) -> Candidate | None:
     """The more complete physics from the selection's end: each effect that ``completes`` a
     selected one (``Effect.completes``), a fuller theory in its place first
     (``Effect.replaces``), then what joins it; the first kept is returned.
 
     A fuller theory (the layerwise model in place of a single shear layer) is kept when its
     criterion is lower at all (gain / c above 0, any extra shear moduli paid for: it is the
-    same effect's more complete theory, not a new effect that must bring ``MIN_GAIN``) or,
-    with no more free parameters, within ``COMPLETE_MARGIN`` x c of the state's; what joins
+    same effect's more complete theory, not a new effect that must bring ``min_gain``) or,
+    with no more free parameters, within ``complete_margin`` x c of the state's; what joins
     (rotary inertia beside transverse shear, no parameter more) when the misfit falls.
     Not tried where an effect selected already covers its physics, where no candidate
     kind has it, or where it ``adds_nothing`` to the state's model.  Why these exist and
@@ -1018,7 +1063,7 @@ def _completed(refitting: Refitting, state: FitResult, selected, kinds, say) -> 
             else "beside {} (the more complete physics)"
         )
         say(f"trying {kind} " + why.format(" + ".join(completed)))
-        candidate = _candidate(state, refitting.refit(state, CANDIDATE_OPTIONS).add(kind))
+        candidate = _candidate(state, refitting.refit(state, policy.candidate_options).add(kind))
         if candidate.fit is None or not candidate.selectable:
             continue
         if not completing.replaces:
@@ -1028,22 +1073,29 @@ def _completed(refitting: Refitting, state: FitResult, selected, kinds, say) -> 
         c_hat = _over_dispersion(min(candidate.fit, state, key=lambda f: f.statistics.bic))
         fuller = (
             candidate.fit.statistics.k <= state.statistics.k
-            and candidate.fit.statistics.bic - state.statistics.bic < COMPLETE_MARGIN * c_hat
+            and candidate.fit.statistics.bic - state.statistics.bic < policy.complete_margin * c_hat
         )
         if candidate.scaled_gain > 0 or fuller:
             return candidate
     return None
 
 
-def _final(refitting: Refitting, state: FitResult, selected, say, like: FitResult | None = None) -> FitResult:
+def _final(
+    refitting: Refitting,
+    state: FitResult,
+    selected,
+    say,
+    policy: SelectionPolicy,
+    like: FitResult | None = None,
+) -> FitResult:
     """The selection refitted in full: iterations to convergence and the whole pairing
     check (a peak list matched again from ``like``'s matching, default ``state``'s), the
     layer properties the thin-plate fit held freed again where the data now determine
     them (``released``); its status is its own (converged only when consistent with the
     scatter)."""
     say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = refitting.continued(state, FINAL_OPTIONS, Settle.FULL, like=like)
-    result = refitting.explained(refitting.released(result, FINAL_OPTIONS))
+    result = refitting.continued(state, policy.final_options, Settle.FULL, like=like)
+    result = refitting.explained(refitting.released(result, policy.final_options))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(
         result,
@@ -1053,4 +1105,4 @@ def _final(refitting: Refitting, state: FitResult, selected, say, like: FitResul
     )
 
 
-__all__ = ["Candidate", "Diagnosis", "Step", "diagnose", "MIN_GAIN", "PLAUSIBILITY_MARGIN"]
+__all__ = ["Candidate", "Diagnosis", "SelectionPolicy", "SELECTION_POLICY", "Step", "diagnose"]

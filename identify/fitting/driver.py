@@ -81,7 +81,7 @@ VANISHING_MASS = 1e-6
 #: A refit ends worse than the fit it adds its effect to when its misfit is higher by
 #: more than this (units of chi^2): a vanishing start is that fit to within far less,
 #: and a tenth of a unit is no difference any test or criterion can see (an effect must
-#: gain ``diagnose.MIN_GAIN`` = 10 to be selected).
+#: gain ``SelectionPolicy.min_gain`` = 10 to be selected).
 NOT_WORSE_CHI2 = 0.1
 #: The start of a ply's shear moduli from the 3-D relations of its class: a
 #: unidirectional ply (E1 >= ``UD_ANISOTROPY`` E2) is transversely isotropic about its

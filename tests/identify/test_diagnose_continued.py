@@ -6,7 +6,6 @@ import importlib
 import tomllib
 
 from fem.spec import parse_spec
-from identify.engine.updating import FitOptions
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
 
@@ -19,14 +18,16 @@ diagnosis = importlib.import_module("identify.diagnosis.diagnose")
 SENSOR = {"kind": "point_mass", "mass_g": 6.0, "x_mm": 120.0, "y_mm": 95.0}
 
 
-def test_a_best_candidate_stopped_at_its_iteration_limit_is_continued(monkeypatch):
+def test_a_best_candidate_stopped_at_its_iteration_limit_is_continued():
     spec = tomllib.loads(SPEC)
     model = parse_spec(spec)
     truth = parse_spec({**spec, "effects": [SENSOR]})
     data = parse_measurements(synthetic_measurements(truth, modes=5, noise_rel=2e-4, seed=1).table, model)
-    monkeypatch.setattr(diagnosis, "CANDIDATE_OPTIONS", FitOptions(max_iterations=1, stall_chi2=0.1))
     said = []
-    result = diagnosis.diagnose(model, data, ["point_mass", "rotary_inertia"], progress=said.append)
+    one_iteration = diagnosis.SelectionPolicy(candidate_iterations=1)
+    result = diagnosis.diagnose(
+        model, data, ["point_mass", "rotary_inertia"], progress=said.append, policy=one_iteration
+    )
     assert any(line.strip().startswith("continuing point_mass") for line in said), said
     assert [c.kind for c in result.selected] == ["point_mass"]
 

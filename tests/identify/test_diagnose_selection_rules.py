@@ -12,7 +12,7 @@ from fem.solver.attachments import PointMass
 from fem.solver.sensitivity import condition_verdict
 from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.compare import compare
-from identify.diagnosis.diagnose import Candidate, Diagnosis, Step, _candidate, _signs
+from identify.diagnosis.diagnose import SELECTION_POLICY, Candidate, Diagnosis, Step, _candidate, _signs
 from identify.engine.result import FitStatus
 from identify.fitting import driver
 from identify.fitting.driver import AddedEffect, Refit, add_effect, point_mass_hints
@@ -46,7 +46,7 @@ def test_an_implausible_candidate_is_a_sign_not_an_answer(sensor_point_mass):
     baseline, added = sensor_point_mass
     c = _candidate(baseline, replace(added, implausible=("a point mass of 20 g is 9 % of the plate",)))
     assert c.eligible and not c.selectable
-    sign = _signs([c], None)
+    sign = _signs([c], None, SELECTION_POLICY)
     assert "point_mass would pay" in sign and "implausible, not taken" in sign and "shear" in sign
 
 
@@ -60,7 +60,7 @@ def test_a_candidate_singular_at_its_solution_is_not_selectable(sensor_point_mas
     singular_fit = replace(fit, uncertainty=replace(fit.uncertainty, condition_number=5e34))
     c = Candidate("thickness", "", replace(added, result=singular_fit, precheck=well), 100.0, 100.0)
     assert c.eligible and c.plausible and c.singular and not c.selectable
-    assert "singular at its solution" in _signs([c], None)
+    assert "singular at its solution" in _signs([c], None, SELECTION_POLICY)
     ok = Candidate("thickness", "", replace(added, precheck=well), 100.0, 100.0)
     assert not ok.singular
 
@@ -72,6 +72,8 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     from types import SimpleNamespace
 
     from identify.diagnosis.diagnose import _held_back, _margins
+
+    factor = SELECTION_POLICY.refits.prune_factor
 
     def fitted(kind, sum_squares, selectable=True):
         return SimpleNamespace(
@@ -85,25 +87,32 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
     assert margins == {"layerwise": (1, 356.0, "transverse_shear")}
     state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0))
     point_mass = [fitted("point_mass", 1000.0 - 2062.0 / 2 - 1000.0 / 2)]  # explains 1531 > 2 x 356
-    held = _held_back(["layerwise"], margins, state, point_mass)
+    held = _held_back(["layerwise"], margins, state, point_mass, factor)
     assert (
         "layerwise not refitted again: in round 1 it explained a chi^2 of 356 beyond transverse_shear"
         in held["layerwise"]
     )
-    assert _held_back(["layerwise"], margins, state, [fitted("point_mass", 400.0)]) == {}  # 600 < 712: refit
-    assert _held_back(["layerwise"], {}, state, point_mass) == {}  # never refitted: no margin known
-    assert _held_back(["layerwise"], margins, state, [fitted("point_mass", -5000.0, selectable=False)]) == {}
+    assert (
+        _held_back(["layerwise"], margins, state, [fitted("point_mass", 400.0)], factor) == {}
+    )  # 600 < 712: refit
+    assert _held_back(["layerwise"], {}, state, point_mass, factor) == {}  # never refitted: no margin known
+    assert (
+        _held_back(["layerwise"], margins, state, [fitted("point_mass", -5000.0, selectable=False)], factor)
+        == {}
+    )
 
 
 def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
     """Layerwise refines the shear candidates: tried when one of them paid, and also when
-    none paid but one explained some misfit and the misfit is still ``FAR_FROM_NOISE``
+    none paid but one explained some misfit and the misfit is still ``far_from_noise``
     (the round would otherwise stop with the more complete theory untried); not when the
     misfit is near the noise, when the shear candidates explained nothing, or when
     another candidate pays (the round goes on without it)."""
     from types import SimpleNamespace
 
-    from identify.diagnosis.diagnose import FAR_FROM_NOISE, MIN_GAIN, _refine
+    from identify.diagnosis.diagnose import _refine
+
+    far_from_noise, min_gain = SELECTION_POLICY.far_from_noise, SELECTION_POLICY.min_gain
 
     def tried(kind, scaled_gain, gain, selectable=True):
         return SimpleNamespace(
@@ -111,21 +120,25 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
         )
 
     kinds = ["transverse_shear", "thick_plate", "layerwise", "point_mass"]
-    far = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=30 * FAR_FROM_NOISE))
-    near = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=FAR_FROM_NOISE / 2))
+    far = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=30 * far_from_noise))
+    near = SimpleNamespace(statistics=SimpleNamespace(reduced_chi2=far_from_noise / 2))
     stalled = [
         tried("transverse_shear", 8.4, 4564.6),
         tried("thick_plate", 3.0, 1953.7),
         tried("point_mass", -2.2, 4846.4),
     ]  # blind13's first round: nothing pays
-    assert _refine("layerwise", kinds, [], stalled, far)
-    assert not _refine("layerwise", kinds, [], stalled, near)
+    assert _refine("layerwise", kinds, [], stalled, far, SELECTION_POLICY)
+    assert not _refine("layerwise", kinds, [], stalled, near, SELECTION_POLICY)
     nothing = [tried("transverse_shear", -3.0, -50.0), tried("thick_plate", -4.0, -80.0)]
-    assert not _refine("layerwise", kinds, [], nothing, far)
-    paying_mass = stalled[:2] + [tried("point_mass", 2 * MIN_GAIN, 9000.0)]
-    assert not _refine("layerwise", kinds, [], paying_mass, far)
-    assert _refine("layerwise", kinds, [], [tried("transverse_shear", 2 * MIN_GAIN, 9000.0)], near)
-    assert _refine("layerwise", kinds, ["thick_plate"], nothing, near), "what it refines is selected already"
+    assert not _refine("layerwise", kinds, [], nothing, far, SELECTION_POLICY)
+    paying_mass = stalled[:2] + [tried("point_mass", 2 * min_gain, 9000.0)]
+    assert not _refine("layerwise", kinds, [], paying_mass, far, SELECTION_POLICY)
+    paying_shear = [tried("transverse_shear", 2 * min_gain, 9000.0)]
+    assert _refine("layerwise", kinds, [], paying_shear, near, SELECTION_POLICY)
+    selected = ["thick_plate"]
+    assert _refine("layerwise", kinds, selected, nothing, near, SELECTION_POLICY), (
+        "what it refines is selected"
+    )
 
 
 def test_shear_candidates_restart_from_the_spec_when_the_thin_plate_distorted_it():
@@ -152,7 +165,7 @@ def test_shear_candidates_restart_from_the_spec_when_the_thin_plate_distorted_it
 def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned):
     """A round's refits in the order of their linearised bounds: the orientation (bound
     10) is pruned by the thickness refit that explained a chi^2 of 77 only when that refit
-    pays for itself (gain / c above ``MIN_GAIN``); at a gain of 5 it is no answer, and the
+    pays for itself (gain / c above ``SelectionPolicy.min_gain``); at a gain of 5 it is no answer, and the
     orientation is refitted (held-out blind02: its bound, second order in the angles,
     understated what it explained)."""
     state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0))
@@ -219,12 +232,12 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
     final = _fit(final_status, rms=2e-4, condition=3e9)
     calls = []
 
-    def refit(refitting, state, chosen, say, like=None):
+    def refit(refitting, state, chosen, say, policy, like=None):
         calls.append((state, [c.kind for c in chosen]))
         return _fit(FitStatus.POOR_FIT, rms=4e-4, condition=again_condition)
 
     monkeypatch.setattr(diagnose_module, "_final", refit)
-    out = diagnose_module._determined_final(None, final, steps, selected, lambda text: None)
+    out = diagnose_module._determined_final(None, final, steps, selected, lambda text: None, SELECTION_POLICY)
     if not dropped:
         assert out is None
         return
@@ -288,7 +301,7 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     monkeypatch.setattr(driver, "add_effect", refitted)
     state = SimpleNamespace(model=single.with_options(transverse_shear=True, rotary_inertia=True))
     selected = [SimpleNamespace(kind="thick_plate")]
-    assert _completed(None, state, selected, ["thick_plate", "layerwise"], print) is None
+    assert _completed(None, state, selected, ["thick_plate", "layerwise"], print, SELECTION_POLICY) is None
 
 
 def test_a_user_registered_effect_takes_part_in_a_diagnosis(paper_model):
@@ -346,3 +359,21 @@ def test_the_refit_policy_is_read_not_the_module_defaults():
     # the policy says, the default context as the documented default.
     assert Refit(None, None, None, policy=RefitPolicy(effect_iterations=7)).options.max_iterations == 7
     assert default.options == REFIT_POLICY.options
+
+
+def test_the_default_policies_are_the_documented_ones():
+    """The defaults of ``SelectionPolicy`` and its ``RefitPolicy`` are the numbers
+    docs/diagnosis.md gives ("The numbers, in one place"), field by field, and every field
+    is in the table."""
+    import re
+    from dataclasses import fields
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "diagnosis.md").read_text()
+    documented = {
+        name: float(value) for name, value in re.findall(r"^\| `([a-z0-9_.]+)` \| ([0-9.]+) \|", text, re.M)
+    }
+    policy = SELECTION_POLICY
+    shown = {f.name: getattr(policy, f.name) for f in fields(policy) if f.name != "refits"}
+    shown |= {f"refits.{f.name}": getattr(policy.refits, f.name) for f in fields(policy.refits)}
+    assert documented == pytest.approx(shown)
