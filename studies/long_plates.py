@@ -146,8 +146,10 @@ class Outcome:
     ratio: dict[str, float] = field(default_factory=dict)
 
 
-def run_plate(plate: Plate, folder: Path) -> Outcome:
-    """peaks -> fit -> diagnose -> fit with the selected effects, timed."""
+def run_plate(plate: Plate, folder: Path, workers: int | None = None) -> Outcome:
+    """peaks -> fit -> diagnose -> fit with the selected effects, timed; ``workers`` as in
+    ``fit`` and ``diagnose`` (default None: two processes where it pays, as the command
+    line runs them)."""
     seconds = {}
     clock = time.perf_counter()
     peak_list = extract_peaks(list(plate.recordings), "original")
@@ -158,16 +160,16 @@ def run_plate(plate: Plate, folder: Path) -> Outcome:
     measurements = parse_measurements(table, model, "peaks.csv")
 
     clock = time.perf_counter()
-    baseline = fit(model, measurements)
+    baseline = fit(model, measurements, workers=workers)
     seconds["fit"] = time.perf_counter() - clock
     clock = time.perf_counter()
-    diagnosis = diagnose(model, measurements)
+    diagnosis = diagnose(model, measurements, workers=workers)
     seconds["diagnose"] = time.perf_counter() - clock
     selected = tuple(c.kind for c in diagnosis.selected)
     final = baseline
     if selected:
         clock = time.perf_counter()
-        final = fit(model, measurements, list(selected))
+        final = fit(model, measurements, list(selected), workers=workers)
         seconds["refit"] = time.perf_counter() - clock
     z, ratio = {}, {}
     for p, v, s in zip(final.parameters, final.values, final.uncertainty.std):
@@ -195,13 +197,13 @@ def run_plate(plate: Plate, folder: Path) -> Outcome:
     )
 
 
-def run(out=None, seeds=(10, 11, 12), real_like: bool = True) -> list[Outcome]:
+def run(out=None, seeds=(10, 11, 12), real_like: bool = True, workers: int | None = None) -> list[Outcome]:
     folder = report_folder("long_plates", out)
     outcomes = []
     for seed in seeds:
         plate_folder = folder / f"plate{seed}"
         plate_folder.mkdir(parents=True, exist_ok=True)
-        outcomes.append(run_plate(simulate(seed, plate_folder, real_like), plate_folder))
+        outcomes.append(run_plate(simulate(seed, plate_folder, real_like), plate_folder, workers))
     rows = [
         {
             "plate": o.seed,
