@@ -1069,11 +1069,11 @@ def ended_worse(result: FitResult, state: FitResult) -> bool:
 
 
 def with_rotary_inertia(refit: Refit, model: SpecimenModel, base) -> FitResult | None:
-    """Where the effect switched on in ``model`` brings rotary inertia to a single-layer
-    ``state`` (``thick_plate``), the fit its refit contains in the limit of vanishing shear:
-    the thin plate with rotary inertia, ``base`` refitted from the state (at most
-    ``CONTINUATION_ITERATIONS``, on the thin plate's mesh); None for the other effects,
-    whose limit is the state itself."""
+    """Where the effect switched on in ``model`` brings rotary inertia to ``state`` on the
+    same plate theory (``thick_plate`` on a thin plate), the fit its refit contains where
+    its shear moduli vanish (or return to the state's): the state's model with rotary
+    inertia, ``base`` refitted from the state (at most ``CONTINUATION_ITERATIONS``, on the
+    state's mesh); None for the other effects, whose limit is the state itself."""
     state = refit.state
     before, after = state.model.options, model.options
     if not after.rotary_inertia or before.rotary_inertia or after.theory != before.theory:
@@ -1090,8 +1090,8 @@ def _restarted(
     start, not a result: the other ``SHEAR_STARTS`` and the thin-plate limit
     (``vanishing_shear_start``, from where every step can only lower the misfit) are tried
     until one is not worse, the lowest misfit kept.  The fit it contains is ``state``, or
-    for an effect that brings rotary inertia the thin plate with it
-    (``with_rotary_inertia``) where that is higher: rotary inertia then raises the misfit,
+    for an effect that brings rotary inertia the state with it (``with_rotary_inertia``)
+    where that is higher: rotary inertia then raises the misfit,
     and a refit that ends between the two has not failed.  Returns (result, parameters,
     notes, the chi^2 of the fit it contains where that is not the state's, else None)."""
     state = refit.state
@@ -1104,8 +1104,8 @@ def _restarted(
         contained, floor = inertia, inertia.statistics.sum_squares
         if not ended_worse(result, inertia):
             note = (
-                f"the refit ended above the fit without {ready.kind}, but not above the thin plate with "
-                f"rotary inertia it contains (RMS {100 * inertia.rms_rel_error:.3g} %): rotary inertia "
+                f"the refit ended above the fit without {ready.kind}, but not above that fit with rotary "
+                f"inertia, which it contains (RMS {100 * inertia.rms_rel_error:.3g} %): rotary inertia "
                 "raises the misfit here, the refit did not fail"
             )
             return result, new, [note], floor
