@@ -307,8 +307,7 @@ class Diagnosis:
         st = (self.final or self.baseline).statistics
         if st.dof <= 0 or st.chi2_against_scatter / st.dof <= self.policy.far_from_noise:
             return ()
-        step = self.steps[-1]
-        return leads(step, step.above_start)
+        return leads(self.steps[-1])
 
     @property
     def verdict(self) -> str:

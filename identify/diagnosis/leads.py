@@ -8,8 +8,8 @@ stated scatter, c is the residual variance).  A
 candidate that lowered it by more explains part of the misfit, however little it gains
 after the criterion's penalty; two such candidates may be needed together, or trade off
 on the modes measured.  An implausible or singular estimate that explains more is a sign
-of what is missing (``Effect.sign``); a refit that ended above the fit it started from
-failed (at the limit where its effect vanishes it is that fit).  Decisions never read
+of what is missing (``Effect.sign``); a refit that ended above the fit it contains failed
+(at the limit where its effect vanishes it is that fit).  Decisions never read
 these texts: programs read ``Lead.code``.
 """
 
@@ -49,21 +49,19 @@ def explained(candidate, state) -> tuple[float, float]:
     return drop / before.sum_squares, drop / (added * unit)
 
 
-def leads(step, failed: tuple[str, ...]) -> tuple[Lead, ...]:
-    """The leads of the selection round ``step`` (the one where nothing more paid), whose
-    refits of the kinds ``failed`` ended above its start."""
+def leads(step) -> tuple[Lead, ...]:
+    """The leads of the selection round ``step`` (the one where nothing more paid; its
+    ``above_start``: the refits that ended above the fit they contain,
+    ``AddedEffect.ended_above``)."""
     out = []
     state = step.start
-    # A refit that frees no parameter (rotary inertia switched on) has no limit where it is
-    # the start: ending above it is the model's answer, not a failed refit.
-    failed = [c.kind for c in step.candidates if c.kind in failed and c.fit.statistics.k > state.statistics.k]
-    if failed:
+    if step.above_start:
         out.append(
             Lead(
                 FAILED_REFIT,
-                f"{', '.join(failed)}: the refit ended above the fit it started from; where its effect "
-                "vanishes the refit is that fit, so the refit failed (a start that did not descend) and "
-                "says nothing against the effect: please report it with the data",
+                f"{', '.join(step.above_start)}: the refit ended above the fit it contains (where its "
+                "effect vanishes the refit is that fit), so the refit failed (a start that did not "
+                "descend) and says nothing against the effect: please report it with the data",
             )
         )
     fitted = [(c, *explained(c, state)) for c in step.candidates if c.eligible]

@@ -53,25 +53,24 @@ def test_leads_name_partial_explainers_together_and_signs_before_them():
             _candidate("suspension", 5, 1950.0),  # 0.44 x chance: what any parameter takes
             _candidate("transverse_shear", 6, 1000.0, ["G13 at its bound"]),
         ),
+        above_start=(),
     )
-    found = leads(step, ())
+    found = leads(step)
     assert [lead.code for lead in found] == [IMPLAUSIBLE, PARTIAL, OUTSIDE]
     assert "transverse_shear explains 50 %" in found[0].text
     assert "fit --effect point_mass --effect orientation" in found[1].text
     assert "suspension" not in found[1].text
 
 
-def test_a_parameter_free_refit_above_its_start_is_no_failed_refit():
-    """Rotary inertia switched on frees nothing: ending above the start is its answer; a
-    refit that frees parameters and ends above it failed (its limit is the start)."""
-    state = _fit(4, 2000.0)
+def test_a_refit_above_what_it_contains_is_the_first_lead():
+    """The round's ``above_start`` (refits that ended above the fit they contain, decided by
+    ``AddedEffect.ended_above``) leads, before what the refits explain."""
     step = SimpleNamespace(
-        start=state, candidates=(_candidate("rotary_inertia", 4, 2010.0), _candidate("adhesive", 5, 2100.0))
+        start=_fit(4, 2000.0), candidates=(_candidate("adhesive", 5, 2100.0),), above_start=("adhesive",)
     )
-    found = leads(step, ("rotary_inertia", "adhesive"))
-    assert found[0].code == leads_module.FAILED_REFIT
+    found = leads(step)
+    assert [lead.code for lead in found] == [leads_module.FAILED_REFIT, OUTSIDE]
     assert found[0].text.startswith("adhesive:")
-    assert "rotary_inertia" not in found[0].text
 
 
 def test_nothing_pays_far_from_the_noise_says_where_to_look():
