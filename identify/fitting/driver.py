@@ -522,19 +522,19 @@ class AddedEffect:
     pruned: bool = False  # not refitted: another effect explained clearly more (``prune_below``)
     held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
-    # chi^2 of the fit the refit contains where that is not the state's: the thin plate
-    # with rotary inertia, when it lies above the state (``_restarted``)
-    contained: float | None = None
+    # the fit the refit contains where that is not the state: the state with rotary
+    # inertia, when it lies above the state (``_restarted``)
+    contained: FitResult | None = None
 
     def ended_above(self, state: FitResult) -> bool:
-        """The refit ended above the fit it contains (``ended_worse``): ``state``, or the
-        higher ``contained``; never for an effect that freed no parameter (rotary inertia
-        switched on: no limit where it is the state, its misfit is its answer)."""
+        """The refit ended above the fit it contains (``ended_worse``): ``state``, and the
+        higher ``contained`` where there is one; never for an effect that freed no
+        parameter (rotary inertia switched on: no limit where it is the state, its misfit
+        is its answer)."""
         result = self.result
         if result is None or not self.added or not ended_worse(result, state):
             return False
-        slack = NOT_WORSE_CHI2 * state.statistics.chi2_unit
-        return self.contained is None or result.statistics.sum_squares > self.contained + slack
+        return self.contained is None or ended_worse(result, self.contained)
 
     @property
     def shear_moduli(self) -> list[Parameter]:
@@ -1079,36 +1079,41 @@ def with_rotary_inertia(refit: Refit, model: SpecimenModel, base) -> FitResult |
     if not after.rotary_inertia or before.rotary_inertia or after.theory != before.theory:
         return None
     thin = state.model.with_options(rotary_inertia=True)
-    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=refit.options.stall_chi2)
-    return fit_layers(thin, refit.measurements, list(base), steps, refit.follow(state.pairings, Settle.NONE))
+    unsettled = refit.follow(state.pairings, Settle.NONE)
+    return fit_layers(thin, refit.measurements, list(base), _continuation_options(refit), unsettled)
+
+
+def _continuation_options(refit: Refit) -> FitOptions:
+    """A continuation step's refit of the layers at fixed effect parameters: at most
+    ``CONTINUATION_ITERATIONS``, stalled as ``refit``'s."""
+    return FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=refit.options.stall_chi2)
 
 
 def _restarted(
     refit: Refit, ready: Prepared, result: FitResult, new, base
-) -> tuple[FitResult, list, list, float | None]:
+) -> tuple[FitResult, list, list, FitResult | None]:
     """A transverse-shear refit that ended worse than the fit it contains is a failed
     start, not a result: the other ``SHEAR_STARTS`` and the thin-plate limit
     (``vanishing_shear_start``, from where every step can only lower the misfit) are tried
     until one is not worse, the lowest misfit kept.  The fit it contains is ``state``, or
     for an effect that brings rotary inertia the state with it (``with_rotary_inertia``)
-    where that is higher: rotary inertia then raises the misfit,
-    and a refit that ends between the two has not failed.  Returns (result, parameters,
-    notes, the chi^2 of the fit it contains where that is not the state's, else None)."""
+    where that is higher: rotary inertia then raises the misfit, and a refit that ends
+    between the two has not failed.  Returns (result, parameters, notes, the fit it
+    contains where that is not the state, else None)."""
     state = refit.state
     shear = shear_moduli_in(new)
     if not shear or not ended_worse(result, state):
         return result, new, [], None
-    contained, floor = state, None
     inertia = with_rotary_inertia(refit, ready.model, base)
-    if inertia is not None and inertia.statistics.sum_squares > state.statistics.sum_squares:
-        contained, floor = inertia, inertia.statistics.sum_squares
-        if not ended_worse(result, inertia):
-            note = (
-                f"the refit ended above the fit without {ready.kind}, but not above that fit with rotary "
-                f"inertia, which it contains (RMS {100 * inertia.rms_rel_error:.3g} %): rotary inertia "
-                "raises the misfit here, the refit did not fail"
-            )
-            return result, new, [note], floor
+    if inertia is not None and inertia.statistics.sum_squares <= state.statistics.sum_squares:
+        inertia = None  # the state is the higher: it is what the refit contains
+    if inertia is not None and not ended_worse(result, inertia):
+        note = (
+            f"the refit ended above the fit without {ready.kind}, but not above that fit with rotary "
+            f"inertia, which it contains (RMS {100 * inertia.rms_rel_error:.3g} %): rotary inertia "
+            "raises the misfit here, the refit did not fail"
+        )
+        return result, new, [note], inertia
     specimen = ready.model.specimen
     parameters = base + list(new)
 
@@ -1125,12 +1130,12 @@ def _restarted(
             ),
         )
 
-    best, where, count = _first_not_worse(refit, ready, result, starts(), parameters, contained)
+    best, where, count = _first_not_worse(refit, ready, result, starts(), parameters, inertia)
     note = (
         f"the refit from the screened start ended worse than without the effect (a failed start); "
         f"restarted {count} time(s), kept {where or 'the screened start'}"
     )
-    return best, new, [note], floor
+    return best, new, [note], inertia
 
 
 def vanishing_shear_start(
@@ -1177,7 +1182,7 @@ def shear_continuation(
     there with them undetermined).  Every step kept lowers the misfit.  Returns (the
     model, its factor)."""
     others = [p for p in parameters if p not in shear]
-    steps = FitOptions(max_iterations=CONTINUATION_ITERATIONS, stall_chi2=refit.options.stall_chi2)
+    steps = _continuation_options(refit)
     unsettled = refit.follow(refit.state.pairings, Settle.NONE)
 
     def fitted(start: SpecimenModel) -> FitResult:
