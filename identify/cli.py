@@ -285,7 +285,8 @@ def run_diagnose(args) -> int:
             model=model,
             measurements=measurements,
             text=result.report(),
-            files={"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())},
+            files={"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())}
+            | ({"refit.txt": result.final.report()} if result.final is not None else {}),
             figures=figures,
             comparison=result.comparison,
         )

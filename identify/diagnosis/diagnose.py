@@ -366,9 +366,8 @@ class Diagnosis:
                 for c in self.selected
             ],
             "path": [s.to_dict() for s in self.steps],
-            "final": None
-            if final is None
-            else {"effects": [c.kind for c in self.selected], **final.to_dict()},
+            # The fit's own document: its "effects" table holds the selected effects' estimates.
+            "final": None if final is None else final.to_dict(),
             "dropped": list(self.dropped),
             "above_start": list(self.above_start),
             "leads": [lead.to_dict() for lead in self.leads],

@@ -943,8 +943,9 @@ class Refitting:
 
     @staticmethod
     def explained(result: FitResult) -> FitResult:
-        """A final fit with its uncertainty budget and the likely causes of a poor fit."""
-        return with_causes(with_budget(result))
+        """A final fit as ``fit`` returns one: with its uncertainty budget, the likely causes
+        of a poor fit and the layers' loss factors when the spec asks for them."""
+        return with_damping(with_causes(with_budget(result)))
 
 
 def add_effect(

@@ -98,16 +98,20 @@ def diagnosis_text(diagnosis) -> str:
         lines.append(f"  -> {step.reason}")
     final = diagnosis.final
     if final is not None:
+        chain = " ".join(f"--effect {c.kind}" for c in diagnosis.selected)
         lines += [
             "",
-            f"refit with {' + '.join(c.kind for c in diagnosis.selected)}",
+            f"refit with {' + '.join(c.kind for c in diagnosis.selected)}: the layers identified with the "
+            f"effects the data ask for (the model of `fit {chain}`, refitted from the diagnosis's end; "
+            "with --report its full report is refit.txt)",
             f"  {status_line(final.status.value, final.message)}",
             f"  RMS relative error {percent(final.rms_rel_error, 3)}",
         ]
-        added = [p for p in final.parameters if p not in diagnosis.baseline.parameters]
-        for p in added:
-            shown = with_std(display(p, final.value(p)), display(p, final.std(p)), UNITS[p.kind][0])
-            lines.append(f"  {p.name:40s} {shown}")
+        for p, value, sd, flags in zip(
+            final.parameters, final.values, final.uncertainty.std, final.uncertainty.flags
+        ):
+            shown = with_std(display(p, value), display(p, sd), UNITS[p.kind][0])
+            lines.append(f"  {p.name:40s} {shown:38s} {'; '.join(flags)}".rstrip())
         notes = [text for _, text in final.effect_notes]
         lines += [f"  - {text}" for text in notes]
     if diagnosis.above_start:

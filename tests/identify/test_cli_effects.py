@@ -63,3 +63,28 @@ def test_diagnose_json_shape(sensor_csv, capsys):
 def test_unknown_effect_is_a_one_line_error(capsys):
     assert main(["diagnose", "--effects", "sensor"]) == 2
     assert "unknown effect kind 'sensor'" in capsys.readouterr().err
+
+
+def test_the_diagnosis_ends_with_the_answer_fit_effect_gives(sensor_csv, capsys, tmp_path):
+    """The diagnosis's final refit is the loop's answer: its text lists every layer
+    property with its std, ``--report`` writes its full fit report (refit.txt), and its
+    values agree with ``fit --effect point_mass`` (the same model refitted from the
+    thin-plate fit) to within 1 % of their std (measured 2.3e-4 std at most): both are the
+    least-squares solution of the same data and model, reached by different paths, so only
+    the iterations' stopping rule separates them."""
+    code = main(
+        ["diagnose", str(COATED_PLATE), sensor_csv, "--effects", "point_mass", "--report", str(tmp_path)]
+    )
+    text = capsys.readouterr().out
+    assert code == 0
+    refit = text[text.index("refit with point_mass") :]
+    assert all(f"{name}." in refit for name in ("steel", "top_coating", "bottom_coating"))
+    assert "parameters (value ± 1 std" in (tmp_path / "refit.txt").read_text()
+    diagnosed = json.loads((tmp_path / "diagnosis.json").read_text())["final"]
+    assert set(diagnosed["effects"]) == {"point_mass"}
+    assert main(["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json"]) == 0
+    fitted = json.loads(capsys.readouterr().out)
+    for group in ("materials", "effects"):
+        for name, values in fitted[group].items():
+            for key, std in values["std"].items():
+                assert abs(diagnosed[group][name][key] - values[key]) < 0.01 * std, (group, name, key)
