@@ -1086,13 +1086,13 @@ def _final(
     policy: SelectionPolicy,
     like: FitResult | None = None,
 ) -> FitResult:
-    """The selection refitted in full: iterations to convergence and the whole pairing
-    check (a peak list matched again from ``like``'s matching, default ``state``'s), the
-    layer properties the thin-plate fit held freed again where the data now determine
-    them (``released``); its status is its own (converged only when consistent with the
-    scatter)."""
+    """The selection refitted in full: iterations to convergence (a peak list matched
+    again from ``like``'s matching, default ``state``'s), the layer properties the
+    thin-plate fit held freed again where the data now determine them (``released``), and
+    the whole pairing check once, at that answer; its status is its own (converged only
+    when consistent with the scatter)."""
     say(f"refitting with {' + '.join(c.kind for c in selected)} (pairing checked in full)")
-    result = refitting.continued(state, policy.final_options, Settle.FULL, like=like)
+    result = refitting.continued(state, policy.final_options, Settle.QUICK, like=like)
     result = refitting.explained(refitting.released(result, policy.final_options))
     notes = tuple((c.kind, text) for c in selected for text in c.added.notes)
     return replace(

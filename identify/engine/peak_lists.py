@@ -182,7 +182,8 @@ def fit_peak_list(
     at the solution until settled; the result's ``peaks`` says what became of each peak.
     ``follow.matches`` (``Match`` per configuration) skips the alignment (e.g. a baseline
     fit's final matching); ``follow.effect_of`` names each parameter's effect.  The final
-    fit settles its pairings in full; the modes are paired afresh in every round."""
+    fit checks its pairings as ``follow.settle`` asks (default in full); the modes are
+    paired afresh in every round."""
     parameters = list(parameters) if parameters is not None else model.specimen.material_parameters()
     start_matches, effect_of = follow.matches, follow.effect_of
     notes = []
@@ -240,7 +241,8 @@ def fit_peak_list(
         # below starts from that fit's solution with the new matching.
         notes.append(f"the peak matching had not settled after {MAX_ROUNDS} rounds at the final tolerance")
     ranked = _ranked(peaks, matches)
-    result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, Follow(effect_of))
+    final = Follow(effect_of, settle=follow.settle)
+    result = update(model, ranked, parameters, _options(options, peaks, ranked), progress, final)
     history += _renumbered(result.history, history)
     assignment = _assignment(result.model, peaks, matches, _options(options, peaks, ranked), ranked)
     return replace(

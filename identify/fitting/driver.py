@@ -345,8 +345,7 @@ def _matched_again(job: dict) -> FitResult:
     matching with the pairing checked in full, or (``like`` None) matched afresh."""
     fit, measurements, options, like = job["fit"], job["measurements"], job["options"], job["like"]
     if like is not None:
-        # a peak list's final fit checks the pairing in full
-        return continued(fit, measurements, options, like=like)
+        return continued(fit, measurements, options, Settle.FULL, like=like)
     return fit_layers(fit.model, measurements, list(fit.parameters), options, Follow(fit.effect_of))
 
 
@@ -418,7 +417,8 @@ def fit_with_effects(
             raise LayerIdError(f"effect '{kind}': {added.error}{advice}")
         notes += [(kind, text) for text in added.notes]
         state = rematched(added.result, measurements, state, options, pool)
-    result, reconsidered_notes = refitting.with_determined_shear(state, options, Settle.FULL)
+    # The pairing is checked in full once, at the answer (``released``).
+    result, reconsidered_notes = refitting.with_determined_shear(state, options, Settle.QUICK)
     notes += [(kinds[-1], text) for text in reconsidered_notes]
     result = with_causes(refitting.released(result, options))
     return replace(
@@ -1353,7 +1353,8 @@ def released(
     for choosing the effects; a property held at a handbook value 30 % off moves the
     others by several of their std (blind cross-ply: 7.5; blind hybrid: 13.9), while freed
     it costs only its own std.  Those still held carry their handbook scatter into the
-    others' std (``with_held_scatter``)."""
+    others' std (``with_held_scatter``).  ``settle``: the pairing check of the answer, made
+    once, at it (the tries to free check only the re-pairings that lower the misfit)."""
     every = baseline.model.specimen.material_parameters()
     held = [
         p
@@ -1363,13 +1364,19 @@ def released(
         and p.target in nominal.materials
         and p.kind in MATERIAL_PARAMETERS
     ]
+    quick = Settle.QUICK if settle is Settle.FULL else settle
+
+    def checked(fitted: FitResult) -> FitResult:
+        """``fitted`` (its pairing checked ``quick``) with it checked as ``settle`` asks."""
+        return fitted if settle is quick else continued(fitted, measurements, options, settle)
+
     if not held:
-        return result
+        return checked(result)
     first_hz = float(result.measurements.table["frequency_hz"].min())
 
     def freeing(fitted: FitResult, free: list[Parameter]) -> FitResult | None:
         free_too = list(fitted.parameters) + free
-        freed = fit_layers(fitted.model, measurements, free_too, options, Follow.on(fitted, settle))
+        freed = fit_layers(fitted.model, measurements, free_too, options, Follow.on(fitted, quick))
         if (
             not freed.finished
             or any(p in free for p in at_bounds(freed))
@@ -1387,9 +1394,10 @@ def released(
             if one is not None:
                 freed, now_free = one, now_free + [p]
     if not now_free:
-        return with_held_scatter(result, held)
+        return with_held_scatter(checked(result), held)
     still = [p for p in held if p not in now_free]
     note = f"{', '.join(p.name for p in now_free)} freed again (held in the thin-plate fit): now determined"
+    freed = checked(freed)
     return with_held_scatter(replace(freed, warnings=freed.warnings + (note,)), still)
 
 

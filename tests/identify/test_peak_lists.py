@@ -113,3 +113,24 @@ def test_a_matching_met_again_from_a_better_solution_is_refitted(example_spec, p
     assert result.converged, result.message
     assert result.peaks.matched.all()
     assert np.max(np.abs(z_scores(result, paper_model))) < 3
+
+
+def test_a_peak_list_fit_checks_its_pairing_as_asked(example_spec, eight_modes, monkeypatch):
+    """A peak list's final fit checks its pairing as ``Follow.settle`` asks: in full by
+    default (every pairing the frequencies cannot rule out refitted, ``settle_pairings``),
+    not at all with ``Settle.NONE``.  It used to check in full whatever was asked, so the
+    diagnosis's final refit on a peak list checked it twice (a long spruce-like plate:
+    110 s -> 78 s for that refit, the same chi^2 to the last digit)."""
+    from identify.engine import updating
+    from identify.engine.updating import Follow, Settle
+    from identify.fitting.driver import fit_layers
+
+    calls = []
+    full = updating.settle_pairings
+    monkeypatch.setattr(updating, "settle_pairings", lambda *a: calls.append(1) or full(*a))
+    peaks = parse_measurements(eight_modes[["configuration", "frequency_hz", "std_hz"]], example_spec)
+    checked = fit_layers(example_spec, peaks)
+    assert len(calls) == 1 and checked.converged
+    calls.clear()
+    unchecked = fit_layers(example_spec, peaks, follow=Follow(settle=Settle.NONE))
+    assert calls == [] and unchecked.finished
