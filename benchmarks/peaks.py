@@ -5,7 +5,7 @@ printed with 7 digits) against ``identify-layers predict`` on the bundled exampl
 whole processes measured in the same run (targets: <= 5 s and <= 3x predict); then the
 accuracy and the calibration of std_hz over simulated sessions.
 
-The session is the test plate of ``tests/identify/test_peaks.py``: modes of the
+The session is the test plate of ``tests/identify/recordings/test_peaks.py``: modes of the
 paper's coated steel plate, a suspension mode, a node at the sensor, a weak mode, a
 close pair; hit 3 is a double hit, hit 5 is cut short at 0.4 s.
 """

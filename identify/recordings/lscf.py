@@ -5,7 +5,7 @@ The common-denominator model H(z) = N(z) / D(z) in z = exp(i (w - w_c) T) is fit
 linear least squares, min sum |N(z_k) - H_k D(z_k)|^2 with D monic (Guillaume, Verboven,
 Vanlanduit, Van der Auweraer and Peeters, "A poly-reference implementation of the
 least-squares complex frequency-domain estimator", IMAC XXI, 2003; the same estimator as
-sdypy-EMA's ``Model.get_poles("lscf")``, which ``tests/identify/test_lscf.py`` checks it
+sdypy-EMA's ``Model.get_poles("lscf")``, which ``tests/identify/recordings/test_lscf.py`` checks it
 against).  Two things differ from that full-band form, both for speed on a plate with
 30-60 modes in band:
 

@@ -5,7 +5,7 @@ criteria).
 Why not scipy's: importing ``scipy.signal`` takes 0.4 s (its peak-finding module
 imports ``scipy.stats``), which was a tenth of ``identify-layers peaks`` on 5 hits and
 more than the finding itself ever costs; these two definitions are all the recordings
-need.  ``tests/identify/test_maxima.py`` checks both against scipy's on random curves,
+need.  ``tests/identify/recordings/test_maxima.py`` checks both against scipy's on random curves,
 plateaus and ties included.
 """
 

@@ -9,7 +9,7 @@ is run on H1 over each for orders (degree / 2) 1, 2, ..., up to about twice its 
 the stabilisation diagram.  (sdypy-EMA's LSCF, the same estimator on the whole band, was
 used before: its import took 0.6 s, pyplot included, and its full-band orders up to 100
 spent 0.4 s in the roots of their polynomials, together three quarters of ``peaks`` on a
-38-mode plate; ``tests/identify/test_lscf.py`` checks the two agree.)  A pole is
+38-mode plate; ``tests/identify/recordings/test_lscf.py`` checks the two agree.)  A pole is
 *stable* when the previous order of its sub-band has one within ``FREQ_TOL`` in
 frequency and ``DAMP_TOL`` in damping; stable poles closer than a quarter of their
 half-power half-bandwidth are one column, and a column stable in at least
@@ -128,7 +128,7 @@ SUSPENSION_DB = 6.0
 #: once the largest is below NEWTON_STEP in units of the pole's decay, so of its half-power
 #: half-bandwidth (the steps shrink 10-100 times each, so the error left is a small part of
 #: that, far below a hit-to-hit scatter of 2-10 % of it; std_hz and damping_std agree with
-#: Levenberg-Marquardt's to 1e-4 of themselves, ``tests/identify/test_peaks.py``).
+#: Levenberg-Marquardt's to 1e-4 of themselves, ``tests/identify/recordings/test_peaks.py``).
 NEWTON_STEPS = 10
 NEWTON_STEP = 1e-5
 #: A hit's pole is converged once the step is below this fraction of its distance from the

@@ -1,6 +1,6 @@
 """The hidden-effect study, run small: each synthetic case diagnosed among four or five
 candidate effects (the full study tries every registered kind); the 3-D reference is in
-``tests/identify/test_diagnose_reference.py``."""
+``tests/identify/diagnosis/test_diagnose_reference.py``."""
 
 import pytest
 

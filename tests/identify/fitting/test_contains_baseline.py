@@ -27,7 +27,7 @@ from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import start_model, true_model
 
-from ..walk import SPEC
+from ...walk import SPEC
 
 
 @pytest.fixture(scope="module")

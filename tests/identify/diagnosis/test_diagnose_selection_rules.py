@@ -369,7 +369,7 @@ def test_the_default_policies_are_the_documented_ones():
     from dataclasses import fields
     from pathlib import Path
 
-    text = (Path(__file__).parents[2] / "docs" / "diagnosis.md").read_text()
+    text = (Path(__file__).parents[3] / "docs" / "diagnosis.md").read_text()
     documented = {
         name: float(value) for name, value in re.findall(r"^\| `([a-z0-9_.]+)` \| ([0-9.]+) \|", text, re.M)
     }

@@ -9,7 +9,7 @@ from fem.spec import parse_spec
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
 
-from ..walk import SPEC
+from ...walk import SPEC
 
 # the module (the package exports its function)
 diagnosis = importlib.import_module("identify.diagnosis.diagnose")
