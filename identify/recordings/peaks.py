@@ -10,15 +10,15 @@ the stabilisation diagram.  (sdypy-EMA's LSCF, the same estimator on the whole b
 used before: its import took 0.6 s, pyplot included, and its full-band orders up to 100
 spent 0.4 s in the roots of their polynomials, together three quarters of ``peaks`` on a
 38-mode plate; ``tests/identify/recordings/test_lscf.py`` checks the two agree.)  A pole is
-*stable* when the previous order of its sub-band has one within ``FREQ_TOL`` in
-frequency and ``DAMP_TOL`` in damping; stable poles closer than a quarter of their
-half-power half-bandwidth are one column, and a column stable in at least
-``STABLE_FRACTION`` of its sub-band's orders is a mode candidate.  Each candidate is
+*stable* when the previous order of its sub-band has one within ``freq_tol`` in
+frequency and ``damp_tol`` in damping (``PeakPolicy``); stable poles closer than a
+quarter of their half-power half-bandwidth are one column, and a column stable in at
+least ``stable_fraction`` of its sub-band's orders is a mode candidate.  Each candidate is
 refined by a local pole-residue fit on H1 (variable projection: complex residues, the
 neighbouring modes' poles with free residues so a strong neighbour's skirt does not bias
 it, and a linear residual term; the poles by Gauss-Newton steps with the exact
 Jacobian, or ``scipy.optimize.least_squares`` where those do not converge; overlapping
-candidates are fitted together), kept when its modal peak stands ``SNR_MIN`` times above the fit's residual,
+candidates are fitted together), kept when its modal peak stands ``snr_min`` times above the fit's residual,
 and cross-checked against peak picking (local maxima of |H1| in dB with their prominence,
 as ``scipy.signal.find_peaks`` defines them, :mod:`identify.recordings.maxima`; Gaussian
 interpolation: ``peak_hz``).  Two modes closer than a quarter half-bandwidth
@@ -59,9 +59,9 @@ Flags (``quality`` is the first that applies, else "good"): ``response_only`` (n
 channel, see above), ``suspension`` (below
 ``frf.SUSPENSION_HZ``: a rigid-body mode on the suspension, kept only when the caller's
 band reaches down there; the default band starts at that frequency, so suspension peaks
-are left out and named in the notes), ``low_coherence`` (gamma^2 < ``COHERENCE_MIN`` at
-the peak), ``weak`` (prominence < ``WEAK_DB`` in |H1| or no local maximum of its own,
-or SNR < 3 x ``SNR_MIN``), ``close`` (another mode within two half-power bandwidths),
+are left out and named in the notes), ``low_coherence`` (gamma^2 < ``coherence_min`` at
+the peak), ``weak`` (prominence < ``weak_db`` in |H1| or no local maximum of its own,
+or SNR < ``weak_snr`` x ``snr_min``), ``close`` (another mode within two half-power bandwidths),
 ``single_hit`` (fewer than two hit estimates), ``guided`` (found only by looking near a
 ``guide_hz`` frequency), ``std_pooled``, ``unpicked`` (no peak picked on |H1| within
 the mode's half-power half-bandwidth: ``peak_hz`` is missing, null in JSON and blank in
@@ -74,7 +74,7 @@ from __future__ import annotations
 import itertools
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -92,38 +92,66 @@ from .lscf import lscf_poles
 from .maxima import find_peaks, local_maxima, prominences
 from .readers import Hit, MeasuredFRF, check_together, read_recordings
 
-#: Stability between successive orders: relative change of frequency and of damping.
-FREQ_TOL = 2e-3
-DAMP_TOL = 0.10
-#: A column must be stable in this fraction of the orders of its sub-band.
-STABLE_FRACTION = 0.3
-#: Sub-bands (:func:`sub_bands`): peaks picked on |H1| per sub-band, the share of its width
-#: fitted beyond each side, and its highest order (degree / 2): 2 x the picked peaks on the
-#: fitted lines + EXTRA_ORDERS, within MIN_ORDER..MAX_ORDER.
-PEAKS_PER_SUB_BAND = 8
-MIN_SUB_BAND_LINES = 800
-SUB_BAND_OVERLAP = 0.25
-EXTRA_ORDERS = 10
-MIN_ORDER = 12
-MAX_ORDER = 40
-#: At most one order per this many lines: noise peaks inflate the count of picked peaks,
-#: and a model with more freedom than that fits the noise (at 20 dB SNR a mode's pole
-#: then wanders by 20 % in damping from order to order and is never stable); the
-#: full-band estimator used before had 28.
-LINES_PER_ORDER = 28
-#: Damping ratios above this are not plate modes (nor computational poles we keep).
-MAX_DAMPING = 0.1
-#: Modal peak |A| / |Re p| over the local fit's RMS residual per line: kept at SNR_MIN,
-#: found near a guide frequency at SNR_GUIDED.
-SNR_MIN = 10.0
-SNR_GUIDED = 3.0
-#: Prominence in |H1| [dB]: below WEAK_DB a mode is "weak"; peaks picked from PICK_DB
-#: (the lab's weakest modes stand 0.5 dB above their neighbourhood).
-WEAK_DB = 1.0
-PICK_DB = 0.3
-COHERENCE_MIN = 0.9
-#: Prominence of a peak below the band named in the notes (a suspension mode stands tall).
-SUSPENSION_DB = 6.0
+
+@dataclass(frozen=True)
+class PeakPolicy:
+    """What ``peaks`` counts as a mode, in one place (``extract_peaks(..., policy=)``;
+    the defaults are ``PEAK_POLICY``, tabled in docs/recordings.md).
+
+    Stabilisation: ``freq_tol`` and ``damp_tol``, the relative change of frequency and of
+    damping within which a pole is stable from one order to the next; a column must be
+    stable in ``stable_fraction`` of the orders of its sub-band.
+
+    Sub-bands (:func:`sub_bands`): about ``peaks_per_sub_band`` peaks picked on |H1| per
+    sub-band and at least ``min_sub_band_lines`` lines, each fitted on its core widened by
+    ``sub_band_overlap`` of its width either side, up to the order (degree / 2) 2 x the
+    picked peaks on the fitted lines + ``extra_orders``, within ``min_order``..``max_order``
+    and at most one order per ``lines_per_order`` lines: noise peaks inflate the count of
+    picked peaks, and a model with more freedom than that fits the noise (at 20 dB SNR a
+    mode's pole then wanders by 20 % in damping from order to order and is never stable;
+    the full-band estimator used before had 28).
+
+    A mode: a damping ratio below ``max_damping`` (above it, not a plate mode nor a
+    computational pole worth keeping); its modal peak |A| / |Re p| at least ``snr_min``
+    times the local fit's RMS residual per line (``snr_guided`` near a guide frequency,
+    within ``guide_rel`` of it, where the hits must also confirm it, scattering by at most
+    ``guided_scatter`` of its half-power bandwidth: a weak real mode in 3e-3 noise
+    scatters by 0.2-0.4, noise fitted as a mode near a node by 1.5).
+
+    Flags and notes: ``weak`` below ``weak_db`` of prominence in |H1| [dB] or below
+    ``weak_snr`` x ``snr_min``; peaks picked on |H1| from ``pick_db`` (the lab's weakest
+    modes stand 0.5 dB above their neighbourhood); ``low_coherence`` below
+    ``coherence_min`` (gamma^2 at the peak); peaks below the band of ``suspension_db``
+    prominence named as suspension modes (a suspension mode stands tall); the
+    ``noted_peaks`` most prominent spurious peaks named."""
+
+    freq_tol: float = 2e-3
+    damp_tol: float = 0.10
+    stable_fraction: float = 0.3
+    peaks_per_sub_band: int = 8
+    min_sub_band_lines: int = 800
+    sub_band_overlap: float = 0.25
+    extra_orders: int = 10
+    min_order: int = 12
+    max_order: int = 40
+    lines_per_order: int = 28
+    max_damping: float = 0.1
+    snr_min: float = 10.0
+    snr_guided: float = 3.0
+    guide_rel: float = 0.03
+    guided_scatter: float = 0.75
+    weak_db: float = 1.0
+    weak_snr: float = 3.0
+    pick_db: float = 0.3
+    coherence_min: float = 0.9
+    suspension_db: float = 6.0
+    noted_peaks: int = 8
+
+
+#: The defaults.
+PEAK_POLICY = PeakPolicy()
+
+# Numerics of the local fits: how far they iterate, not what counts as a mode.
 #: Local fits (:func:`_gauss_newton`): at most NEWTON_STEPS Gauss-Newton steps, converged
 #: once the largest is below NEWTON_STEP in units of the pole's decay, so of its half-power
 #: half-bandwidth (the steps shrink 10-100 times each, so the error left is a small part of
@@ -138,12 +166,6 @@ NEWTON_STEP = 1e-5
 PER_HIT_RELATIVE = 1e-2
 #: Half-width of a local fit's window, in half-power half-bandwidths (zeta f).
 FIT_HALF_WIDTHS = 4.0
-GUIDE_REL = 0.03
-#: A guided mode's hits may scatter by this fraction of its half-power bandwidth (a weak
-#: real mode in 3e-3 noise: 0.2-0.4; noise fitted as a mode near a node: 1.5).
-GUIDED_SCATTER = 0.75
-#: Spurious peaks named in the notes (the most prominent).
-NOTED_PEAKS = 8
 CSV_COLUMNS = ["configuration", "frequency_hz", "std_hz", "damping_ratio", "damping_std"]
 FLAG_ORDER = (
     "response_only",
@@ -203,6 +225,7 @@ class PeakList:
     rejected: tuple[Rejection, ...] = ()
     notes: tuple[str, ...] = ()
     diagram: Stabilisation | None = None
+    policy: PeakPolicy = PEAK_POLICY
 
     def __len__(self) -> int:
         return len(self.table)
@@ -236,7 +259,7 @@ class PeakList:
         write_text(path, self.to_frame()[CSV_COLUMNS].to_csv(index=False, float_format="%.7g"))
 
     def plot(self, directory: str | Path) -> list[Path]:
-        return plot_peaks(self, directory, COHERENCE_MIN)
+        return plot_peaks(self, directory, self.policy.coherence_min)
 
 
 # --- local pole-residue fit ------------------------------------------------------------
@@ -502,33 +525,35 @@ def _fit_all(
 # --- stabilisation diagram ---------------------------------------------------------------
 
 
-def sub_bands(frf: AveragedFRF, band_hz, picked: pd.DataFrame, max_order: int | None = None) -> list[SubBand]:
+def sub_bands(
+    frf: AveragedFRF, band_hz, picked: pd.DataFrame, policy: PeakPolicy = PEAK_POLICY
+) -> list[SubBand]:
     """The band cut into equally wide sub-bands (a plate's modal density is constant) of
-    about ``PEAKS_PER_SUB_BAND`` peaks of at least ``WEAK_DB`` picked on |H1| (stand-ins
-    for its modes) each and at least ``MIN_SUB_BAND_LINES`` lines, each cut moved half-way
-    between the two such peaks either side of it (two cuts between the same peaks are one).  Each is fitted
-    on its core widened by ``SUB_BAND_OVERLAP`` of its width either side (beyond the band
-    too, where the FRF has lines), so that a mode near a cut or the band's edge is
-    modelled with its neighbours and away from where the ends of the fitted lines meet on
-    the circle (:data:`identify.recordings.lscf.ARC`), up to the order (degree /
-    2) 2 x the peaks on the fitted lines + ``EXTRA_ORDERS`` (over-modelling: noise and the
-    residual terms of the modes outside take computational poles), at least ``MIN_ORDER``,
-    at most ``max_order`` (default ``MAX_ORDER``) and one per ``LINES_PER_ORDER`` fitted
-    lines."""
+    about ``peaks_per_sub_band`` peaks of at least ``weak_db`` picked on |H1| (stand-ins
+    for its modes) each and at least ``min_sub_band_lines`` lines, each cut moved half-way
+    between the two such peaks either side of it (two cuts between the same peaks are
+    one).  Each is fitted on its core widened by ``sub_band_overlap`` of its width either
+    side (beyond the band too, where the FRF has lines), so that a mode near a cut or the
+    band's edge is modelled with its neighbours and away from where the ends of the
+    fitted lines meet on the circle (:data:`identify.recordings.lscf.ARC`), up to the
+    order (degree / 2) 2 x the peaks on the fitted lines + ``extra_orders``
+    (over-modelling: noise and the residual terms of the modes outside take computational
+    poles), at least ``min_order``, at most ``max_order`` and one per ``lines_per_order``
+    fitted lines (``policy``, a ``PeakPolicy``)."""
     lo, hi = band_hz
     f = picked["frequency_hz"].to_numpy()
-    f = np.sort(f[(f > lo) & (f < hi) & (picked["prominence_db"].to_numpy() >= WEAK_DB)])
-    count = int(
-        np.clip(round(len(f) / PEAKS_PER_SUB_BAND), 1, max(1, len(frf.lines(band_hz)) // MIN_SUB_BAND_LINES))
-    )
+    f = np.sort(f[(f > lo) & (f < hi) & (picked["prominence_db"].to_numpy() >= policy.weak_db)])
+    most = max(1, len(frf.lines(band_hz)) // policy.min_sub_band_lines)
+    count = int(np.clip(round(len(f) / policy.peaks_per_sub_band), 1, most))
     cuts = np.unique([lo, *(_between_peaks(lo + k * (hi - lo) / count, f) for k in range(1, count)), hi])
     out = []
     for a, b in itertools.pairwise(cuts):
-        margin = SUB_BAND_OVERLAP * (b - a)
+        margin = policy.sub_band_overlap * (b - a)
         fitted = (max(frf.frequency_hz[1], a - margin), min(frf.frequency_hz[-1], b + margin))
         peaks = int(np.sum((f >= fitted[0]) & (f <= fitted[1])))
-        highest = min(max_order or MAX_ORDER, len(frf.lines(fitted)) // LINES_PER_ORDER)
-        out.append(SubBand((a, b), fitted, int(np.clip(2 * peaks + EXTRA_ORDERS, MIN_ORDER, highest))))
+        highest = min(policy.max_order, len(frf.lines(fitted)) // policy.lines_per_order)
+        order = np.clip(2 * peaks + policy.extra_orders, policy.min_order, highest)
+        out.append(SubBand((a, b), fitted, int(order)))
     return out
 
 
@@ -538,10 +563,10 @@ def _between_peaks(cut: float, peaks_hz: np.ndarray) -> float:
     return 0.5 * (peaks_hz[i - 1] + peaks_hz[i]) if 0 < i < len(peaks_hz) else cut
 
 
-def stabilisation(frf: AveragedFRF, bands: list[SubBand]) -> Stabilisation:
+def stabilisation(frf: AveragedFRF, bands: list[SubBand], policy: PeakPolicy = PEAK_POLICY) -> Stabilisation:
     """LSCF poles (:func:`identify.recordings.lscf.lscf_poles`) of H1 on each sub-band for
     degrees 2, 4, ..., 2 x its order, those in its core kept, with stability between
-    successive degrees."""
+    successive degrees (``policy.freq_tol``, ``policy.damp_tol``)."""
     orders, poles, part = [], [], []
     for k, sub in enumerate(bands):
         lines = frf.lines(sub.fitted_hz)
@@ -556,7 +581,7 @@ def stabilisation(frf: AveragedFRF, bands: list[SubBand]) -> Stabilisation:
                 & (f >= sub.core_hz[0])
                 & (f < sub.core_hz[1])
                 & (zeta > 0)
-                & (zeta < MAX_DAMPING)
+                & (zeta < policy.max_damping)
             )
             orders.append(np.full(keep.sum(), degree))
             poles.append(p[keep])
@@ -569,19 +594,19 @@ def stabilisation(frf: AveragedFRF, bands: list[SubBand]) -> Stabilisation:
         for o in np.unique(order[band == k])[1:]:
             now, before = (order == o) & (band == k), (order == o - 2) & (band == k)
             if before.any():
-                close_f = np.abs(wf[now][:, None] / wf[before] - 1) < FREQ_TOL
-                close_z = np.abs(wz[now][:, None] / wz[before] - 1) < DAMP_TOL
+                close_f = np.abs(wf[now][:, None] / wf[before] - 1) < policy.freq_tol
+                close_z = np.abs(wz[now][:, None] / wz[before] - 1) < policy.damp_tol
                 stable[now] = (close_f & close_z).any(axis=1)
     degrees = np.array([sub.order for sub in bands])
     return Stabilisation(order, f, zeta, stable, pole, band, degrees)
 
 
-def _columns(diagram: Stabilisation) -> np.ndarray:
+def _columns(diagram: Stabilisation, stable_fraction: float) -> np.ndarray:
     """Seed poles [rad/s] of the stable columns, each the median over its poles, kept when
-    stable in at least ``STABLE_FRACTION`` of the orders of its sub-band (of the sub-bands
+    stable in at least ``stable_fraction`` of the orders of its sub-band (of the sub-bands
     it spans, near a cut: the larger).  A column is a single linkage of stable poles
     within a quarter of their half-power half-bandwidth, split in two (or more) where that
-    many poles of one order lie in it in at least ``STABLE_FRACTION`` of the orders: an
+    many poles of one order lie in it in at least ``stable_fraction`` of the orders: an
     order gives one pole a mode, so those are close modes (a pair 0.2 % apart, each
     wider than their spacing) that the linkage chained."""
     keep = diagram.stable
@@ -594,8 +619,8 @@ def _columns(diagram: Stabilisation) -> np.ndarray:
     seeds = []
     for members in np.split(np.arange(len(p)), np.flatnonzero(gap) + 1):
         orders = diagram.orders[b[members]].max()
-        for column in _split(members, b, o, p, STABLE_FRACTION * orders):
-            if len(set(zip(b[column], o[column]))) >= STABLE_FRACTION * orders:
+        for column in _split(members, b, o, p, stable_fraction * orders):
+            if len(set(zip(b[column], o[column]))) >= stable_fraction * orders:
                 seeds.append(np.median(p[column].real) + 1j * np.median(p[column].imag))
     return np.array(seeds)
 
@@ -636,7 +661,10 @@ def _split(
 
 
 def picked_peaks(
-    frequency_hz: np.ndarray, magnitude: np.ndarray, lines: np.ndarray, prominence_db: float = PICK_DB
+    frequency_hz: np.ndarray,
+    magnitude: np.ndarray,
+    lines: np.ndarray,
+    prominence_db: float = PEAK_POLICY.pick_db,
 ) -> pd.DataFrame:
     """Local maxima of 20 log10 |H| in ``lines`` with at least ``prominence_db``:
     frequency by Gaussian interpolation (a parabola through the three dB values)."""
@@ -723,6 +751,7 @@ def extract_peaks(
     band_hz: tuple[float, float] | None = None,
     guide_hz=None,
     max_order: int | None = None,
+    policy: PeakPolicy = PEAK_POLICY,
 ) -> PeakList:
     """The peak list of one configuration from its recordings.
 
@@ -733,8 +762,11 @@ def extract_peaks(
     dropped 10 dB, or 0.8-1.2 x the ``guide_hz`` range when given.  guide_hz: predicted
     model frequencies [Hz] (optional): modes not found near them are looked for harder
     (flag "guided").  max_order: the highest LSCF order (denominator degree / 2) of any
-    sub-band (default ``MAX_ORDER``; each sub-band's from the peaks picked on it).
+    sub-band (default ``policy.max_order``; each sub-band's from the peaks picked on it).
+    policy: what counts as a mode (``PeakPolicy``; default ``PEAK_POLICY``).
     """
+    if max_order is not None:
+        policy = replace(policy, max_order=max_order)
     given = recordings if isinstance(recordings, (list, tuple)) else [recordings]
     if given and all(isinstance(r, (Hit, MeasuredFRF)) for r in given):
         records = check_together(given)
@@ -753,23 +785,24 @@ def extract_peaks(
             f"band_hz = ({band[0]:g}, {band[1]:g}) holds {len(lines)} spectral lines; need at least "
             "16: widen the band or record longer hits"
         )
-    picked = picked_peaks(frf.frequency_hz, frf.h1, lines, PICK_DB)
-    _note_below_band(frf, band, notes)
-    diagram = stabilisation(frf, sub_bands(frf, band, picked, max_order))
-    seeds = _columns(diagram)
-    found = _refine(frf, seeds, notes)
+    picked = picked_peaks(frf.frequency_hz, frf.h1, lines, policy.pick_db)
+    _note_below_band(frf, band, notes, policy.suspension_db)
+    diagram = stabilisation(frf, sub_bands(frf, band, picked, policy), policy)
+    seeds = _columns(diagram, policy.stable_fraction)
+    found = _refine(frf, seeds, notes, policy)
     if guide is not None:
-        found = _look_near_guides(frf, guide, picked, diagram, found, notes)
-    table = _table(frf, lines, found, picked, notes)
+        found = _look_near_guides(frf, guide, picked, diagram, found, notes, policy)
+    table = _table(frf, lines, found, picked, notes, policy)
     if frf.n_hits == 1:
         notes.append("one hit: std_hz cannot be estimated (NaN); repeat the hit for a scatter")
-    return PeakList(configuration, table, frf, band, frf.rejected, tuple(notes), diagram)
+    return PeakList(configuration, table, frf, band, frf.rejected, tuple(notes), diagram, policy)
 
 
-def _note_below_band(frf: AveragedFRF, band, notes: list[str]) -> None:
+def _note_below_band(frf: AveragedFRF, band, notes: list[str], prominence_db: float) -> None:
+    """Name the peaks below the band of ``prominence_db`` in ``notes`` (suspension modes)."""
     below = np.flatnonzero((frf.frequency_hz >= 1.0) & (frf.frequency_hz < band[0]))
     if len(below) >= 3:
-        low = picked_peaks(frf.frequency_hz, frf.h1, below, SUSPENSION_DB)
+        low = picked_peaks(frf.frequency_hz, frf.h1, below, prominence_db)
         if len(low):
             notes.append(
                 f"peaks below the band at {', '.join(f'{f:.1f}' for f in low['frequency_hz'])} Hz "
@@ -789,13 +822,14 @@ class _Poles:
     guided: np.ndarray
 
 
-def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]) -> _Poles:
-    """Fit the stable columns on H1; drop weak or duplicated ones and refit."""
+def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str], policy: PeakPolicy) -> _Poles:
+    """Fit the stable columns on H1; drop weak (``policy.snr_min``), too damped
+    (``policy.max_damping``) or duplicated ones and refit."""
     cache: dict = {}
     while True:
         pole, snr, ok = _fit_all(frf, frf.h1, seeds, cache)
         f, zeta = correct_for_window(pole, frf.decay_rate)
-        bad = ~ok | (snr < SNR_MIN) | ~(zeta > 0) | (zeta > MAX_DAMPING)
+        bad = ~ok | (snr < policy.snr_min) | ~(zeta > 0) | (zeta > policy.max_damping)
         dup = np.zeros(len(seeds), dtype=bool)
         order = np.argsort(f)
         for a, b in itertools.pairwise(order):
@@ -808,47 +842,48 @@ def _refine(frf: AveragedFRF, seeds: np.ndarray, notes: list[str]) -> _Poles:
         reason = (
             "the local fit failed"
             if not ok[w]
-            else f"damping ratio {zeta[w]:.3g} outside (0, {MAX_DAMPING:g})"
-            if not 0 < zeta[w] <= MAX_DAMPING
-            else f"its peak is only {snr[w]:.1f} times the fit residual (need {SNR_MIN:g})"
-            if snr[w] < SNR_MIN
+            else f"damping ratio {zeta[w]:.3g} outside (0, {policy.max_damping:g})"
+            if not 0 < zeta[w] <= policy.max_damping
+            else f"its peak is only {snr[w]:.1f} times the fit residual (need {policy.snr_min:g})"
+            if snr[w] < policy.snr_min
             else "it duplicates a neighbour"
         )
         notes.append(f"stable pole near {seeds[w].imag / (2 * np.pi):.2f} Hz left out: {reason}")
         seeds = np.delete(seeds, w)
 
 
-def _look_near_guides(frf, guide, picked, diagram, found: _Poles, notes) -> _Poles:
-    """For guide frequencies with no mode ``found`` within GUIDE_REL: fit the best nearby
-    picked peak, or the diagram's most persistent pole nearby, with the modes found as its
-    neighbours; keep it at SNR >= SNR_GUIDED when the hits confirm it (flag "guided")."""
+def _look_near_guides(frf, guide, picked, diagram, found: _Poles, notes, policy: PeakPolicy) -> _Poles:
+    """For guide frequencies with no mode ``found`` within ``policy.guide_rel``: fit the
+    best nearby picked peak, or the diagram's most persistent pole nearby, with the modes
+    found as its neighbours; keep it at SNR >= ``policy.snr_guided`` when the hits confirm
+    it (flag "guided")."""
     pole, snr, guided = found.pole, found.snr, found.guided
     f, _ = correct_for_window(pole, frf.decay_rate)
     for g in guide:
-        if len(f) and np.min(np.abs(f / g - 1)) < GUIDE_REL:
+        if len(f) and np.min(np.abs(f / g - 1)) < policy.guide_rel:
             continue
-        near = picked[np.abs(picked["frequency_hz"] / g - 1) < GUIDE_REL]
+        near = picked[np.abs(picked["frequency_hz"] / g - 1) < policy.guide_rel]
         if len(near):
             fp = float(near["frequency_hz"].iloc[np.argmax(near["prominence_db"])])
-            candidates = diagram.pole[np.abs(diagram.frequency_hz / fp - 1) < FREQ_TOL * 5]
+            candidates = diagram.pole[np.abs(diagram.frequency_hz / fp - 1) < policy.freq_tol * 5]
             # start: 0.5 % damping
             decay = np.median(candidates.real) if len(candidates) else -2 * np.pi * fp * 0.005
             seed = decay + 2j * np.pi * fp
         else:
-            near_guide = np.abs(diagram.frequency_hz / g - 1) < GUIDE_REL
+            near_guide = np.abs(diagram.frequency_hz / g - 1) < policy.guide_rel
             if not near_guide.any():
                 notes.append(f"nothing found near the guide frequency {g:.1f} Hz (node at the sensor?)")
                 continue
-            seed = _persistent(diagram.pole[near_guide], diagram.frequency_hz[near_guide])
+            seed = _persistent(diagram.pole[near_guide], diagram.frequency_hz[near_guide], policy.freq_tol)
         # fitted with the modes found as its neighbours: a weak mode on a strong one's skirt
         p, s, ok = (x[-1:] for x in _fit_all(frf, frf.h1, np.append(pole, seed), only=(len(pole),)))
         fn, zeta = correct_for_window(p, frf.decay_rate)
         if (
             ok[0]
-            and s[0] >= SNR_GUIDED
-            and 0 < zeta[0] < MAX_DAMPING
-            and abs(fn[0] / g - 1) < GUIDE_REL
-            and _on_the_hits(frf, np.append(pole, p))
+            and s[0] >= policy.snr_guided
+            and 0 < zeta[0] < policy.max_damping
+            and abs(fn[0] / g - 1) < policy.guide_rel
+            and _on_the_hits(frf, np.append(pole, p), policy)
         ):
             pole, snr, guided = np.append(pole, p), np.append(snr, s), np.append(guided, True)
             notes.append(f"mode at {fn[0]:.2f} Hz found only by looking near the guide frequency {g:.1f} Hz")
@@ -857,36 +892,39 @@ def _look_near_guides(frf, guide, picked, diagram, found: _Poles, notes) -> _Pol
     return _Poles(pole, snr, guided)
 
 
-def _on_the_hits(frf: AveragedFRF, pole: np.ndarray) -> bool:
+def _on_the_hits(frf: AveragedFRF, pole: np.ndarray, policy: PeakPolicy) -> bool:
     """Do the hits confirm the last of ``pole`` (with the others as its neighbours): found
     on at least half of the hits' own FRFs (of two at least; always, with one), their
-    frequencies scattering by at most ``GUIDED_SCATTER`` of its half-power bandwidth?  A
+    frequencies scattering by at most ``policy.guided_scatter`` of its half-power bandwidth?  A
     guided fit on H1 alone can make a weak "mode" of noise near a node (SNR 4-5, 1-2 %
     damping), which the hits then place anywhere in its window."""
     if frf.n_hits < 2:
         return True
-    per_hit = _per_hit(frf, pole, only=(len(pole) - 1,))[0][:, -1]
+    per_hit = _per_hit(frf, pole, policy.max_damping, only=(len(pole) - 1,))[0][:, -1]
     found = per_hit[np.isfinite(per_hit)]
     half_bandwidth = abs(pole[-1].real) / (2 * np.pi)
     return bool(
         len(found) >= max(2, math.ceil(frf.n_hits / 2))
-        and np.std(found, ddof=1) <= GUIDED_SCATTER * 2 * half_bandwidth
+        and np.std(found, ddof=1) <= policy.guided_scatter * 2 * half_bandwidth
     )
 
 
-def _persistent(pole: np.ndarray, frequency_hz: np.ndarray) -> complex:
+def _persistent(pole: np.ndarray, frequency_hz: np.ndarray, freq_tol: float) -> complex:
     """The pole [rad/s] the diagram returns to most often: the median of the poles within
-    5 ``FREQ_TOL`` of the one with most such neighbours (a column too unsteady to be
+    5 ``freq_tol`` of the one with most such neighbours (a column too unsteady to be
     stable, or a weak mode that is stable only in some orders)."""
-    close = np.abs(frequency_hz[:, None] / frequency_hz - 1) < 5 * FREQ_TOL
+    close = np.abs(frequency_hz[:, None] / frequency_hz - 1) < 5 * freq_tol
     members = close[np.argmax(close.sum(axis=1))]
     return complex(np.median(pole[members].real) + 1j * np.median(pole[members].imag))
 
 
-def _per_hit(frf: AveragedFRF, pole: np.ndarray, only=None) -> tuple[np.ndarray, np.ndarray]:
+def _per_hit(
+    frf: AveragedFRF, pole: np.ndarray, max_damping: float, only=None
+) -> tuple[np.ndarray, np.ndarray]:
     """(hits, modes) frequency [Hz] and damping ratio [-] (window-corrected) of every mode
     (or of those at the indices ``only``) fitted on each hit's FRF with the neighbourhood
-    it had on H1 (:func:`refined_per_record`; NaN: failed)."""
+    it had on H1 (:func:`refined_per_record`; NaN: failed, or damped above
+    ``max_damping``)."""
     out, damping = np.full((frf.n_hits, len(pole)), np.nan), np.full((frf.n_hits, len(pole)), np.nan)
     if frf.n_hits < 2:
         return out, damping
@@ -907,7 +945,7 @@ def _per_hit(frf: AveragedFRF, pole: np.ndarray, only=None) -> tuple[np.ndarray,
                 ok
                 & (np.abs(p.imag - pole[i].imag) < FIT_HALF_WIDTHS * abs(pole[i].real))
                 & (zeta > 0)
-                & (zeta < MAX_DAMPING)
+                & (zeta < max_damping)
             )
         out[good, i], damping[good, i] = f[good], zeta[good]
     return out, damping
@@ -956,11 +994,11 @@ def _std(frf: AveragedFRF, per_hit: np.ndarray, frequency_hz: np.ndarray) -> tup
     return std, n
 
 
-def _table(frf, lines, found: _Poles, picked, notes) -> pd.DataFrame:
+def _table(frf, lines, found: _Poles, picked, notes, policy: PeakPolicy) -> pd.DataFrame:
     order = np.argsort(found.pole.imag)
     pole, snr, guided = found.pole[order], found.snr[order], found.guided[order]
     f, zeta = correct_for_window(pole, frf.decay_rate)
-    per_hit_f, per_hit_zeta = _per_hit(frf, pole)
+    per_hit_f, per_hit_zeta = _per_hit(frf, pole, policy.max_damping)
     std, n = _std(frf, per_hit_f, pole.imag / (2 * np.pi))
     broadened = broadening(frf, per_hit_f, f, zeta)
     zeta = np.where(np.isfinite(broadened) & (broadened < 0.5 * zeta), zeta - broadened, zeta)
@@ -987,8 +1025,8 @@ def _table(frf, lines, found: _Poles, picked, notes) -> pd.DataFrame:
     flags = {
         "response_only": np.full(len(f), not frf.has_force),
         "suspension": f < frf_module.SUSPENSION_HZ,
-        "low_coherence": frf.coherence[line] < COHERENCE_MIN,
-        "weak": (prominence < WEAK_DB) | (snr < 3 * SNR_MIN),
+        "low_coherence": frf.coherence[line] < policy.coherence_min,
+        "weak": (prominence < policy.weak_db) | (snr < policy.weak_snr * policy.snr_min),
         "close": close,
         "single_hit": n < 2,
         "guided": guided,
@@ -996,7 +1034,11 @@ def _table(frf, lines, found: _Poles, picked, notes) -> pd.DataFrame:
         "unpicked": np.isnan(peak_hz),
     }
     names = [[k for k in FLAG_ORDER if flags[k][j]] for j in range(len(f))]
-    left = picked.drop(index=list(used)).nlargest(NOTED_PEAKS, "prominence_db").sort_values("frequency_hz")
+    left = (
+        picked.drop(index=list(used))
+        .nlargest(policy.noted_peaks, "prominence_db")
+        .sort_values("frequency_hz")
+    )
     if len(left):
         listed = ", ".join(
             f"{x:.1f} Hz ({p:.1f} dB)"

@@ -127,7 +127,7 @@ def test_mains_hum_is_removed_and_said(hits):
 def test_unremoved_hum_stands_in_the_frf(hits, monkeypatch):
     """The same hum with the removal switched off (the test above is not vacuous): 50
     and 100 Hz stand over 20 dB tall in |H1|.  They are not taken for modes (a steady
-    sine's pole has a damping ratio of ~1e-5 that changes by more than DAMP_TOL from
+    sine's pole has a damping ratio of ~1e-5 that changes by more than ``PeakPolicy.damp_tol`` from
     order to order, so it is never stable) but named as spurious peaks."""
     import identify.recordings.frf as frf
 

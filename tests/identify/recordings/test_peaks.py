@@ -276,15 +276,7 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
     cuts, every cut half-way between two picked peaks, each fitted a quarter of its width
     beyond both cuts (beyond the band's edges too, down to the first line above 0 Hz),
     orders within their bounds."""
-    from identify.recordings.peaks import (
-        MAX_ORDER,
-        MIN_ORDER,
-        PICK_DB,
-        SUB_BAND_OVERLAP,
-        WEAK_DB,
-        picked_peaks,
-        sub_bands,
-    )
+    from identify.recordings.peaks import PEAK_POLICY, picked_peaks, sub_bands
     from identify.recordings.tap_quirks import real_like_plate
 
     hits = Session(
@@ -292,9 +284,9 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
     ).hits()
     frf = extract_peaks(hits).frf
     band = (20.0, 2900.0)
-    picked = picked_peaks(frf.frequency_hz, frf.h1, frf.lines(band), PICK_DB)
+    picked = picked_peaks(frf.frequency_hz, frf.h1, frf.lines(band), PEAK_POLICY.pick_db)
     bands = sub_bands(frf, band, picked)
-    peaks = np.sort(picked["frequency_hz"][picked["prominence_db"] >= WEAK_DB].to_numpy())
+    peaks = np.sort(picked["frequency_hz"][picked["prominence_db"] >= PEAK_POLICY.weak_db].to_numpy())
     assert 3 <= len(bands) <= 8
     assert bands[0].core_hz[0] == band[0] and bands[-1].core_hz[1] == band[1]
     for before, after in zip(bands[:-1], bands[1:]):
@@ -305,9 +297,45 @@ def test_sub_bands_cut_between_peaks_and_overlap(session):
     for sub in bands:
         width = sub.core_hz[1] - sub.core_hz[0]
         assert sub.fitted_hz[0] == pytest.approx(
-            max(frf.frequency_hz[1], sub.core_hz[0] - SUB_BAND_OVERLAP * width)
+            max(frf.frequency_hz[1], sub.core_hz[0] - PEAK_POLICY.sub_band_overlap * width)
         )
         assert sub.fitted_hz[1] == pytest.approx(
-            min(frf.frequency_hz[-1], sub.core_hz[1] + SUB_BAND_OVERLAP * width)
+            min(frf.frequency_hz[-1], sub.core_hz[1] + PEAK_POLICY.sub_band_overlap * width)
         )
-        assert MIN_ORDER <= sub.order <= MAX_ORDER
+        assert PEAK_POLICY.min_order <= sub.order <= PEAK_POLICY.max_order
+
+
+def test_the_default_peak_policy_is_the_documented_one():
+    """The defaults of ``PeakPolicy`` are the numbers docs/recordings.md gives ("The
+    numbers, in one place"), field by field, and every field is in the table."""
+    import re
+    from dataclasses import fields
+    from pathlib import Path
+
+    from identify.recordings.peaks import PEAK_POLICY
+
+    text = (Path(__file__).parents[3] / "docs" / "recordings.md").read_text()
+    documented = {name: float(v) for name, v in re.findall(r"^\| `([a-z0-9_]+)` \| ([0-9.]+) \|", text, re.M)}
+    assert documented == pytest.approx({f.name: getattr(PEAK_POLICY, f.name) for f in fields(PEAK_POLICY)})
+
+
+def test_a_stricter_policy_keeps_only_the_modes_that_meet_it(session):
+    """A policy passed in is the one applied: with ``snr_min`` raised between two modes'
+    SNRs, the modes below it are left out (each named in the notes with the threshold)
+    and those above it are kept at the same frequencies (their fits do not depend on the
+    threshold beyond which neighbours remain: within 1e-4 relative)."""
+    from dataclasses import replace
+
+    from identify.recordings.peaks import PEAK_POLICY
+
+    hits, result = session
+    default = result.table
+    snr = np.sort(default["snr"].to_numpy())
+    threshold = float(np.sqrt(snr[len(snr) // 3] * snr[len(snr) // 3 + 1]))
+    strict = extract_peaks(hits, configuration="original", policy=replace(PEAK_POLICY, snr_min=threshold))
+    assert (strict.table["snr"] >= threshold).all()
+    strong = default[default["snr"] > 1.5 * threshold]["frequency_hz"].to_numpy()
+    kept = strict.table["frequency_hz"].to_numpy()
+    assert len(kept) < len(default) and len(strong) > 0
+    assert all(np.min(np.abs(kept / f - 1)) < 1e-4 for f in strong)
+    assert any(f"need {threshold:g}" in note for note in strict.notes)
