@@ -1,5 +1,7 @@
 """identify-layers fit --effect, compare and diagnose on data with a hidden sensor mass."""
 
+import contextlib
+import io
 import json
 
 import pytest
@@ -20,13 +22,31 @@ def sensor_csv(tmp_path_factory):
     return str(path)
 
 
-def test_fit_with_free_point_mass(sensor_csv, capsys, tmp_path):
+@pytest.fixture(scope="module")
+def point_mass_fit(sensor_csv, tmp_path_factory):
+    """``fit --effect point_mass --json --report``: (exit code, JSON, report folder)."""
+    folder = tmp_path_factory.mktemp("report")
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = main(
+            [
+                "fit",
+                str(COATED_PLATE),
+                sensor_csv,
+                "--effect",
+                "point_mass",
+                "--json",
+                "--report",
+                str(folder),
+            ]
+        )
+    return code, json.loads(printed.getvalue()), folder
+
+
+def test_fit_with_free_point_mass(point_mass_fit):
     """The fit JSON: the effect's parameters are reported under "effects"; the report shows
     the error per mode before and after."""
-    code = main(
-        ["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json", "--report", str(tmp_path)]
-    )
-    out = json.loads(capsys.readouterr().out)
+    code, out, tmp_path = point_mass_fit
     assert code == 0 and out["converged"]
     mass = out["effects"]["point_mass"]
     assert mass["mass_g"] == pytest.approx(3.0, rel=0.1) and mass["std"]["mass_g"] > 0
@@ -65,7 +85,7 @@ def test_unknown_effect_is_a_one_line_error(capsys):
     assert "unknown effect kind 'sensor'" in capsys.readouterr().err
 
 
-def test_the_diagnosis_ends_with_the_answer_fit_effect_gives(sensor_csv, capsys, tmp_path):
+def test_the_diagnosis_ends_with_the_answer_fit_effect_gives(sensor_csv, point_mass_fit, capsys, tmp_path):
     """The diagnosis's final refit is the loop's answer: its text lists every layer
     property with its std, ``--report`` writes its full fit report (refit.txt), and its
     values agree with ``fit --effect point_mass`` (the same model refitted from the
@@ -82,8 +102,7 @@ def test_the_diagnosis_ends_with_the_answer_fit_effect_gives(sensor_csv, capsys,
     assert "parameters (value ± 1 std" in (tmp_path / "refit.txt").read_text()
     diagnosed = json.loads((tmp_path / "diagnosis.json").read_text())["final"]
     assert set(diagnosed["effects"]) == {"point_mass"}
-    assert main(["fit", str(COATED_PLATE), sensor_csv, "--effect", "point_mass", "--json"]) == 0
-    fitted = json.loads(capsys.readouterr().out)
+    fitted = point_mass_fit[1]
     for group in ("materials", "effects"):
         for name, values in fitted[group].items():
             for key, std in values["std"].items():
