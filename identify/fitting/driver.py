@@ -385,7 +385,7 @@ def fit_with_effects(
 ) -> FitResult:
     """The fit with ``kinds`` switched on, their parameters free, starting from the
     baseline fit (``refitting.baseline``), one effect after the other (``add_effect``);
-    the last refit checks the pairing in full.
+    the answer's pairing is checked in full, once, at the end.
 
     A point mass starts at each of the positions the residual scan suggests and on a grid
     over that quarter of the plate; the lowest misfit is kept and rivals that fit about as
@@ -398,10 +398,10 @@ def fit_with_effects(
     """
     measurements = refitting.measurements
     state, notes = refitting.baseline, []
-    for number, kind in enumerate(kinds):
+    for kind in kinds:
+        # Each start's refit checks only the re-pairings that lower the misfit; the answer
+        # is checked in full once, at the end (``released``).
         step = refitting.refit(state, options, pool=pool)
-        if number == len(kinds) - 1 and step.measurements is measurements:
-            step = replace(step, settle=Settle.FULL)
         hints = refitting.hints(state)
         added = add_effect(step, kind, hints, progress=progress)
         if refitting.restarted([kind], state):
