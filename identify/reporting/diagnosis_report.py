@@ -11,9 +11,9 @@ import pandas as pd
 from fem.effects import effect
 from fem.numbers import finite_or_none
 
-from ..engine.parameters import UNITS, display
 from . import html_report as h
-from .rounding import percent, status_line, with_std
+from .report import parameter_lines
+from .rounding import percent, status_line
 
 
 def diagnosis_view(diagnosis) -> str:
@@ -107,11 +107,7 @@ def diagnosis_text(diagnosis) -> str:
             f"  {status_line(final.status.value, final.message)}",
             f"  RMS relative error {percent(final.rms_rel_error, 3)}",
         ]
-        for p, value, sd, flags in zip(
-            final.parameters, final.values, final.uncertainty.std, final.uncertainty.flags
-        ):
-            shown = with_std(display(p, value), display(p, sd), UNITS[p.kind][0])
-            lines.append(f"  {p.name:40s} {shown:38s} {'; '.join(flags)}".rstrip())
+        lines += parameter_lines(final, 40)
         notes = [text for _, text in final.effect_notes]
         lines += [f"  - {text}" for text in notes]
     if diagnosis.above_start:

@@ -198,6 +198,17 @@ def shown_parameters(parameters: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def parameter_lines(result, name_width: int) -> list[str]:
+    """One line per parameter of a fit: its name (padded to ``name_width``), value ± std
+    in display units with the relative std, and its flags."""
+    u = result.uncertainty
+    lines = []
+    for p, value, sd, flags in zip(result.parameters, result.values, u.std, u.flags):
+        shown = with_std(display(p, value), display(p, sd), UNITS[p.kind][0])
+        lines.append(f"  {p.name:{name_width}s} {shown:38s} {'; '.join(flags)}".rstrip())
+    return lines
+
+
 def report_text(result) -> str:
     """Fixed sections: statistics, parameters +- std with flags, correlations, residuals,
     the error per mode before and after the effects (when they were free), warnings."""
@@ -233,9 +244,7 @@ def report_text(result) -> str:
         f"  condition number       {u.condition_number:.3g} ({u.verdict}; paper: good < 1e3, singular > 1e7)",
     ]
     lines += ["", "parameters (value ± 1 std, rounded to two digits of the std; relative std)"]
-    for p, value, sd, flags in zip(result.parameters, result.values, u.std, u.flags):
-        shown = with_std(display(p, value), display(p, sd), UNITS[p.kind][0])
-        lines.append(f"  {p.name:28s} {shown:38s} {'; '.join(flags)}".rstrip())
+    lines += parameter_lines(result, 28)
     strong = [
         (i, j)
         for i in range(len(result.parameters))
