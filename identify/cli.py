@@ -216,6 +216,7 @@ def run_compare(args) -> int:
         check_report_folder(args.report)
     model, measurements = _model_and_measurements(args)
     comparison = compare(model, measurements, refit=not args.no_fit)
+    text = comparison.report()
     if args.report:
         shown = comparison.fitted.model if comparison.fitted else model
         modes = int(comparison.table["mode"].max()) + 3
@@ -224,9 +225,9 @@ def run_compare(args) -> int:
             analysis="compare (identify-layers compare)",
             model=model,
             measurements=measurements,
-            text=comparison.report(),
+            text=text,
             files={
-                "comparison.txt": comparison.report(),
+                "comparison.txt": text,
                 "comparison.csv": comparison.table.to_csv(index=False),
             },
             figures=[
@@ -245,7 +246,7 @@ def run_compare(args) -> int:
         )
         write_analysis_report(args.report, report)
         _say(f"report written to {args.report}/")
-    print(to_json(comparison.to_dict()) if args.json else comparison.report())
+    print(to_json(comparison.to_dict()) if args.json else text)
     return 0
 
 
@@ -261,6 +262,7 @@ def run_diagnose(args) -> int:
     model, measurements = _model_and_measurements(args)
     kinds = args.effects.split(",") if args.effects else None
     result = diagnose(model, measurements, kinds, progress=_progress, workers=None)
+    text = result.report()
     if args.report:
         figures = [
             (
@@ -284,15 +286,15 @@ def run_diagnose(args) -> int:
             analysis="diagnose (identify-layers diagnose)",
             model=model,
             measurements=measurements,
-            text=result.report(),
-            files={"diagnosis.txt": result.report(), "diagnosis.json": to_json(result.to_dict())}
+            text=text,
+            files={"diagnosis.txt": text, "diagnosis.json": to_json(result.to_dict())}
             | ({"refit.txt": result.final.report()} if result.final is not None else {}),
             figures=figures,
             comparison=result.comparison,
         )
         write_analysis_report(args.report, report)
         _say(f"report written to {args.report}/")
-    print(to_json(result.to_dict()) if args.json else result.report())
+    print(to_json(result.to_dict()) if args.json else text)
     return 0 if result.explained else 1
 
 

@@ -179,7 +179,10 @@ def run_plate(plate: Plate, folder: Path, workers: int | None = None, confirm: b
     selected = tuple(c.kind for c in diagnosis.selected)
     final = diagnosis.final or baseline
     z, ratio = _scores(final, plate.truth)
-    reports = [baseline.report(), diagnosis.report(), final.report()]
+    # Where nothing was selected the answer is the baseline, whose report is already first.
+    reports = [baseline.report(), diagnosis.report()] + (
+        [final.report()] if diagnosis.final is not None else []
+    )
     confirm_z = {}
     if confirm and selected:
         clock = time.perf_counter()
