@@ -42,7 +42,11 @@ series of ``N_CASES_2`` cases drawn from ``SEED_2`` (blind25-blind36) is the hel
 since (``halves``).
 
     python tests/data/solid3d/blind.py [--only NAME ...] [--check]
+    python tests/data/solid3d/blind.py --regression [--only NAME ...]
     python tests/data/solid3d/blind.py --shapes-only --only NAME [--only NAME ...]
+
+``--regression`` solves the fixed cases of ``REGRESSION`` into ``regression/<case>.json``
+(all of them, or only the ``--only`` ones: the others' records are left as they are).
 
 ``--shapes-only`` re-solves stored cases exactly as they were made and writes the top-face
 w of their stored flexural modes (``blind_shapes/<case>.json``, the grid of ``generate.GRID``),
@@ -273,9 +277,11 @@ def _fixed(
     )
 
 
-#: The diagnosis's two known failures rebuilt on other stacks and masses (regression
-#: tests, not part of the blind family): a thick carbon/glass/carbon laminate carrying a
-#: sensor, and a glass-skinned foam sandwich.
+#: Fixed cases of the same generator (regression tests, not part of the blind family): the
+#: diagnosis's two known failures rebuilt on other stacks and masses (a thick
+#: carbon/glass/carbon laminate carrying a sensor, and a glass-skinned foam sandwich), and a
+#: sandwich family the blind draw lacks: carbon-fabric skins on an end-grain balsa-type core,
+#: soft in plane but stiffer through its thickness (E3 = 20 E1; G13, G23 = 3.1, 2.4 G12).
 REGRESSION = (
     _fixed(
         "regression_sensor_on_thick",
@@ -315,6 +321,39 @@ REGRESSION = (
         0.15,
         1.5,
         "glass-fabric skins 0.6 mm on an 8 mm foam core of G = 50 MPa",
+    ),
+    _fixed(
+        "regression_balsa_sandwich",
+        "sandwich",
+        240.0,
+        160.0,
+        [("cfrp_fabric", 0.4, 0.0), ("balsa_core", 6.0, 0.0), ("cfrp_fabric", 0.4, 0.0)],
+        {
+            "cfrp_fabric": g.MATERIALS["cfrp_fabric"],
+            "balsa_core": dict(
+                E1=0.18,
+                E2=0.18,
+                E3=3.6,
+                G12=0.07,
+                G13=0.22,
+                G23=0.17,
+                nu12=0.3,
+                nu13=0.02,
+                nu23=0.02,
+                density=150.0,
+                note=(
+                    "end-grain balsa-type core: soft in plane, stiffer through the thickness "
+                    "(E3 = 20 E1, G13, G23 = 3.1, 2.4 G12)"
+                ),
+            ),
+        },
+        None,
+        0.12,
+        1.2,
+        (
+            "carbon-fabric skins 0.4 mm on a 6 mm end-grain balsa-type core "
+            "(G13, G23 = 3.1, 2.4 G12; E3 = 20 E1)"
+        ),
     ),
 )
 
@@ -779,7 +818,11 @@ def main(argv=None) -> int:
         action="store_true",
         help="the coarse mesh's error on the stored references (no ccx run)",
     )
-    parser.add_argument("--regression", action="store_true", help="the regression cases, into ../regression")
+    parser.add_argument(
+        "--regression",
+        action="store_true",
+        help="the regression cases (or only the --only ones), into regression/",
+    )
     parser.add_argument(
         "--shapes-only",
         action="store_true",
@@ -794,9 +837,15 @@ def main(argv=None) -> int:
     if args.shapes_only:
         return _shapes_only(cases, args.only, parser)
     if args.regression:
+        known = [c["name"] for c in REGRESSION]
+        unknown = [n for n in args.only or [] if n not in known]
+        if unknown:
+            parser.error(f"--regression --only: unknown regression case(s) {unknown}; known: {known}")
         folder = HERE / "regression"
         folder.mkdir(exist_ok=True)
         for case in REGRESSION:
+            if args.only and case["name"] not in args.only:
+                continue
             result = run_case(case, LEVEL, "regression")
             _write(folder / f"{case['name']}.json", result)
             print(f"{case['name']}: {result['made_with']['wall_time_s']:.0f} s", flush=True)
