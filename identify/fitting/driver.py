@@ -100,7 +100,7 @@ UD_NU23 = 0.45
 #: from G12 / 16).  The starts with G23 != G13 are for unidirectional plies (and wood) only
 #: (``_shear_starts``).
 SHEAR_STARTS = (TRANSVERSELY_ISOTROPIC, (1.0, 1.0), (1.0, 0.25), (1.0, 1 / 16), (0.25, 0.25))
-#: The last start of a failed shear refit is the thin-plate limit: shear moduli so stiff
+#: A failed shear refit is restarted from the thin-plate limit first: shear moduli so stiff
 #: that the shear theory's frequencies lie within this share of the measurements' scatter
 #: of the fit it is added to (``vanishing_shear_start``), from where every accepted step
 #: lowers the misfit.  A fixed multiple of G12 is no such limit: at 8 G12 a balsa core
@@ -587,6 +587,14 @@ class Prepared:
     seconds: float = 0.0
     pairings: dict | None = None  # followed from the start of the refit
     others: tuple = ()  # other start models, most promising first (``Effect.other_starts``)
+    # the misfit (sum of squares) of the fit it starts from where that is not the state
+    start_misfit: float | None = None
+
+    def starts_above(self, state: FitResult) -> bool:
+        """It starts from another fit (the spec's values) with more misfit than ``state``:
+        ending above ``state`` is then no failed start (its rival from ``state`` is refitted
+        too, and the lower kept)."""
+        return self.start_misfit is not None and ended_worse_by(self.start_misfit, state)
 
     def frees_any(self, parameters) -> bool:
         """Whether the refit moves any of the plain ``parameters``."""
@@ -664,6 +672,7 @@ def prepare_effect(
         time.perf_counter() - started,
         origin.pairings,
         others,
+        None if start is None else start.statistics.sum_squares,
     )
 
 
@@ -1013,7 +1022,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             notes += rivals
         else:
             result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
-            if effect(kind).frees_shear:
+            if effect(kind).frees_shear and not ready.starts_above(state):
                 result, new, restarted, contained = _restarted(refit, ready, result, new, base)
                 notes += restarted
             result, restarted = _other_starts(refit, ready, result, base + new)
@@ -1065,8 +1074,14 @@ def ended_worse(result: FitResult, state: FitResult) -> bool:
     """A refit that ends with more misfit than the fit it started from (which is the same
     model with the effect off), by more than ``NOT_WORSE_CHI2`` units of chi^2, has
     failed: it stopped in a local minimum or diverged."""
+    return ended_worse_by(result.statistics.sum_squares, state)
+
+
+def ended_worse_by(sum_squares: float, state: FitResult) -> bool:
+    """A misfit (weighted sum of squares) above ``state``'s by more than ``NOT_WORSE_CHI2``
+    units of chi^2."""
     slack = NOT_WORSE_CHI2 * state.statistics.chi2_unit
-    return not result.statistics.sum_squares <= state.statistics.sum_squares + slack
+    return not sum_squares <= state.statistics.sum_squares + slack
 
 
 def with_rotary_inertia(refit: Refit, model: SpecimenModel, base) -> FitResult | None:
@@ -1094,9 +1109,10 @@ def _restarted(
     refit: Refit, ready: Prepared, result: FitResult, new, base
 ) -> tuple[FitResult, list, list, FitResult | None]:
     """A transverse-shear refit that ended worse than the fit it contains is a failed
-    start, not a result: the other ``SHEAR_STARTS`` and the thin-plate limit
-    (``vanishing_shear_start``, from where every step can only lower the misfit) are tried
-    until one is not worse, the lowest misfit kept.  The fit it contains is ``state``, or
+    start, not a result: it is refitted from the thin-plate limit (``vanishing_shear_start``
+    and ``shear_continuation``, from where every step can only lower the misfit), and only
+    where that too ends worse (a fault, reported) from the other ``SHEAR_STARTS`` until one
+    is not, the lowest misfit kept.  The fit it contains is ``state``, or
     for an effect that brings rotary inertia the state with it (``with_rotary_inertia``)
     where that is higher: rotary inertia then raises the misfit, and a refit that ends
     between the two has not failed.  Returns (result, parameters, notes, the fit it
@@ -1119,8 +1135,6 @@ def _restarted(
     parameters = base + list(new)
 
     def starts():
-        for start in _shear_starts(specimen, shear):
-            yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
         model, factor = vanishing_shear_start(refit, ready.model, shear, parameters)
         model, reached = shear_continuation(refit, model, shear, factor, parameters)
         yield (
@@ -1130,13 +1144,21 @@ def _restarted(
                 f"while the misfit fell (to {reached:.3g} G12)"
             ),
         )
+        for start in _shear_starts(specimen, shear):
+            yield ready.model.with_values(_shear_values(specimen, shear, start)), _describe_start(start)
 
     best, where, count = _first_not_worse(refit, ready, result, starts(), parameters, inertia)
-    note = (
+    notes = [
         f"the refit from the screened start ended worse than without the effect (a failed start); "
         f"restarted {count} time(s), kept {where or 'the screened start'}"
-    )
-    return best, new, [note], inertia
+    ]
+    if count > 1:
+        notes.append(
+            "the refit from the thin-plate limit ended above the fit it contains, which a continuation "
+            "that only descends cannot do: please report it (a fault of the refit, not of the data); "
+            "the other shear starts were tried"
+        )
+    return best, new, notes, inertia
 
 
 def vanishing_shear_start(
