@@ -414,19 +414,29 @@ def _refine(kind: str, kinds, selected, candidates, state: FitResult, policy: Se
     """Is refinement ``kind`` worth a refit in this round: what it refines is not among the
     candidates at all, or is selected already, or paid for itself in this round (even at
     the noise level: the refinement may be the more complete physics, ``complete_margin``),
-    or explained some misfit while nothing paid and the misfit is ``far_from_noise`` (the
-    round would stop with the more complete theory untried)."""
+    or, while nothing paid and the misfit is ``far_from_noise``, explained some misfit or
+    failed to start (its refit failed, or ended above the fit it contains): the round would
+    stop with the more complete theory untried."""
     refined = set(effect(kind).refines)
     if not refined & set(kinds) or refined & set(selected):
         return True
     if any(c.scaled_gain > policy.min_gain for c in candidates if c.kind in refined):
         return True
     nothing_pays = not any(c.selectable and c.scaled_gain > policy.min_gain for c in candidates)
-    return (
-        nothing_pays
-        and state.statistics.reduced_chi2 > policy.far_from_noise
-        and any(c.eligible and c.gain > 0 for c in candidates if c.kind in refined)
-    )
+    far = state.statistics.reduced_chi2 > policy.far_from_noise
+    simpler = [c for c in candidates if c.kind in refined]
+    explained = any(c.eligible and c.gain > 0 for c in simpler)
+    failed = any(_failed_to_start(c, state) for c in simpler)
+    return nothing_pays and far and (explained or failed)
+
+
+def _failed_to_start(candidate: Candidate, state: FitResult) -> bool:
+    """A candidate whose refit failed (not pruned, not unidentifiable beforehand) or ended
+    above the fit it contains (``AddedEffect.ended_above``)."""
+    added = candidate.added
+    if candidate.fit is None:
+        return not added.pruned and not (added.precheck is not None and added.precheck.singular)
+    return candidate.fit.finished and added.ended_above(state)
 
 
 def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int, float, str]]:

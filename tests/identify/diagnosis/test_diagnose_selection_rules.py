@@ -106,17 +106,23 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
     """Layerwise refines the shear candidates: tried when one of them paid, and also when
     none paid but one explained some misfit and the misfit is still ``far_from_noise``
     (the round would otherwise stop with the more complete theory untried); not when the
-    misfit is near the noise, when the shear candidates explained nothing, or when
-    another candidate pays (the round goes on without it)."""
+    misfit is near the noise, when the shear candidates explained nothing (and did not
+    fail to start), or when another candidate pays (the round goes on without it)."""
     from types import SimpleNamespace
 
     from identify.diagnosis.diagnose import _refine
 
     far_from_noise, min_gain = SELECTION_POLICY.far_from_noise, SELECTION_POLICY.min_gain
 
-    def tried(kind, scaled_gain, gain, selectable=True):
+    def tried(kind, scaled_gain, gain, selectable=True, above=False, fit=True, pruned=False):
         return SimpleNamespace(
-            kind=kind, scaled_gain=scaled_gain, gain=gain, eligible=True, selectable=selectable
+            kind=kind,
+            scaled_gain=scaled_gain,
+            gain=gain,
+            eligible=fit,
+            selectable=selectable and fit,
+            fit=SimpleNamespace(finished=True) if fit else None,
+            added=SimpleNamespace(pruned=pruned, precheck=None, ended_above=lambda state: above),
         )
 
     kinds = ["transverse_shear", "thick_plate", "layerwise", "point_mass"]
@@ -139,6 +145,15 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
     assert _refine("layerwise", kinds, selected, nothing, near, SELECTION_POLICY), (
         "what it refines is selected"
     )
+    # The simpler theories failed to start (a refit that ended above the fit it contains,
+    # or one that failed): far from the noise the fuller theory is tried, near it not.
+    above = [tried("transverse_shear", -3.0, -50.0, above=True), tried("thick_plate", -4.0, -80.0)]
+    assert _refine("layerwise", kinds, [], above, far, SELECTION_POLICY)
+    assert not _refine("layerwise", kinds, [], above, near, SELECTION_POLICY)
+    failed = [tried("transverse_shear", 0.0, 0.0, fit=False), tried("thick_plate", -4.0, -80.0)]
+    assert _refine("layerwise", kinds, [], failed, far, SELECTION_POLICY)
+    pruned = [tried("transverse_shear", 0.0, 0.0, fit=False, pruned=True), tried("thick_plate", -4.0, -80.0)]
+    assert not _refine("layerwise", kinds, [], pruned, far, SELECTION_POLICY)
 
 
 def test_shear_candidates_restart_from_the_spec_when_the_thin_plate_distorted_it():
