@@ -53,6 +53,7 @@ import numpy as np
 import pandas as pd
 
 import identify
+from fem.effects import effect as effect_kind
 from fem.inputs import InputStd
 from fem.io import write_text
 from fem.spec import parse_spec
@@ -112,7 +113,8 @@ def load(name: str) -> dict:
 
 
 def _core(case: dict) -> str | None:
-    return "foam_core" if case["family"] == "sandwich" else None
+    """A sandwich's core material (its middle layer's: a foam, end-grain balsa)."""
+    return case["choices"]["nominal_layers"][1]["material"] if case["family"] == "sandwich" else None
 
 
 def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, sensor: bool = True):
@@ -120,10 +122,9 @@ def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, se
     angles, the sensor as a fixed point mass); ``theory``: 'thick_plate' (first-order shear
     with rotary inertia), 'layerwise' or 'clt'."""
     text = case["truth_spec_toml"]
-    if _core(case):
-        text = re.sub(
-            r"(\[materials\.foam_core\][^\[]*?)identify = \w+", r'\1identify = ["G13", "G23"]', text
-        )
+    core = _core(case)
+    if core:
+        text = re.sub(rf"(\[materials\.{core}\][^\[]*?)identify = \w+", r'\1identify = ["G13", "G23"]', text)
     if not sensor:
         text = text.split("\n[[effects]]")[0] + "\n"
     if theory == "layerwise":
@@ -285,6 +286,9 @@ class Outcome:
     oracle_seconds: float = math.nan
     error: str = ""
     report: str = ""  # the diagnosis's own report: every round's candidates and reasons
+    # candidates whose refit ended above the fit it contains, as (round, kind)
+    # (``Step.above_start``): a shear or layerwise one is a fault (it can only descend)
+    above_start: tuple[tuple[int, str], ...] = ()
 
     @property
     def true_effects(self) -> tuple[str, ...]:
@@ -342,6 +346,7 @@ class Outcome:
                 k: {"rms_pct": num(100 * rms), "max_z": num(z, 2)}
                 for k, (rms, z) in (self.oracle.without if self.oracle else {}).items()
             },
+            "above_start": [f"round {number}: {kind}" for number, kind in self.above_start],
             "error": self.error,
         }
 
@@ -441,6 +446,7 @@ def run_case(
         result = identify.diagnose(start, data, progress=progress)
         out.seconds = time.perf_counter() - started
         out.report = result.report()
+        out.above_start = tuple((s.number, kind) for s in result.steps for kind in s.above_start)
         if with_oracle:
             started = time.perf_counter()
             out.oracle = oracle(case, data)
@@ -498,9 +504,17 @@ def summary(outcomes: list[Outcome]) -> dict:
             100 * sum(o.within_measurement_std for o in outcomes) / n, 1
         ),
         "tracebacks": sum(bool(o.error) for o in outcomes),
+        "shear_refits_above_start": sum(_shear_above_start(o) for o in outcomes),
         "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
         "max_seconds": round(float(np.max(seconds)), 1) if seconds else None,
     }
+
+
+def _shear_above_start(o: Outcome) -> int:
+    """How many of a case's shear and layerwise candidates (``Effect.frees_shear``) ended
+    above the fit they contain: refits that start at the thin-plate limit can only descend,
+    so each one counted is a fault."""
+    return sum(effect_kind(kind).frees_shear for _, kind in o.above_start)
 
 
 def report(outcomes: list[Outcome], title: str) -> str:

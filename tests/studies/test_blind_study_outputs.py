@@ -25,6 +25,7 @@ def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, mon
             seconds=12.0,
             oracle_seconds=3.0,
             report=f"== diagnosis of {name} ==",
+            above_start=((1, "thick_plate"), (2, "point_mass")),
         )
 
     monkeypatch.setattr(study, "run_case", recorded)
@@ -35,6 +36,9 @@ def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, mon
     assert data["cases"][0]["without"] == {"shear": {"rms_pct": 0.5, "max_z": 40.0}}
     assert data["summary"]["dev"]["cases"] == 1
     assert data["summary"]["dev"]["contains_true_pct"] == 100.0
+    # A shear refit that ended above its start is a fault the study counts; a point mass's is not.
+    assert data["cases"][0]["above_start"] == ["round 1: thick_plate", "round 2: point_mass"]
+    assert data["summary"]["dev"]["shear_refits_above_start"] == 1
 
 
 def test_an_effect_is_true_when_leaving_it_out_costs_the_misfit_or_a_property():
