@@ -249,6 +249,11 @@ MIN_ELASTIC, MIN_FLEXURAL = 12, 16
 #: Kinetic-energy share of w above which a mode is "flexural".
 FLEXURAL_SHARE = 0.5
 GRID = (13, 11)  # points along x, along y
+#: A spec states E3 for a core whose E3 is at least this many times its in-plane moduli
+#: (end-grain balsa, a honeycomb), the project's own class limit
+#: (``identify.fitting.plausibility.THROUGH_THICKNESS_CORE``): a user who bonds such a core
+#: knows what it is, and its E3 is on its data sheet.
+THROUGH_THICKNESS_CORE = 5.0
 LABEL_GRID = (49, 41)
 
 #: The quarter model [0, L/2] x [0, W/2]; mirror planes x = L/2 and y = W/2.
@@ -775,6 +780,11 @@ def spec_toml(name: str, case: dict, materials=None) -> str:
             f"density_kg_m3 = {_sig(c['density'])!r}",
             f"G13_GPa = {_sig(c['G13'])!r}",
             f"G23_GPa = {_sig(c['G23'])!r}",
+        ]
+        if c["E3"] >= THROUGH_THICKNESS_CORE * max(c["E1"], c["E2"]):
+            # a core whose grain or cells run through its thickness: a user states its E3
+            lines.append(f"E3_GPa = {_sig(c['E3'])!r}")
+        lines += [
             f"identify = {'true' if m in used else 'false'}",
             f'note = "3-D: E3 = {c["E3"]:g} GPa, nu13 = {c["nu13"]:.4g}, nu23 = {c["nu23"]:.4g}"',
             "",
