@@ -9,6 +9,7 @@ from fem.solver.attachments import PointMass
 from fem.solver.reduced_basis import Reanalysis
 from fem.spec import parse_spec
 from fem.specimen import Parameter
+from studies.long_plates import handbook_model
 
 #: A foam-core sandwich (skins 0.5 mm, core 6 mm; the layerwise benchmark's, smaller and
 #: on a coarse mesh so a full solve takes a fraction of a second).
@@ -153,27 +154,6 @@ def test_assembled_and_projected_reanalyses_agree(theory):
     assert np.max(np.abs(other - one) / scale) < 1e-7
 
 
-#: A long spruce plate at handbook values (the shape of a public tap-test data set's).
-SPRUCE = {
-    "specimen": {
-        "length_mm": 580.0,
-        "width_mm": 213.0,
-        "layers": [{"material": "spruce", "thickness_mm": 5.0}],
-    },
-    "materials": {
-        "spruce": {
-            "E1_GPa": 10.0,
-            "E2_GPa": 0.80,
-            "G12_GPa": 0.62,
-            "nu12": 0.40,
-            "density_kg_m3": 440.0,
-            "identify": True,
-        }
-    },
-    "configurations": [{"name": "original"}],
-}
-
-
 @pytest.mark.parametrize(
     "options", [{}, {"transverse_shear": True, "rotary_inertia": True}], ids=["kirchhoff", "shear_and_mass"]
 )
@@ -182,7 +162,7 @@ def test_the_screens_reach(options):
     compared), E1 +15 %, E2 -5 %, G12 +5 %, nu12 0.40 -> 0.35.  The Ritz frequencies
     bound the full solve's from above and lie within 0.1 % (measured 0.01-0.04 %; the
     screen matches peaks at 1 %, so 0.1 % leaves it a factor 10)."""
-    start = parse_spec(SPRUCE)
+    start = handbook_model()  # a long spruce plate (the shape of a public tap-test data set's)
     divisions = start.with_options(modes=20).options.divisions_for(start.specimen)
     start = start.with_options(modes=30, divisions=divisions, **options)
     if options:

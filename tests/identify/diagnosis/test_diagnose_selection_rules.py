@@ -281,31 +281,10 @@ def test_layerwise_is_not_tried_in_place_of_the_single_shear_layer_it_is(monkeyp
     plate: its rolling shear modulus G23 is below a tenth of G13, so the layerwise model
     lets it stretch through its thickness, E3 = E2, which the single shear layer does not.)"""
     from fem.effects import effect
-    from fem.spec import parse_spec
     from identify.diagnosis.diagnose import _completed
+    from studies.long_plates import handbook_model
 
-    single = parse_spec(
-        {
-            "specimen": {
-                "name": "board",
-                "length_mm": 580.0,
-                "width_mm": 213.0,
-                "layers": [{"material": "spruce", "thickness_mm": 5.0}],
-            },
-            "materials": {
-                "spruce": {
-                    "E1_GPa": 10.0,
-                    "E2_GPa": 0.8,
-                    "G12_GPa": 0.62,
-                    "nu12": 0.4,
-                    "density_kg_m3": 440,
-                    "identify": True,
-                }
-            },
-            "configurations": [{"name": "original"}],
-        },
-        "<test>",
-    )
+    single = handbook_model()
     layerwise = effect("layerwise")
     assert layerwise.single_shear_layer(single)
     assert not layerwise.single_shear_layer(example_spec)
