@@ -8,6 +8,7 @@ with G13, G23 = 3.1, 2.4 x its G12 and E3 = 20 x its E1; the thin-plate frequenc
 The user's spec gives no transverse shear moduli and handbook starts (skins 55 / 55 /
 4.2 GPa, core 0.15 / 0.15 / 0.06 GPa: 0.8-0.9 x the truth); the scatter is 0.05 %."""
 
+import os
 import re
 import tomllib
 
@@ -17,6 +18,8 @@ import pytest
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.compare import compare
+from identify.diagnosis.diagnose import diagnose
+from identify.engine.result import FitStatus
 from identify.engine.updating import FitOptions
 from identify.fitting import driver
 from identify.fitting.driver import (
@@ -93,3 +96,21 @@ def test_the_shear_continuation_descends_from_the_thin_plate_s_misfit(baseline, 
     assert added.implausible == (), added.implausible
     core = fitted.specimen.materials["balsa_core"]
     assert core.G13 > MAX_SHEAR_RATIO * core.G12
+
+
+@pytest.mark.skipif(
+    not os.environ.get("LAYER_ID_LONG_TESTS"), reason="long (4 min): set LAYER_ID_LONG_TESTS=1"
+)
+def test_the_diagnosis_reaches_the_layerwise_model_and_every_property(baseline):
+    """The whole diagnosis from the handbook starts: layerwise selected in the first round
+    (measured 7.94 % -> 0.0382 %, 0.77 x the stated scatter: converged), and every layer
+    property within 3 std of the 3-D model's (measured: within 1.3 std, the core's
+    in-plane E1 the worst; 247 s on a loaded 2-core machine)."""
+    model, data, _ = baseline
+    result = diagnose(model, data)
+    assert [c.kind for c in result.selected] == ["layerwise"]
+    final = result.final
+    assert final.status is FitStatus.CONVERGED
+    truth = parse_spec(tomllib.loads(study.load(CASE)["truth_spec_toml"]), CASE)
+    for p, value, std in zip(final.parameters, final.values, final.uncertainty.std, strict=True):
+        assert abs(value - truth.value(p)) < 3 * std, (p.name, value, truth.value(p), std)
