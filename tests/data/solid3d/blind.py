@@ -41,6 +41,34 @@ stored in ``index.json`` with both seeds.  That held-out half was run once (run 
 series of ``N_CASES_2`` cases drawn from ``SEED_2`` (blind25-blind36) is the held-out half
 since (``halves``).
 
+A third series (``draw_cases_3``, ``SEED_3``, blind37-blind96) draws families the first two
+never did, in turn, ``PER_FAMILY_3`` = 12 cases each:
+
+- ``balsa_sandwich``: woven carbon (60 %) or glass skins 0.3-1.0 mm (constants scaled
+  0.85-1.15, the glass too) on a 5-20 mm core soft in plane and stiffer through its
+  thickness, end-grain balsa or honeycomb type (``_balsa_core``: E1 = E2 = 0.02-0.3 GPa,
+  G12 0.005-0.1 GPa and at most E1 / 2, G13 = 2-100 x G12, G23 = 0.5-0.9 x G13,
+  E3 = 10-100 x E1, so that the spec states it, nu13, nu23 = 0.01-0.05, 40-250 kg/m^3;
+  its 3-D compliance positive definite, ``positive_definite``);
+- ``thick_skins``: woven carbon or glass skins 1.0-2.5 mm or aluminium skins 0.5-2 mm
+  (half each) on a foam core (``_core``, 4-12 mm) or a balsa-type core (5-20 mm), half each;
+- ``coating``: a polymer coating (E = 0.5-5 GPa log-uniform, nu = 0.35-0.45, 1100-1600
+  kg/m^3, 0.2-2.0 mm) on one side, top or bottom, of a steel or aluminium sheet of
+  0.8-3 mm (E, nu, density 0.97-1.03 x the handbook's): two layers, unsymmetric (the
+  specimen's metals are named ``steel``, ``aluminium_sheet``, ``aluminium_skin``: the
+  bonded plate is ``aluminium``);
+- ``angle_ply``: [+t/-t/+t] or [+t/-t/+t/-t/+t] (equal plies), t = 15-60 deg (whole
+  degrees), CFRP or GFRP plies (``_ply``), a/h 15-60: bending-twisting coupling,
+  |D16| / D11 = 0.11-0.77 over the draws (an antisymmetric [+t/-t/+t/-t] has D16 = 0);
+- ``sensor``: the four stacks above in turn, every one with a sensor.
+
+The plates 200-300 mm long on a sandwich stack, 150-250 mm otherwise; misalignment, sensor
+(half of the cases outside the ``sensor`` family) and bonded configurations as above.  Only
+plies with axes are turned: a core, a metal and a coating keep 0 deg (a case without such
+plies has ``misalignment_max_deg`` 0).  A sensor stands on its base on a sandwich and on a
+coating on top; on a metal or a laminate it is a point mass.  The series is split per
+family into 6 'dev3' and 6 'heldout3' cases (``split_by_family``, ``SPLIT_SEED_3``).
+
     python tests/data/solid3d/blind.py [--only NAME ...] [--check]
     python tests/data/solid3d/blind.py --regression [--only NAME ...]
     python tests/data/solid3d/blind.py --shapes-only --only NAME [--only NAME ...]
@@ -87,6 +115,16 @@ N_CASES = 24
 SEED_2 = 20_2028
 N_CASES_2 = 12
 FAMILIES = ("hybrid", "cross_ply", "sandwich")
+#: The third series: families the first two never drew, in turn, ``PER_FAMILY_3`` cases
+#: each (blind37-blind96), split per family into a development and a held-out half by
+#: ``SPLIT_SEED_3`` (``split_by_family``).
+SEED_3 = 20_2029
+SPLIT_SEED_3 = 20_2030
+#: ``sensor``: a stack of the other four families (``STACKS_3`` in turn), always with a sensor.
+FAMILIES_3 = ("balsa_sandwich", "thick_skins", "coating", "angle_ply", "sensor")
+STACKS_3 = FAMILIES_3[:4]
+PER_FAMILY_3 = 12
+N_CASES_3 = PER_FAMILY_3 * len(FAMILIES_3)
 #: A sensor's square base on a sandwich: this side [mm] plus 1 mm per gram of its mass.
 SENSOR_BASE_MM = 5.0
 #: Elements across each side of a sensor's base in the solid model, per thickness factor of
@@ -99,6 +137,8 @@ ELASTIC = 18
 LEVEL = g.LEVELS[0]
 CHECK_LEVEL = g.LEVELS[1]
 SCATTER = (0.85, 1.15)
+#: A metal's E, nu and density: this factor range times the handbook value.
+METAL_SCATTER = (0.97, 1.03)
 
 
 def _ply(rng, base: str) -> dict:
@@ -124,8 +164,9 @@ def _ply(rng, base: str) -> dict:
 
 
 def _fabric(rng, base: str) -> dict:
-    """A woven skin: in-plane constants scaled; through the thickness as the base."""
-    b = g.MATERIALS[base]
+    """A woven skin (``cfrp_fabric``, or ``gfrp_fabric`` in the third series): in-plane
+    constants scaled; through the thickness as the base."""
+    b = FABRICS[base]
     s = lambda: rng.uniform(*SCATTER)  # noqa: E731
     e = b["E1"] * s()
     return dict(
@@ -152,6 +193,8 @@ GLASS_FABRIC = dict(
     density=1900.0,
     note="woven E-glass/epoxy skin",
 )
+#: The woven skins' base constants (GPa, kg/m^3).
+FABRICS = {"cfrp_fabric": g.MATERIALS["cfrp_fabric"], "gfrp_fabric": GLASS_FABRIC}
 
 
 def _core(rng) -> dict:
@@ -170,6 +213,210 @@ def _core(rng) -> dict:
         nu23=nu,
         density=50.0 + 900.0 * shear,
         note="isotropic foam core, E = 2G(1 + nu)",
+    )
+
+
+STEEL = dict(
+    E1=210.0,
+    E2=210.0,
+    E3=210.0,
+    G12=210.0 / 2.58,
+    G13=210.0 / 2.58,
+    G23=210.0 / 2.58,
+    nu12=0.29,
+    nu13=0.29,
+    nu23=0.29,
+    density=7850.0,
+    note="structural steel, isotropic (G = E / 2(1 + nu))",
+)
+#: The third series' metals: the specimen's own (named apart from the bonded ``aluminium``).
+METALS = {
+    "steel": STEEL,
+    "aluminium_sheet": g.MATERIALS["aluminium"],
+    "aluminium_skin": g.MATERIALS["aluminium"],
+}
+
+
+def _log_uniform(rng, low: float, high: float) -> float:
+    return math.exp(rng.uniform(math.log(low), math.log(high)))
+
+
+def compliance(c: dict) -> np.ndarray:
+    """The 3-D compliance [1/GPa] of a material's engineering constants (``MATERIALS``'
+    keys; Voigt order 11, 22, 33, 23, 13, 12; nu_ij = -strain_j / strain_i under stress i,
+    as ccx reads them)."""
+    s = np.diag([1 / c["E1"], 1 / c["E2"], 1 / c["E3"], 1 / c["G23"], 1 / c["G13"], 1 / c["G12"]])
+    s[0, 1] = s[1, 0] = -c["nu12"] / c["E1"]
+    s[0, 2] = s[2, 0] = -c["nu13"] / c["E1"]
+    s[1, 2] = s[2, 1] = -c["nu23"] / c["E2"]
+    return s
+
+
+def positive_definite(c: dict) -> bool:
+    """Whether a material's 3-D compliance is positive definite (a physical solid)."""
+    return bool(np.linalg.eigvalsh(compliance(c)).min() > 0)
+
+
+def _metal(rng, name: str) -> dict:
+    """An isotropic metal of ``METALS``: E, nu and density scaled by ``METAL_SCATTER``,
+    G = E / 2(1 + nu)."""
+    b = METALS[name]
+    s = lambda: rng.uniform(*METAL_SCATTER)  # noqa: E731
+    e, nu, rho = b["E1"] * s(), b["nu12"] * s(), b["density"] * s()
+    shear = e / (2 * (1 + nu))
+    base = "steel" if name == "steel" else "aluminium"
+    return dict(
+        E1=e,
+        E2=e,
+        E3=e,
+        G12=shear,
+        G13=shear,
+        G23=shear,
+        nu12=nu,
+        nu13=nu,
+        nu23=nu,
+        density=rho,
+        note=f"{base} scaled 0.97-1.03 per constant (E, nu, density), isotropic (G = E / 2(1 + nu))",
+    )
+
+
+def _balsa_core(rng) -> dict:
+    """An end-grain balsa or honeycomb-type core: soft in plane (E1 = E2 = 0.02-0.3 GPa,
+    G12 = 0.005 GPa to min(0.1 GPa, E1 / 2), both log-uniform, nu12 = 0.2-0.4), stiffer
+    through its thickness: G13 = 2-100 x G12 (log-uniform), G23 = 0.5-0.9 x G13,
+    E3 = 10-100 x E1 (log-uniform), nu13, nu23 = 0.01-0.05; density 40-250 kg/m^3."""
+    e = _log_uniform(rng, 0.02, 0.3)
+    g12 = _log_uniform(rng, 0.005, min(0.1, e / 2))
+    g13 = g12 * _log_uniform(rng, 2.0, 100.0)
+    core = dict(
+        E1=e,
+        E2=e,
+        G12=g12,
+        G13=g13,
+        G23=g13 * rng.uniform(0.5, 0.9),
+        nu12=rng.uniform(0.2, 0.4),
+        density=rng.uniform(40.0, 250.0),
+        note="end-grain balsa / honeycomb-type core: soft in plane, stiffer through its thickness",
+    )
+    # Positive definite over these ranges (at the worst corner, nu12 = 0.4, nu13 = nu23 =
+    # 0.05, E3 = 100 E1, 1 - nu12^2 - (nu13^2 + nu23^2 + 2 nu12 nu13 nu23) E3/E1 = 0.14):
+    # the through-thickness constants are drawn again should a wider range break it.
+    while True:
+        core.update(
+            E3=e * _log_uniform(rng, 10.0, 100.0), nu13=rng.uniform(0.01, 0.05), nu23=rng.uniform(0.01, 0.05)
+        )
+        if positive_definite(core):
+            return core
+
+
+def _coating(rng) -> dict:
+    """A thick polymer coating (paint, a damping layer): isotropic, E = 0.5-5 GPa
+    (log-uniform), nu = 0.35-0.45, density 1100-1600 kg/m^3."""
+    e, nu = _log_uniform(rng, 0.5, 5.0), rng.uniform(0.35, 0.45)
+    shear = e / (2 * (1 + nu))
+    return dict(
+        E1=e,
+        E2=e,
+        E3=e,
+        G12=shear,
+        G13=shear,
+        G23=shear,
+        nu12=nu,
+        nu13=nu,
+        nu23=nu,
+        density=rng.uniform(1100.0, 1600.0),
+        note="polymer coating, isotropic (G = E / 2(1 + nu))",
+    )
+
+
+def _skins(rng, materials: dict, thick: bool) -> tuple[str, float]:
+    """A sandwich's skin material (added to ``materials``) and thickness [mm]: woven carbon
+    (60 %) or glass 0.3-1.0 mm; ``thick``: woven carbon or glass 1.0-2.5 mm, or aluminium
+    0.5-2 mm (half each)."""
+    if thick and rng.random() < 0.5:
+        materials["aluminium_skin"] = _metal(rng, "aluminium_skin")
+        return "aluminium_skin", rng.uniform(0.5, 2.0)
+    name = "cfrp_fabric" if rng.random() < 0.6 else "gfrp_fabric"
+    materials[name] = _fabric(rng, name)
+    return name, rng.uniform(1.0, 2.5) if thick else rng.uniform(0.3, 1.0)
+
+
+def _stack_3(rng, stack: str, materials: dict) -> tuple[float, list, str | None, bool]:
+    """A third-series stack: its length [mm], nominal layers (material, thickness [mm],
+    angle [deg]) bottom to top, its core (None without) and whether a sensor on its top
+    face stands on its base (on a soft layer or a soft core a point mass is singular).
+    Adds the materials drawn to ``materials``."""
+    if stack in ("balsa_sandwich", "thick_skins"):
+        length = rng.uniform(200.0, 300.0)
+        skin, t_skin = _skins(rng, materials, thick=stack == "thick_skins")
+        if stack == "balsa_sandwich" or rng.random() < 0.5:
+            core, t_core = "balsa_core", rng.uniform(5.0, 20.0)
+            materials[core] = _balsa_core(rng)
+        else:
+            core, t_core = "foam_core", rng.uniform(4.0, 12.0)
+            materials[core] = _core(rng)
+        return length, [(skin, t_skin, 0.0), (core, t_core, 0.0), (skin, t_skin, 0.0)], core, True
+    length = rng.uniform(150.0, 250.0)
+    if stack == "coating":
+        metal = "steel" if rng.random() < 0.5 else "aluminium_sheet"
+        materials[metal] = _metal(rng, metal)
+        materials["coating"] = _coating(rng)
+        layers = [(metal, rng.uniform(0.8, 3.0), 0.0), ("coating", rng.uniform(0.2, 2.0), 0.0)]
+        on_top = rng.random() < 0.5
+        return length, layers if on_top else layers[::-1], None, on_top
+    # angle_ply: [+t/-t/+t] or [+t/-t/+t/-t/+t], equal plies: D16, D26 != 0
+    ply = "cfrp_ud" if rng.random() < 0.5 else "gfrp_ud"
+    materials[ply] = _ply(rng, ply)
+    h = length / rng.uniform(15.0, 60.0)
+    n = 3 if rng.random() < 0.5 else 5
+    t = float(round(rng.uniform(15.0, 60.0)))
+    return length, [(ply, h / n, t if k % 2 == 0 else -t) for k in range(n)], None, False
+
+
+def draw_case_3(rng, index: int, family: str, stack: str) -> dict:
+    """One case of the third series: ``draw_case``'s choices on a ``STACKS_3`` stack; the
+    plies with axes (not a core, a metal or a coating) misaligned by up to 0-8 deg; a
+    sensor on half of the cases (on every case of the ``sensor`` family)."""
+    materials = {"aluminium": g.MATERIALS["aluminium"], "soft_adhesive": g.MATERIALS["soft_adhesive"]}
+    length, nominal, core, on_base = _stack_3(rng, stack, materials)
+    plies = {m for m, _, _ in nominal if m in ("cfrp_ud", "gfrp_ud", "cfrp_fabric", "gfrp_fabric")}
+    width = length * rng.uniform(0.6, 0.9)
+    spread = rng.uniform(0.0, 8.0) if plies else 0.0
+    layers = []
+    for m, t, angle in nominal:
+        turn = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, spread)) if m in plies else 0.0
+        layers.append((m, round(t, 3), round(angle + turn, 2)))
+    sensor = None
+    if family == "sensor" or rng.random() < 0.5:
+        sensor = dict(
+            mass_g=round(rng.uniform(1.0, 10.0), 2),
+            x_mm=rng.uniform(0.1, 0.9) * length,
+            y_mm=rng.uniform(0.1, 0.9) * width,
+        )
+        if on_base:
+            sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
+    bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
+    added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
+    return dict(
+        name=f"blind{index + 1:02d}_{family}",
+        family=family,
+        stack=stack,
+        core=core,
+        length_mm=round(length, 1),
+        width_mm=round(width, 1),
+        layers=layers,
+        nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal],
+        materials=materials,
+        sensor=sensor,
+        misalignment_max_deg=round(spread, 2),
+        bond_line_mm=bond,
+        aluminium_mm=plate,
+        configurations=[
+            dict(name="original", bottom=[], top=[]),
+            dict(name="al_bottom", bottom=added, top=[]),
+            dict(name="al_top", bottom=[], top=added),
+        ],
+        description=f"blind {family} case {index + 1}" + (f" ({stack})" if stack != family else ""),
     )
 
 
@@ -365,18 +612,34 @@ def draw_cases(n: int = N_CASES, seed: int = SEED, first: int = 0) -> list[dict]
     return [dict(draw_case(rng, first + i), seed=seed) for i in range(n)]
 
 
+def draw_cases_3(seed: int = SEED_3, first: int = N_CASES + N_CASES_2) -> list[dict]:
+    """The third series: ``N_CASES_3`` cases of ``FAMILIES_3`` in turn from one generator
+    seeded with ``seed``, numbered from ``first`` + 1; the k-th ``sensor`` case on the
+    stack ``STACKS_3[k % 4]``."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for i in range(N_CASES_3):
+        family = FAMILIES_3[i % len(FAMILIES_3)]
+        stack = STACKS_3[i // len(FAMILIES_3) % len(STACKS_3)] if family == "sensor" else family
+        cases.append(dict(draw_case_3(rng, first + i, family, stack), seed=seed))
+    return cases
+
+
 def all_cases() -> list[dict]:
-    """Both series: the first (split into halves) and the second (held-out)."""
-    return draw_cases() + draw_cases(N_CASES_2, SEED_2, first=N_CASES)
+    """The three series: the first (all development now), the second (held-out) and the
+    third (split per family)."""
+    return draw_cases() + draw_cases(N_CASES_2, SEED_2, first=N_CASES) + draw_cases_3()
 
 
 def halves(cases: list[dict]) -> dict[str, str]:
     """Every case's half: the first series all development (its held-out half, drawn by
-    ``split``, was run once in run 8 and then worked on), the second series held-out."""
+    ``split``, was run once in run 8 and then worked on), the second series held-out, the
+    third 'dev3' or 'heldout3' (``split_by_family``)."""
     first = [c["name"] for c in cases if c["seed"] == SEED]
     return {
         **{name: "dev" for name in split(first)},
-        **{c["name"]: "heldout" for c in cases if c["seed"] != SEED},
+        **{c["name"]: "heldout" for c in cases if c["seed"] == SEED_2},
+        **split_by_family([c for c in cases if c["seed"] == SEED_3]),
     }
 
 
@@ -384,6 +647,20 @@ def split(names: list[str], seed: int = SPLIT_SEED) -> dict[str, str]:
     """Half 'dev', half 'heldout', at random, once."""
     order = np.random.default_rng(seed).permutation(len(names))
     return {names[k]: ("dev" if rank < len(names) // 2 else "heldout") for rank, k in enumerate(order)}
+
+
+def split_by_family(cases: list[dict], seed: int = SPLIT_SEED_3) -> dict[str, str]:
+    """The third series' halves: per family (``FAMILIES_3`` in order, one generator
+    seeded with ``seed``) half 'dev3', half 'heldout3' at random; in the cases' order."""
+    rng = np.random.default_rng(seed)
+    half = {}
+    for family in FAMILIES_3:
+        names = [c["name"] for c in cases if c["family"] == family]
+        order = rng.permutation(len(names))
+        half.update(
+            {names[k]: ("dev3" if rank < len(names) // 2 else "heldout3") for rank, k in enumerate(order)}
+        )
+    return {c["name"]: half[c["name"]] for c in cases}
 
 
 # ---------------------------------------------------------------------------------------
@@ -588,7 +865,7 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
         family=case["family"],
         half=half,
         seed=case.get("seed"),
-        split_seed=SPLIT_SEED,
+        split_seed=SPLIT_SEED_3 if case.get("seed") == SEED_3 else SPLIT_SEED,
         choices=dict(
             length_mm=case["length_mm"],
             width_mm=case["width_mm"],
@@ -600,6 +877,7 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
             sensor=None if not case["sensor"] else dict(case["sensor"], x_mm=sensor_xy[0], y_mm=sensor_xy[1]),
             bond_line_mm=case["bond_line_mm"],
             aluminium_mm=case["aluminium_mm"],
+            **{k: case[k] for k in ("stack", "core") if k in case},
         ),
         materials={
             m: {k: (g._sig(v) if isinstance(v, float) else v) for k, v in c.items()}
@@ -773,6 +1051,19 @@ def stored_convergence() -> list[dict]:
     return out
 
 
+def index_record(half: dict[str, str]) -> dict:
+    """``index.json``: the seeds and every case's half (``halves``)."""
+    return dict(
+        seed=SEED,
+        split_seed=SPLIT_SEED,
+        seed_2=SEED_2,
+        seed_3=SEED_3,
+        split_seed_3=SPLIT_SEED_3,
+        cases=half,
+        script="tests/data/solid3d/blind.py",
+    )
+
+
 def _write(path: Path, data) -> None:
     tmp = path.with_suffix(".tmp")
     tmp.write_text(g.dumps(data) + "\n")
@@ -862,12 +1153,7 @@ def main(argv=None) -> int:
     if args.check_stored:
         _write(args.out / "mesh_check.json", dict(stored_references=stored_convergence()))
         return 0
-    _write(
-        args.out / "index.json",
-        dict(
-            seed=SEED, split_seed=SPLIT_SEED, seed_2=SEED_2, cases=half, script="tests/data/solid3d/blind.py"
-        ),
-    )
+    _write(args.out / "index.json", index_record(half))
     for case in cases:
         if args.only and case["name"] not in args.only:
             continue
