@@ -33,7 +33,8 @@ docs: $(STAMP)
 	$(BIN)/pip install --quiet -e '.[docs]'
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
-# The blind diagnosis study on the development half (HALF=heldout or both for the others),
+# The blind diagnosis study on the development half (HALF=heldout or both for the others;
+# dev3, heldout3 or both3 for the third series' new families, all for every case),
 # JOBS cases at once (one process each).  A layerwise diagnosis process grows to 6-14 GB:
 # two of them were killed by the out-of-memory killer on a 23 GB machine (JOBS=1 there).
 HALF ?= dev

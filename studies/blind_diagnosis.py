@@ -1,19 +1,32 @@
 """Blind diagnosis study: the diagnosis run on 3-D solid reference cases it was not tuned on.
 
 The cases are ``tests/data/solid3d/blind/*.json`` (made by ``tests/data/solid3d/blind.py``:
-CalculiX C3D20R full-plate models of thick hybrid laminates, cross-plies and foam-core
-sandwiches with misaligned plies, a sensor on half of them, soft bond lines; 10 flexural
-modes per configuration; split once at random into a development and a held-out half).
+CalculiX C3D20R full-plate models with misaligned plies, a sensor on half of them, soft
+bond lines; 10 flexural modes per configuration) in three series and four halves
+(``HALVES``, ``blind/index.json``):
+
+- 'dev': the first series (blind01-24: thick hybrid laminates, cross-plies, foam-core
+  sandwiches), the development half since run 8;
+- 'heldout': the second series (blind25-36, the same families), held out;
+- 'dev3', 'heldout3': the third series (blind37-96), families the first two never drew
+  (``balsa_sandwich``, ``thick_skins``, ``coating``, ``angle_ply`` and ``sensor``, a
+  sensor on every one of these stacks), split per family 6 and 6.
+
+``--half`` takes a half or a union of them (``SELECTIONS``: 'both' = dev + heldout,
+'both3' = dev3 + heldout3, 'all').
 
 Per case (everything seeded by the case's number):
 
 - measurements: the 3-D frequencies with Gaussian scatter of 0.02-0.1 % (drawn per case,
   stated as std_hz), each numbered by the plate mode its shape paired with in the
   generator, the nodal-line label given where a neighbour is within 1 % (as a lab would);
-- the user's spec: the nominal stack (0/90 deg, no sensor), the plies' E1, E2, G12, nu12
-  drawn 0.7-1.3 x the truth (handbook-like starts), G13/G23 not given, the plies' angles
-  known to 3 deg (``angle_deg_std``, a lay-up tolerance); a foam core identified through
-  its shear moduli (``identify = ["G13", "G23"]``), started 0.7-1.3 x;
+- the user's spec: the nominal stack (the nominal angles, no sensor), every layer's E1,
+  E2, G12, nu12 drawn 0.7-1.3 x the truth (handbook-like starts; a coating's and a metal's
+  too, both identified), G13/G23 not given, the angles of the plies with axes known to
+  3 deg (``angle_deg_std``, a lay-up tolerance; not a core's, a metal's or a coating's); a
+  core (foam, balsa-type: its in-plane constants hardly enter the frequencies) identified
+  through its shear moduli (``identify = ["G13", "G23"]``), started 0.7-1.3 x, its other
+  constants known (a balsa-type core's E3 from its data sheet);
 - ``identify.diagnosis.diagnose`` through the public API (every registered effect a candidate);
 - the oracle floor: the project's model with the true properties, angles, sensor and the
   shear theory (first-order shear with rotary inertia, or the layerwise model, whichever
@@ -26,13 +39,15 @@ Per case (everything seeded by the case's number):
   user's 3 deg lay-up tolerance in the budget, as the oracle without angles has it).
 
 Reported per half: the confusion table (true effects against selected), the RMS after the
-selection against the floor, each layer property's error in std, the time per case.
+selection against the floor, each layer property's error in std, the time per case, and
+the summary's figures per family (``summary``: ``families`` in the JSON).
 
 ``shapes_table(case)`` gives the held-out cases' 3-D mode shapes (the top face's w on a
 13 x 11 grid, ``tests/data/solid3d/blind_shapes/``) as a SHAPES.csv table whose
 frequencies are those of the case's measurement rows.
 
-    python -m studies.blind_diagnosis [--half dev|heldout|both] [--case NAME] [--out DIR] [--jobs N]
+    python -m studies.blind_diagnosis [--half dev|heldout|both|dev3|heldout3|both3|all]
+                                      [--case NAME] [--out DIR] [--jobs N]
 """
 
 from __future__ import annotations
@@ -85,6 +100,11 @@ PHYSICS = {
     "orientation": {"orientation"},
 }
 IN_PLANE = ("E1", "E2", "G12", "nu12")
+#: The halves of ``index.json``: the first two series' development and held-out halves,
+#: and the third series'.
+HALVES = ("dev", "heldout", "dev3", "heldout3")
+#: ``--half`` names for unions of halves (any single half is a name too).
+SELECTIONS = {"both": ("dev", "heldout"), "both3": ("dev3", "heldout3"), "all": HALVES}
 
 
 def index() -> dict:
@@ -92,9 +112,10 @@ def index() -> dict:
 
 
 def case_names(half: str = "both") -> list[str]:
-    """The stored cases of a half ('dev', 'heldout' or 'both'), in name order."""
+    """The stored cases of a half (``HALVES``) or of a union (``SELECTIONS``), in name order."""
+    wanted = SELECTIONS.get(half, (half,))
     halves = index()["cases"]
-    return sorted(n for n, h in halves.items() if half in ("both", h) and (DATA / f"{n}.json").exists())
+    return sorted(n for n, h in halves.items() if h in wanted and (DATA / f"{n}.json").exists())
 
 
 #: The regression cases (the diagnosis's two known failures on other stacks and masses).
@@ -113,8 +134,22 @@ def load(name: str) -> dict:
 
 
 def _core(case: dict) -> str | None:
-    """A sandwich's core material (its middle layer's: a foam, end-grain balsa)."""
+    """A sandwich's core material (its middle layer's: a foam, end-grain balsa): the third
+    series' records name it (``choices.core``), the first two's are their sandwiches'."""
+    if "core" in case["choices"]:
+        return case["choices"]["core"]
     return case["choices"]["nominal_layers"][1]["material"] if case["family"] == "sandwich" else None
+
+
+def _without_axes(case: dict) -> set[str]:
+    """The materials whose layers have no axes the user lays up: the core and the isotropic
+    (a metal, a coating: E1 = E2, G12 = E1 / 2(1 + nu12) to the record's digits)."""
+    isotropic = {
+        name
+        for name, c in case["materials"].items()
+        if c["E1"] == c["E2"] and abs(2 * c["G12"] * (1 + c["nu12"]) / c["E1"] - 1) < 1e-5
+    }
+    return isotropic | {_core(case)} - {None}
 
 
 def truth_model(case: dict, theory: str = "thick_plate", angles: bool = True, sensor: bool = True):
@@ -160,11 +195,13 @@ def start_model(case: dict, rng: np.random.Generator):
 
 
 def with_lay_up_tolerance(model, case: dict):
-    """The model with its plies' angles known to ``ANGLE_STD_DEG`` (a core has no axes)."""
+    """The model with its plies' angles known to ``ANGLE_STD_DEG`` (a core, a metal or a
+    coating has no axes: ``_without_axes``)."""
+    free = _without_axes(case)
     tolerance = tuple(
         InputStd("angle", layer.label, math.radians(ANGLE_STD_DEG))
         for layer in model.specimen.layers
-        if layer.material.name != _core(case)
+        if layer.material.name not in free
     )
     return replace(model, input_std=tuple(model.input_std) + tolerance)
 
@@ -289,6 +326,7 @@ class Outcome:
     # candidates whose refit ended above the fit it contains, as (round, kind)
     # (``Step.above_start``): a shear or layerwise one is a fault (it can only descend)
     above_start: tuple[tuple[int, str], ...] = ()
+    stack: str = ""  # the third series' stack (the ``sensor`` family's differ); else the family
 
     @property
     def true_effects(self) -> tuple[str, ...]:
@@ -326,6 +364,7 @@ class Outcome:
         return {
             "case": self.case,
             "family": self.family,
+            "stack": self.stack or self.family,
             "half": self.half,
             "noise_pct": num(100 * self.noise),
             "true": "+".join(self.true_effects),
@@ -433,7 +472,7 @@ def run_case(
     case = load(name)
     rng, drawn = _case_rng(name)
     noise = drawn if noise is None else noise
-    out = Outcome(name, case["family"], case["half"], noise)
+    out = Outcome(name, case["family"], case["half"], noise, stack=case["choices"].get("stack", ""))
     try:
         start = start_model(case, rng)
         if starts:
@@ -490,12 +529,14 @@ def confusion(outcomes: list[Outcome]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def summary(outcomes: list[Outcome]) -> dict:
+def summary(outcomes: list[Outcome], per_family: bool = True) -> dict:
+    """The acceptance figures over the outcomes [% of the cases], the faults and the times
+    [s]; with ``per_family`` the same per family (``families``, in the outcomes' order)."""
     n = len(outcomes)
     if not n:
         return {"cases": 0}
     seconds = [o.seconds for o in outcomes if math.isfinite(o.seconds)]
-    return {
+    out = {
         "cases": n,
         "contains_true_pct": round(100 * sum(o.contains_truth for o in outcomes) / n, 1),
         "rms_within_1.5_floor_pct": round(100 * sum(o.within_floor for o in outcomes) / n, 1),
@@ -508,6 +549,12 @@ def summary(outcomes: list[Outcome]) -> dict:
         "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
         "max_seconds": round(float(np.max(seconds)), 1) if seconds else None,
     }
+    if per_family:
+        out["families"] = {
+            family: summary([o for o in outcomes if o.family == family], per_family=False)
+            for family in dict.fromkeys(o.family for o in outcomes)
+        }
+    return out
 
 
 def _shear_above_start(o: Outcome) -> int:
@@ -519,6 +566,8 @@ def _shear_above_start(o: Outcome) -> int:
 
 def report(outcomes: list[Outcome], title: str) -> str:
     table = pd.DataFrame([o.row() for o in outcomes])
+    overall = summary(outcomes)
+    families = pd.DataFrame([{"family": f, **s} for f, s in overall.pop("families").items()])
     lines = [
         f"== {title} ==",
         "",
@@ -527,7 +576,10 @@ def report(outcomes: list[Outcome], title: str) -> str:
         "confusion (per effect, over the cases):",
         confusion(outcomes).to_string(index=False),
         "",
-        json.dumps(summary(outcomes)),
+        "per family (% of its cases):",
+        families.to_string(index=False, na_rep="-"),
+        "",
+        json.dumps(overall),
     ]
     return "\n".join(lines)
 
@@ -544,7 +596,13 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m studies.blind_diagnosis", description=__doc__.split("\n\n")[0]
     )
-    parser.add_argument("--half", choices=("dev", "heldout", "both"), default="dev")
+    parser.add_argument(
+        "--half",
+        choices=(*HALVES, *SELECTIONS),
+        default="dev",
+        help="dev, heldout (blind01-36), dev3, heldout3 (the third series, blind37-96), or a "
+        "union: both (dev + heldout), both3 (dev3 + heldout3), all",
+    )
     parser.add_argument("--case", action="append", help="run only these cases")
     parser.add_argument("--out", type=Path, default=Path("reports") / "blind_diagnosis")
     parser.add_argument("--verbose", action="store_true", help="print the diagnosis's progress")
@@ -570,6 +628,7 @@ def main(argv=None) -> int:
                     case["half"],
                     math.nan,
                     error="its process was killed before it finished (out of memory?): run it with --jobs 1",
+                    stack=case["choices"].get("stack", ""),
                 )
                 _keep(o, args.out)
                 outcomes.append(o)
@@ -580,10 +639,12 @@ def main(argv=None) -> int:
             _keep(o, args.out)
             outcomes.append(o)
     texts = []
-    for half in ("dev", "heldout"):
+    for half in HALVES:
         part = [o for o in outcomes if o.half == half]
         if part:
             texts.append(report(part, f"{half} half ({len(part)} cases)"))
+    # the first two series' halves always (as the study has written them), the third's when run
+    written = [h for h in HALVES if h in ("dev", "heldout") or any(o.half == h for o in outcomes)]
     text = "\n\n".join(texts)
     print(text)
     write_text(args.out / f"blind_{args.half}.txt", text + "\n")
@@ -592,7 +653,7 @@ def main(argv=None) -> int:
         json.dumps(
             {
                 "cases": [o.row() for o in outcomes],
-                "summary": {h: summary([o for o in outcomes if o.half == h]) for h in ("dev", "heldout")},
+                "summary": {h: summary([o for o in outcomes if o.half == h]) for h in written},
             },
             indent=1,
         )

@@ -4,8 +4,18 @@ summary are strict JSON."""
 
 import json
 import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
 
 from studies import blind_diagnosis as study
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data" / "solid3d"))
+
+import blind  # noqa: E402
+import generate  # noqa: E402
 
 
 def test_each_case_keeps_its_report_and_the_summary_is_strict_json(tmp_path, monkeypatch):
@@ -137,3 +147,101 @@ def test_the_3d_top_face_shapes_load_as_a_shapes_table_that_pairs_with_the_plate
         )
         a = first["amplitude"].to_numpy()
         assert (a @ w) ** 2 / ((a @ a) * (w @ w)) >= 0.9, conf["name"]
+
+
+def test_the_halves_select_the_third_series_apart(monkeypatch, tmp_path):
+    """'dev3' and 'heldout3' are the third series' halves: 'dev' and 'both' stay the first
+    two series' (a run of the development half is the one it was), 'all' is every case."""
+    (tmp_path / "index.json").write_text(
+        json.dumps({"cases": {"blind04_hybrid": "dev", "blind25_hybrid": "heldout", "blind37_x": "dev3"}})
+    )
+    for name in ("blind04_hybrid", "blind25_hybrid", "blind37_x"):
+        (tmp_path / f"{name}.json").write_text("{}")
+    monkeypatch.setattr(study, "DATA", tmp_path)
+    assert study.case_names("dev") == ["blind04_hybrid"]
+    assert study.case_names("both") == ["blind04_hybrid", "blind25_hybrid"]
+    assert study.case_names("dev3") == study.case_names("both3") == ["blind37_x"]
+    assert study.case_names("all") == ["blind04_hybrid", "blind25_hybrid", "blind37_x"]
+
+
+def test_the_summary_has_figures_per_family(tmp_path, monkeypatch):
+    """The summary (JSON and text) gives the acceptance figures per family too; a third
+    series half is summarised when it is run."""
+
+    def recorded(name, progress=None):
+        family = name.split("_", 1)[1]
+        return study.Outcome(
+            name,
+            family,
+            "dev3",
+            5e-4,
+            study.Oracle(2e-4, "thick_plate", 1.0, {}, ()),
+            rms_after=2e-4 if family == "coating" else 1e-3,
+            max_z=1.0,
+            seconds=10.0,
+            stack="coating",
+        )
+
+    monkeypatch.setattr(study, "run_case", recorded)
+    names = ["blind39_coating", "blind44_coating", "blind51_sensor"]
+    assert (
+        study.main([*(x for n in names for x in ("--case", n)), "--half", "dev3", "--out", str(tmp_path)])
+        == 0
+    )
+    data = json.loads((tmp_path / "blind_dev3.json").read_text())
+    families = data["summary"]["dev3"]["families"]
+    assert list(families) == ["coating", "sensor"]
+    assert families["coating"]["cases"] == 2 and families["coating"]["rms_within_1.5_floor_pct"] == 100.0
+    assert families["sensor"]["rms_within_1.5_floor_pct"] == 0.0
+    assert data["cases"][2]["stack"] == "coating"
+    assert "per family" in (tmp_path / "blind_dev3.txt").read_text()
+
+
+def _record(case: dict) -> dict:
+    """The parts of a stored record that the study's models read, from a draw."""
+    layers = lambda key: [dict(material=m, thickness_mm=t, angle_deg=a) for m, t, a in case[key]]  # noqa: E731
+    return dict(
+        case=case["name"],
+        family=case["family"],
+        choices=dict(
+            nominal_layers=layers("nominal_layers"),
+            true_layers=layers("layers"),
+            misalignment_max_deg=case["misalignment_max_deg"],
+            sensor=None,
+            stack=case["stack"],
+            core=case["core"],
+        ),
+        materials={
+            m: {k: generate._sig(v) for k, v in c.items() if k != "note"}
+            for m, c in case["materials"].items()
+        },
+        truth_spec_toml=blind.truth_spec(dict(case, sensor=None)),
+    )
+
+
+@pytest.mark.parametrize("family", blind.STACKS_3)
+def test_the_third_series_stacks_identify_their_layers(family):
+    """The user's spec of a new family: every layer's in-plane constants identified (a
+    coating's and its metal's both), a core's G13 and G23 instead (at the start drawn
+    0.7-1.3 x, its E3 stated); lay-up tolerances on the plies with axes only (the skins, the
+    angle plies: not a core, a metal or a coating); the truth at the true angles."""
+    case = next(c for c in blind.draw_cases_3() if c["family"] == family)
+    record = _record(case)
+    start = study.start_model(record, np.random.default_rng(0))
+    identified = {m.name: m.identify for m in start.specimen.identified_materials}
+    expected = {
+        m: ("G13", "G23") if m == case["core"] else ("E1", "E2", "G12", "nu12") for m, _, _ in case["layers"]
+    }
+    assert identified == expected
+    with_axes = {"cfrp_ud", "gfrp_ud", "cfrp_fabric", "gfrp_fabric"}
+    angles = [i.target for i in start.input_std if i.kind == "angle"]
+    assert angles == [layer.label for layer in start.specimen.layers if layer.material.name in with_axes]
+    assert bool(angles) == (family in ("balsa_sandwich", "angle_ply") or case["misalignment_max_deg"] > 0)
+    if case["core"] == "balsa_core":
+        core = start.specimen.materials["balsa_core"]
+        assert core.E3 == pytest.approx(1e9 * case["materials"]["balsa_core"]["E3"], rel=1e-6)
+        assert 0.7 <= core.G13 / (1e9 * case["materials"]["balsa_core"]["G13"]) <= 1.3
+    truth = study.truth_model(record)
+    assert [math.degrees(layer.angle) for layer in truth.specimen.layers] == pytest.approx(
+        [a for _, _, a in case["layers"]]
+    )
