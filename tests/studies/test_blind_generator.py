@@ -180,9 +180,11 @@ def _cores(families) -> list[dict]:
 
 def test_balsa_cores_are_soft_in_plane_and_stiff_through_the_thickness():
     """The balsa-type cores (of the balsa sandwiches and the thick skins): the stated ranges,
-    G13 != G23, E3 >= 5 x the in-plane moduli so that the spec states E3."""
-    cores = _cores(("balsa_sandwich", "thick_skins"))
+    G13 != G23, E3 >= 5 x the in-plane moduli so that the spec states E3, and no core that
+    shears more stiffly than half its crushing modulus E3 (three draws are held there)."""
+    cores = _cores(("balsa_sandwich", "thick_skins", "sensor"))
     assert len(cores) >= 12
+    assert sum(math.isclose(c["G13"], c["E3"] / 2) for c in cores) >= 1
     for c in cores:
         assert c["E1"] == c["E2"] and 0.02 <= c["E1"] <= 0.3
         assert 0.005 <= c["G12"] <= min(0.1, c["E1"] / 2)
@@ -191,6 +193,7 @@ def test_balsa_cores_are_soft_in_plane_and_stiff_through_the_thickness():
         assert 10.0 <= c["E3"] / c["E1"] <= 100.0 and c["E3"] >= generate.THROUGH_THICKNESS_CORE * c["E1"]
         assert 0.01 <= c["nu13"] <= 0.05 and 0.01 <= c["nu23"] <= 0.05
         assert 40.0 <= c["density"] <= 250.0
+        assert c["G13"] <= c["E3"] / 2 * (1 + 1e-12)
     case = _of("balsa_sandwich")[0]
     assert "E3_GPa" in blind.truth_spec(case, None).split("[materials.balsa_core]")[1].split("[")[0]
 

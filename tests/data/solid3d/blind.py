@@ -284,7 +284,11 @@ def _balsa_core(rng) -> dict:
     """An end-grain balsa or honeycomb-type core: soft in plane (E1 = E2 = 0.02-0.3 GPa,
     G12 = 0.005 GPa to min(0.1 GPa, E1 / 2), both log-uniform, nu12 = 0.2-0.4), stiffer
     through its thickness: G13 = 2-100 x G12 (log-uniform), G23 = 0.5-0.9 x G13,
-    E3 = 10-100 x E1 (log-uniform), nu13, nu23 = 0.01-0.05; density 40-250 kg/m^3."""
+    E3 = 10-100 x E1 (log-uniform), nu13, nu23 = 0.01-0.05; density 40-250 kg/m^3.  Its
+    transverse shear moduli are at most E3 / 2 (both scaled down together where the draw
+    gives more): the cell walls or grain that carry the shear carry the crushing load too,
+    and no balsa or honeycomb shears more stiffly than it crushes (end-grain balsa: G13
+    about 0.05-0.1 E3; a Nomex honeycomb: G13 about 0.3 E3)."""
     e = _log_uniform(rng, 0.02, 0.3)
     g12 = _log_uniform(rng, 0.005, min(0.1, e / 2))
     g13 = g12 * _log_uniform(rng, 2.0, 100.0)
@@ -306,7 +310,11 @@ def _balsa_core(rng) -> dict:
             E3=e * _log_uniform(rng, 10.0, 100.0), nu13=rng.uniform(0.01, 0.05), nu23=rng.uniform(0.01, 0.05)
         )
         if positive_definite(core):
-            return core
+            break
+    ceiling = core["E3"] / 2
+    if core["G13"] > ceiling:
+        core.update(G13=ceiling, G23=core["G23"] * ceiling / core["G13"])
+    return core
 
 
 def _coating(rng) -> dict:
