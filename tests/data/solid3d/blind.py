@@ -403,28 +403,21 @@ def draw_case_3(rng, index: int, family: str, stack: str) -> dict:
         )
         if on_base:
             sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
-    bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
-    added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
-    return dict(
-        name=f"blind{index + 1:02d}_{family}",
-        family=family,
+    description = f"blind {family} case {index + 1}" + (f" ({stack})" if stack != family else "")
+    return _record(
+        rng,
+        index,
+        family,
+        length,
+        width,
+        layers,
+        nominal,
+        materials,
+        sensor,
+        spread,
+        description,
         stack=stack,
         core=core,
-        length_mm=round(length, 1),
-        width_mm=round(width, 1),
-        layers=layers,
-        nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal],
-        materials=materials,
-        sensor=sensor,
-        misalignment_max_deg=round(spread, 2),
-        bond_line_mm=bond,
-        aluminium_mm=plate,
-        configurations=[
-            dict(name="original", bottom=[], top=[]),
-            dict(name="al_bottom", bottom=added, top=[]),
-            dict(name="al_top", bottom=[], top=added),
-        ],
-        description=f"blind {family} case {index + 1}" + (f" ({stack})" if stack != family else ""),
     )
 
 
@@ -471,11 +464,44 @@ def draw_case(rng, index: int) -> dict:
         )
         if family == "sandwich":
             sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
+    return _record(
+        rng,
+        index,
+        family,
+        length,
+        width,
+        layers,
+        nominal,
+        materials,
+        sensor,
+        spread,
+        f"blind {family} case {index + 1}",
+    )
+
+
+def _record(
+    rng,
+    index: int,
+    family: str,
+    length,
+    width,
+    layers,
+    nominal,
+    materials,
+    sensor,
+    spread,
+    description,
+    **choices,
+) -> dict:
+    """A drawn case's dict: its layers and choices (``choices``: the third series' stack and
+    core, after the family), with the bonded configurations' soft bond line (0.05-0.3 mm)
+    and aluminium plate (1-2 mm) drawn last."""
     bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
     added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
     return dict(
         name=f"blind{index + 1:02d}_{family}",
         family=family,
+        **choices,
         length_mm=round(length, 1),
         width_mm=round(width, 1),
         layers=layers,
@@ -490,7 +516,7 @@ def draw_case(rng, index: int) -> dict:
             dict(name="al_bottom", bottom=added, top=[]),
             dict(name="al_top", bottom=[], top=added),
         ],
-        description=f"blind {family} case {index + 1}",
+        description=description,
     )
 
 
