@@ -233,7 +233,7 @@ def test_the_third_series_stacks_identify_their_layers(family):
         m: ("G13", "G23") if m == case["core"] else ("E1", "E2", "G12", "nu12") for m, _, _ in case["layers"]
     }
     assert identified == expected
-    with_axes = {"cfrp_ud", "gfrp_ud", "cfrp_fabric", "gfrp_fabric"}
+    with_axes = set(blind.WITH_AXES)
     angles = [i.target for i in start.input_std if i.kind == "angle"]
     assert angles == [layer.label for layer in start.specimen.layers if layer.material.name in with_axes]
     assert bool(angles) == (family in ("balsa_sandwich", "angle_ply") or case["misalignment_max_deg"] > 0)

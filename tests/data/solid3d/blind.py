@@ -92,6 +92,7 @@ import sys
 import tempfile
 import time
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -387,38 +388,9 @@ def draw_case_3(rng, index: int, family: str, stack: str) -> dict:
     sensor on half of the cases (on every case of the ``sensor`` family)."""
     materials = {"aluminium": g.MATERIALS["aluminium"], "soft_adhesive": g.MATERIALS["soft_adhesive"]}
     length, nominal, core, on_base = _stack_3(rng, stack, materials)
-    plies = {m for m, _, _ in nominal if m in ("cfrp_ud", "gfrp_ud", "cfrp_fabric", "gfrp_fabric")}
-    width = length * rng.uniform(0.6, 0.9)
-    spread = rng.uniform(0.0, 8.0) if plies else 0.0
-    layers = []
-    for m, t, angle in nominal:
-        turn = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, spread)) if m in plies else 0.0
-        layers.append((m, round(t, 3), round(angle + turn, 2)))
-    sensor = None
-    if family == "sensor" or rng.random() < 0.5:
-        sensor = dict(
-            mass_g=round(rng.uniform(1.0, 10.0), 2),
-            x_mm=rng.uniform(0.1, 0.9) * length,
-            y_mm=rng.uniform(0.1, 0.9) * width,
-        )
-        if on_base:
-            sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
     description = f"blind {family} case {index + 1}" + (f" ({stack})" if stack != family else "")
-    return _record(
-        rng,
-        index,
-        family,
-        length,
-        width,
-        layers,
-        nominal,
-        materials,
-        sensor,
-        spread,
-        description,
-        stack=stack,
-        core=core,
-    )
+    drawn = _Drawn(index, family, length, nominal, materials, on_base, description, family == "sensor")
+    return _record(rng, drawn, stack=stack, core=core)
 
 
 def draw_case(rng, index: int) -> dict:
@@ -449,64 +421,66 @@ def draw_case(rng, index: int) -> dict:
         # for 14 of the 16 stored laminates; it varied with Python's hash seed).
         for name in dict.fromkeys((b, a)):
             materials[name] = _ply(rng, name)
+    on_base = family == "sandwich"
+    drawn = _Drawn(index, family, length, nominal, materials, on_base, f"blind {family} case {index + 1}")
+    return _record(rng, drawn)
+
+
+#: The materials whose layers have axes a lay-up can turn (plies); a core, a metal or a
+#: coating has none.
+WITH_AXES = ("cfrp_ud", "gfrp_ud", "cfrp_fabric", "gfrp_fabric")
+
+
+@dataclass(frozen=True)
+class _Drawn:
+    """A case's stack as drawn: its number, family, length [mm], nominal layers (material,
+    thickness [mm], angle [deg]) bottom to top, materials, whether a sensor on its top face
+    stands on its base, its description, and whether it always carries a sensor."""
+
+    index: int
+    family: str
+    length: float
+    nominal: list
+    materials: dict
+    on_base: bool
+    description: str
+    sensor_always: bool = False
+
+
+def _record(rng, drawn: _Drawn, **choices) -> dict:
+    """A drawn stack's case dict, the rest drawn in this order: the width (0.6-0.9 x the
+    length), the plies' misalignment (each ply with axes turned by +-U(0, d) deg, d =
+    U(0, 8) per case), a 1-10 g sensor (on half of the cases, or always) at a point in the
+    middle 80 %, and the bonded configurations' soft bond line (0.05-0.3 mm) and aluminium
+    plate (1-2 mm).  ``choices``: the third series' stack and core, after the family."""
+    length, nominal = drawn.length, drawn.nominal
+    plies = {m for m, _, _ in nominal if m in WITH_AXES}
     width = length * rng.uniform(0.6, 0.9)
-    spread = rng.uniform(0.0, 8.0)
+    spread = rng.uniform(0.0, 8.0) if plies else 0.0
     layers = []
     for m, t, angle in nominal:
-        turn = 0.0 if m == "foam_core" else float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, spread))
+        turn = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.0, spread)) if m in plies else 0.0
         layers.append((m, round(t, 3), round(angle + turn, 2)))
     sensor = None
-    if rng.random() < 0.5:
+    if drawn.sensor_always or rng.random() < 0.5:
         sensor = dict(
             mass_g=round(rng.uniform(1.0, 10.0), 2),
             x_mm=rng.uniform(0.1, 0.9) * length,
             y_mm=rng.uniform(0.1, 0.9) * width,
         )
-        if family == "sandwich":
+        if drawn.on_base:
             sensor["base_mm"] = round(SENSOR_BASE_MM + sensor["mass_g"], 1)
-    return _record(
-        rng,
-        index,
-        family,
-        length,
-        width,
-        layers,
-        nominal,
-        materials,
-        sensor,
-        spread,
-        f"blind {family} case {index + 1}",
-    )
-
-
-def _record(
-    rng,
-    index: int,
-    family: str,
-    length,
-    width,
-    layers,
-    nominal,
-    materials,
-    sensor,
-    spread,
-    description,
-    **choices,
-) -> dict:
-    """A drawn case's dict: its layers and choices (``choices``: the third series' stack and
-    core, after the family), with the bonded configurations' soft bond line (0.05-0.3 mm)
-    and aluminium plate (1-2 mm) drawn last."""
     bond, plate = round(rng.uniform(0.05, 0.3), 3), round(rng.uniform(1.0, 2.0), 2)
     added = [("soft_adhesive", bond, 0.0), ("aluminium", plate, 0.0)]
     return dict(
-        name=f"blind{index + 1:02d}_{family}",
-        family=family,
+        name=f"blind{drawn.index + 1:02d}_{drawn.family}",
+        family=drawn.family,
         **choices,
         length_mm=round(length, 1),
         width_mm=round(width, 1),
         layers=layers,
         nominal_layers=[(m, round(t, 3), a) for m, t, a in nominal],
-        materials=materials,
+        materials=drawn.materials,
         sensor=sensor,
         misalignment_max_deg=round(spread, 2),
         bond_line_mm=bond,
@@ -516,7 +490,7 @@ def _record(
             dict(name="al_bottom", bottom=added, top=[]),
             dict(name="al_top", bottom=[], top=added),
         ],
-        description=description,
+        description=drawn.description,
     )
 
 
