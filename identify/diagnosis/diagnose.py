@@ -143,6 +143,11 @@ class Candidate:
         """Can be selected: refitted to a finished (converged or poor) fit."""
         return self.fit is not None and self.fit.finished
 
+    def ended_above(self, state: FitResult) -> bool:
+        """Refitted to a finished fit that ended above the fit it contains
+        (``AddedEffect.ended_above``): a failed start."""
+        return self.eligible and self.added.ended_above(state)
+
     @property
     def singular(self) -> bool:
         """The refit ended where the frequencies do not determine its parameters: the
@@ -432,11 +437,11 @@ def _refine(kind: str, kinds, selected, candidates, state: FitResult, policy: Se
 
 def _failed_to_start(candidate: Candidate, state: FitResult) -> bool:
     """A candidate whose refit failed (not pruned, not unidentifiable beforehand) or ended
-    above the fit it contains (``AddedEffect.ended_above``)."""
+    above the fit it contains (``Candidate.ended_above``)."""
     added = candidate.added
     if candidate.fit is None:
         return not added.pruned and not (added.precheck is not None and added.precheck.singular)
-    return candidate.fit.finished and added.ended_above(state)
+    return candidate.ended_above(state)
 
 
 def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int, float, str]]:
@@ -806,11 +811,7 @@ def diagnose(
                 margins.update(_margins(refining, candidates, number))
             candidates = _continue_unfinished(this_round, candidates, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}
-            above = tuple(
-                c.kind
-                for c in candidates
-                if c.fit is not None and c.fit.finished and c.added.ended_above(this_round.refit.state)
-            )
+            above = tuple(c.kind for c in candidates if c.ended_above(this_round.refit.state))
             finished = [c for c in candidates if c.eligible]
             c_hat = _over_dispersion(min(finished, key=lambda c: c.bic).fit) if finished else 1.0
             ordered = plausible_first(

@@ -122,7 +122,8 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
             eligible=fit,
             selectable=selectable and fit,
             fit=SimpleNamespace(finished=True) if fit else None,
-            added=SimpleNamespace(pruned=pruned, precheck=None, ended_above=lambda state: above),
+            added=SimpleNamespace(pruned=pruned, precheck=None),
+            ended_above=lambda state: fit and above,
         )
 
     kinds = ["transverse_shear", "thick_plate", "layerwise", "point_mass"]
