@@ -489,10 +489,14 @@ def _held_back(
     return held
 
 
-def _refined_start(kind: str, candidates) -> FitResult | None:
+def _refined_start(kind: str, candidates, state: FitResult) -> FitResult | None:
     """The fit a refinement's refit starts from: the lowest-criterion finished candidate
-    among the effects ``kind`` refines (None: from the round's start)."""
-    refined = [c for c in candidates if c.kind in effect(kind).refines and c.selectable]
+    among the effects ``kind`` refines, unless it ended above ``state`` (a failed start
+    is no place to start from); None: from ``state``, as any candidate, so that a refit
+    ending above it is continued from the thin-plate limit at its values."""
+    refined = [
+        c for c in candidates if c.kind in effect(kind).refines and c.selectable and not c.ended_above(state)
+    ]
     return min(refined, key=lambda c: c.bic).fit if refined else None
 
 
@@ -807,7 +811,7 @@ def diagnose(
             if refining:
                 # A refinement starts where the best of what it refines ended (the layerwise
                 # model's solves cost 6-18 of the single layer's: few iterations from there).
-                candidates += run(refining, {k: _refined_start(k, candidates) for k in refining})
+                candidates += run(refining, {k: _refined_start(k, candidates, state) for k in refining})
                 margins.update(_margins(refining, candidates, number))
             candidates = _continue_unfinished(this_round, candidates, say)
             closed |= {c.kind for c in candidates if c.fit is None and not c.added.pruned}

@@ -1134,8 +1134,12 @@ def _restarted(
     specimen = ready.model.specimen
     parameters = base + list(new)
 
+    # At the state's values: the refit's own start may be another fit's end (a refinement's),
+    # whose thin-plate limit is not the fit the refit contains.
+    at_state = ready.model.with_values(dict(zip(state.parameters, state.values, strict=True)))
+
     def starts():
-        model, factor = vanishing_shear_start(refit, ready.model, shear, parameters)
+        model, factor = vanishing_shear_start(refit, at_state, shear, parameters)
         model, reached = shear_continuation(refit, model, shear, factor, parameters)
         yield (
             model,

@@ -157,6 +157,35 @@ def test_a_refinement_is_tried_when_nothing_pays_far_from_the_noise():
     assert not _refine("layerwise", kinds, [], pruned, far, SELECTION_POLICY)
 
 
+def test_a_refinement_does_not_start_from_a_failed_start():
+    """A refinement starts where the lowest-criterion selectable candidate it refines
+    ended, but not from one that ended above the fit it contains (a failed start): then
+    from the next one, or from the state (None) as any candidate."""
+    from types import SimpleNamespace
+
+    from identify.diagnosis.diagnose import _refined_start
+
+    def tried(kind, bic, above=False, selectable=True):
+        return SimpleNamespace(
+            kind=kind,
+            bic=bic,
+            selectable=selectable,
+            fit=f"{kind} fit",
+            ended_above=lambda state: above,
+        )
+
+    state = SimpleNamespace()
+    mass = tried("point_mass", 10.0)
+    shear, thick = tried("transverse_shear", 50.0), tried("thick_plate", 60.0)
+    assert _refined_start("layerwise", [mass, shear, thick], state) == "transverse_shear fit"
+    shear_above = tried("transverse_shear", 50.0, above=True)
+    assert _refined_start("layerwise", [mass, shear_above, thick], state) == "thick_plate fit"
+    thick_above = tried("thick_plate", 60.0, above=True)
+    assert _refined_start("layerwise", [mass, shear_above, thick_above], state) is None
+    unselectable = tried("thick_plate", 40.0, selectable=False)
+    assert _refined_start("layerwise", [shear, unselectable], state) == "transverse_shear fit"
+
+
 def test_shear_candidates_restart_from_the_spec_when_the_thin_plate_distorted_it():
     """``spec_start`` gives the spec's values as a start when the thin-plate fit is
     degenerate, and only then: a converged fit near the spec's values is not; one that

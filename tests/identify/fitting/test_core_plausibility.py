@@ -221,3 +221,41 @@ def test_a_refit_from_the_spec_s_values_is_not_restarted_when_it_ends_above_the_
     assert restarted == []
     add_effect(context, "transverse_shear")
     assert len(restarted) == 1 and not restarted[0].starts_above(baseline)
+
+
+def test_a_refinement_that_ends_above_the_thin_plate_is_continued_from_the_thin_plate_s_values(
+    monkeypatch,
+):
+    """A refinement (layerwise) starts where what it refines (transverse shear) ended, at
+    other layer values than the thin-plate fit's.  Where it ends above the thin plate, the
+    continuation starts from the thin-plate limit at the thin-plate fit's own values, the
+    fit the refinement contains, not at its start's: there the first step sits at the
+    thin plate's misfit and every step can only descend."""
+    truth = parse_spec(sandwich(TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR)).with_options(theory="layerwise")
+    data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
+    start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25)))
+    baseline = compare(start, data).fitted
+    context = Refit(baseline, data, start.specimen)
+    shear = add_effect(context, "transverse_shear").result
+    ready = prepare_effect(baseline, "layerwise", start=shear)
+    skin_e1 = Parameter("E1", "fabric")
+    # the refinement starts at the shear fit's values, well away from the thin plate's
+    assert abs(ready.model.value(skin_e1) / baseline.model.value(skin_e1) - 1) > 0.05
+
+    class Stop(Exception):
+        pass
+
+    continued_from = []
+
+    def recording(refit, model, shear_moduli, parameters):
+        continued_from.append(model)
+        raise Stop
+
+    monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
+    monkeypatch.setattr(driver, "vanishing_shear_start", recording)
+    with pytest.raises(Stop):
+        driver._restarted(context, ready, shear, list(ready.added), list(ready.base))
+    (model,) = continued_from
+    for parameter, value in zip(baseline.parameters, baseline.values, strict=True):
+        assert model.value(parameter) == pytest.approx(value, rel=1e-12), parameter
+    assert model.options.theory == "layerwise"
