@@ -91,6 +91,14 @@ TRUE_RATIO = 1.5
 #: every layer property within ``Z_MAX`` std.
 FLOOR_RATIO = 1.5
 Z_MAX = 3.0
+#: A case's answer is the same as a stored run's (``--against``) when it selects the same
+#: effects and its RMS against the floor and its worst property [std] agree to these: the
+#: two decimals the runs are stored and documented with, plus the half unit rounding leaves.
+SAME_RATIO = 0.015
+SAME_MAX_Z = 0.015
+#: Stored runs of the study (``--against``): per case the selection, the RMS against the
+#: floor, the worst property and the diagnosis time.
+RUNS = Path(__file__).resolve().parent.parent / "tests" / "data" / "solid3d" / "blind_runs"
 #: Physics a selected effect brings (for "the selection contains the true effects").
 PHYSICS = {
     "transverse_shear": {"shear"},
@@ -584,10 +592,82 @@ def report(outcomes: list[Outcome], title: str) -> str:
     return "\n".join(lines)
 
 
-def _keep(o: Outcome, out: Path) -> None:
-    """Print a finished case's row and write its diagnosis report to OUT/cases/CASE.txt
-    (as each case ends: a run stopped half way keeps what it did)."""
+def changes(row: dict, earlier: dict) -> dict:
+    """What differs between a case's ``row`` and a stored run's (``earlier``: its
+    ``selected``, ``ratio`` and ``max_z``), as field -> (earlier, now): the selected effects
+    as a set (the order they were added in is the path, not the answer), the RMS against
+    the floor beyond ``SAME_RATIO`` and the worst property beyond ``SAME_MAX_Z`` std (None,
+    an undetermined property, equals only None).  Empty: the same answer."""
+
+    def effects(text: str) -> frozenset:
+        return frozenset(text.split("+")) - {""}
+
+    def apart(a, b, tolerance: float) -> bool:
+        if a is None or b is None:
+            return a is not b
+        return abs(a - b) > tolerance
+
+    out = {}
+    if effects(row["selected"]) != effects(earlier["selected"]):
+        out["selected"] = (earlier["selected"], row["selected"])
+    for key, tolerance in (("ratio", SAME_RATIO), ("max_z", SAME_MAX_Z)):
+        if apart(row[key], earlier[key], tolerance):
+            out[key] = (earlier[key], row[key])
+    return out
+
+
+def against_line(row: dict, stored: dict) -> str:
+    """One line on a case against a stored run (``load_run``): the same answer or what
+    changed, and its diagnosis time against the stored one's."""
+    earlier = stored["cases"].get(row["case"])
+    if earlier is None:
+        return f"  {row['case']}: not in {stored['name']}"
+    changed = changes(row, earlier)
+    verdict = (
+        "differs: " + "; ".join(f"{k} {a} -> {b}" for k, (a, b) in changed.items())
+        if changed
+        else "the same answer"
+    )
+    if earlier.get("seconds") and row["seconds"]:
+        verdict += f", {row['seconds'] / earlier['seconds']:.2f} x its time"
+    return f"  {row['case']} against {stored['name']}: {verdict}"
+
+
+def compared(rows: list[dict], stored: dict) -> dict:
+    """The run against a stored one: the cases with the same answer, those that differ
+    (with ``changes``), those the stored run lacks, and the median of the diagnosis times'
+    ratios (now / stored; a ratio on one machine, not an absolute time)."""
+    known = [r for r in rows if r["case"] in stored["cases"]]
+    changed = {r["case"]: changes(r, stored["cases"][r["case"]]) for r in known}
+    ratios = [
+        r["seconds"] / stored["cases"][r["case"]]["seconds"]
+        for r in known
+        if r["seconds"] and stored["cases"][r["case"]].get("seconds")
+    ]
+    return {
+        "run": stored["name"],
+        "same": [case for case, c in changed.items() if not c],
+        "differ": [case for case, c in changed.items() if c],
+        "not_stored": [r["case"] for r in rows if r["case"] not in stored["cases"]],
+        "median_time_ratio": round(float(np.median(ratios)), 2) if ratios else None,
+        "changes": {case: {k: list(v) for k, v in c.items()} for case, c in changed.items() if c},
+    }
+
+
+def load_run(path: Path) -> dict:
+    """A stored run (``RUNS``, or any file of that form): its ``cases``, name -> the row's
+    ``selected``, ``ratio``, ``max_z`` and ``seconds``; ``name`` is the file's stem."""
+    data = json.loads(path.read_text())
+    return {"name": path.stem, "cases": data["cases"]}
+
+
+def _keep(o: Outcome, out: Path, stored: dict | None = None) -> None:
+    """Print a finished case's row (and, with a stored run, whether its answer is that run's)
+    and write its diagnosis report to OUT/cases/CASE.txt (as each case ends: a run stopped
+    half way keeps what it did)."""
     print(json.dumps(o.row()), flush=True)
+    if stored is not None:
+        print(against_line(o.row(), stored), flush=True)
     (out / "cases").mkdir(parents=True, exist_ok=True)
     write_text(out / "cases" / f"{o.case}.txt", (o.report or o.error) + "\n")
 
@@ -607,7 +687,14 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("reports") / "blind_diagnosis")
     parser.add_argument("--verbose", action="store_true", help="print the diagnosis's progress")
     parser.add_argument("--jobs", type=int, default=1, help="cases run at once, one process each (default 1)")
+    parser.add_argument(
+        "--against",
+        type=Path,
+        help="a stored run (tests/data/solid3d/blind_runs/*.json): say per case whether the "
+        "selection, the RMS against the floor and the worst property are that run's",
+    )
     args = parser.parse_args(argv)
+    stored = load_run(args.against) if args.against else None
     names = args.case or case_names(args.half)
     outcomes = []
     if args.jobs > 1:
@@ -615,7 +702,7 @@ def main(argv=None) -> int:
         try:
             with ProcessPoolExecutor(max_workers=args.jobs) as pool:
                 for o in pool.map(run_case, names):
-                    _keep(o, args.out)
+                    _keep(o, args.out, stored)
                     outcomes.append(o)
         except BrokenProcessPool:
             # A worker killed from outside (the out-of-memory killer: a layerwise diagnosis
@@ -630,13 +717,13 @@ def main(argv=None) -> int:
                     error="its process was killed before it finished (out of memory?): run it with --jobs 1",
                     stack=case["choices"].get("stack", ""),
                 )
-                _keep(o, args.out)
+                _keep(o, args.out, stored)
                 outcomes.append(o)
     else:
         for name in names:
             say = (lambda text, name=name: print(f"  {name}: {text}", flush=True)) if args.verbose else None
             o = run_case(name, progress=say)
-            _keep(o, args.out)
+            _keep(o, args.out, stored)
             outcomes.append(o)
     texts = []
     for half in HALVES:
@@ -645,20 +732,22 @@ def main(argv=None) -> int:
             texts.append(report(part, f"{half} half ({len(part)} cases)"))
     # the first two series' halves always (as the study has written them), the third's when run
     written = [h for h in HALVES if h in ("dev", "heldout") or any(o.half == h for o in outcomes)]
+    record = {
+        "cases": [o.row() for o in outcomes],
+        "summary": {h: summary([o for o in outcomes if o.half == h]) for h in written},
+    }
+    if stored is not None:
+        record["against"] = compared(record["cases"], stored)
+        texts.append(
+            f"against {stored['name']}: "
+            + json.dumps({k: v for k, v in record["against"].items() if k != "changes"})
+            + "\n"
+            + "\n".join(against_line(row, stored) for row in record["cases"])
+        )
     text = "\n\n".join(texts)
     print(text)
     write_text(args.out / f"blind_{args.half}.txt", text + "\n")
-    write_text(
-        args.out / f"blind_{args.half}.json",
-        json.dumps(
-            {
-                "cases": [o.row() for o in outcomes],
-                "summary": {h: summary([o for o in outcomes if o.half == h]) for h in written},
-            },
-            indent=1,
-        )
-        + "\n",
-    )
+    write_text(args.out / f"blind_{args.half}.json", json.dumps(record, indent=1) + "\n")
     return 0
 
 

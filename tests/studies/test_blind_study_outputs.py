@@ -245,3 +245,54 @@ def test_the_third_series_stacks_identify_their_layers(family):
     assert [math.degrees(layer.angle) for layer in truth.specimen.layers] == pytest.approx(
         [a for _, _, a in case["layers"]]
     )
+
+
+def test_a_run_is_compared_with_a_stored_one_by_its_answer_not_its_path():
+    """The same effects added in another order, and figures within the stored digits, are
+    the same answer; one effect more, a ratio 0.02 off or a property that lost its std
+    differ, each named."""
+    earlier = {"selected": "thick_plate+point_mass+layerwise", "ratio": 0.52, "max_z": 1.08}
+    row = {"selected": "thick_plate+layerwise+point_mass", "ratio": 0.5249, "max_z": 1.0749}
+    assert study.changes(row, earlier) == {}
+    row = {"selected": "layerwise+point_mass", "ratio": 0.54, "max_z": None}
+    assert study.changes(row, earlier) == {
+        "selected": ("thick_plate+point_mass+layerwise", "layerwise+point_mass"),
+        "ratio": (0.52, 0.54),
+        "max_z": (1.08, None),
+    }
+
+
+def test_the_stored_development_run_covers_the_half_and_a_run_is_said_against_it(tmp_path, monkeypatch):
+    stored = study.load_run(study.RUNS / "dev.json")
+    assert sorted(stored["cases"]) == study.case_names("dev")
+    for name, case in stored["cases"].items():
+        assert set(case) >= {"selected", "ratio", "max_z", "seconds", "commit"}, name
+    earlier = stored["cases"]["blind24_sandwich"]
+
+    def recorded(name, progress=None):
+        oracle = study.Oracle(4.39e-4, "layerwise", 1.12, {"shear": (0.2, None)}, ("shear",))
+        return study.Outcome(
+            name,
+            "sandwich",
+            "dev",
+            4.6e-4,
+            oracle,
+            selected=tuple(earlier["selected"].split("+")),
+            rms_baseline=0.2,
+            rms_after=earlier["ratio"] * 4.39e-4,
+            max_z=earlier["max_z"],
+            seconds=earlier["seconds"] / 2,
+        )
+
+    monkeypatch.setattr(study, "run_case", recorded)
+    path = str(study.RUNS / "dev.json")
+    assert study.main(["--case", "blind24_sandwich", "--out", str(tmp_path), "--against", path]) == 0
+    against = json.loads((tmp_path / "blind_dev.json").read_text())["against"]
+    assert against == {
+        "run": "dev",
+        "same": ["blind24_sandwich"],
+        "differ": [],
+        "not_stored": [],
+        "median_time_ratio": 0.5,
+        "changes": {},
+    }
