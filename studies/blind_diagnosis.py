@@ -92,8 +92,9 @@ TRUE_RATIO = 1.5
 FLOOR_RATIO = 1.5
 Z_MAX = 3.0
 #: A case's answer is the same as a stored run's (``--against``) when it selects the same
-#: effects and its RMS against the floor and its worst property [std] agree to these: the
-#: two decimals the runs are stored and documented with, plus the half unit rounding leaves.
+#: effects and its RMS against the floor and its worst property [std] agree to these: one
+#: unit of the second decimal the runs are stored and documented with, plus the half unit
+#: that rounding to it leaves.
 SAME_RATIO = 0.015
 SAME_MAX_Z = 0.015
 #: Stored runs of the study (``--against``): per case the selection, the RMS against the
