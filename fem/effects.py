@@ -47,7 +47,8 @@ class Effect:
     is degenerate, the ``sign`` an implausible estimate of it is reported as, and the
     selected effects it ``completes`` at the selection's end (in their place when it
     ``replaces`` them: a fuller theory of the same physics; else beside them), and whether
-    its refit runs from ``independent_starts`` that the residual scan ``hinted``."""
+    its refit runs from ``independent_starts`` that the residual scan ``hinted``, and the
+    parameters that measure its ``amount``."""
 
     kind = ""
     description = ""
@@ -66,6 +67,10 @@ class Effect:
     #: the misfit) as well as by the linearised step, which at a wrong position explains
     #: little.
     hinted = False
+    #: The kinds of its parameters that say how much of it there is, zero where it is
+    #: absent (a sensor's mass, the springs' stiffness): where the refit determines none of
+    #: them (std at least the value), the data show a misfit it removes, not the effect.
+    amount: tuple[str, ...] = ()
 
     @property
     def physics(self) -> frozenset[str]:
@@ -310,6 +315,7 @@ class PointMassEffect(Effect):
     keys = ("mass_g", "x_mm", "y_mm", "label", "base_mm")
     independent_starts = True
     hinted = True
+    amount = ("mass",)
 
     def fixed(self, model, table):
         self._check(table)
@@ -352,6 +358,7 @@ class SuspensionEffect(Effect):
     description = "out-of-plane springs where the plate is suspended: stiffness"
     sign = "the lowest modes are off: the suspension, or a missing shear effect?"
     keys = ("stiffness_N_m", "points_mm")
+    amount = ("stiffness",)
     #: Default support points when none are given: near the four corners (10 % in).
     DEFAULT_INSET = 0.1
     #: The vanishing start's stiffness, a share of the default start's: the default moves

@@ -990,36 +990,59 @@ def _determined_final(
     say,
     policy: SelectionPolicy,
 ) -> tuple[FitResult, Step] | None:
-    """When the final refit fits the frequencies but does not determine its parameters
-    (``not_identifiable``: the sensitivity matrix singular at the solution), the last
-    selected effect is taken out and the selection before it refitted in full; kept (the
-    new final and a step that says why) when that refit is determined.  A candidate's own
-    test compares its conditioning with the start's (``Candidate.singular``), which on a
-    model already near the limit lets an effect through that tips the final refit over
-    it, where the layer properties have no std at all.  blind22 (a hybrid without a
-    sensor): a 0.82 g point mass on the layerwise model took the misfit below the noise
-    and left the final refit not identifiable.  Only with two effects or more selected:
-    without the one, the baseline would be the answer and its misfit is what was to be
-    explained."""
-    if final is None or final.status is not FitStatus.NOT_IDENTIFIABLE or len(selected) < 2:
+    """When the final refit does not determine the last selected effect, that effect is
+    taken out and the selection before it refitted in full; kept (the new final and a step
+    that says why) when that refit is determined.  Not determined: the refit fits the
+    frequencies but its sensitivity matrix is singular (``not_identifiable``: no parameter
+    has a std), or the effect's ``amount`` (a sensor's mass) has a std at least its value,
+    so the data cannot tell it from its absence: the misfit it removes is model error that
+    an effect of that size imitates, not a sign of the effect.  A candidate's own tests
+    (gain, plausibility, its conditioning against its start's) see neither: they are
+    taken before the final refit frees every parameter together.  Only with two effects or
+    more selected: without the one, the baseline would be the answer and its misfit is
+    what was to be explained."""
+    if final is None or len(selected) < 2:
         return None
     last = selected[-1]
+    vague = _undetermined_amount(final, last.kind)
+    if final.status is not FitStatus.NOT_IDENTIFIABLE and not vague:
+        return None
     before = next(s for s in reversed(steps) if s.chosen is last)
-    say(
-        f"the refit with {' + '.join(c.kind for c in selected)} is not identifiable: refitting without "
-        f"{last.kind}"
-    )
+    why = "is not identifiable" if not vague else f"does not determine {last.kind}'s {', '.join(vague)}"
+    say(f"the refit with {' + '.join(c.kind for c in selected)} {why}: refitting without {last.kind}")
     again = _final(refitting, before.start, selected[:-1], say, policy)
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
         return None
+    if vague:
+        undetermined = "; ".join(
+            f"{p.name} {display(p, v):.3g} +- {display(p, sd):.2g}"
+            for p, v, sd in zip(final.parameters, final.values, final.uncertainty.std)
+            if p.name in vague
+        )
+        unknown = f"does not determine its amount ({undetermined}: the data cannot tell it from none)"
+    else:
+        unknown = (
+            f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g})"
+        )
     reason = (
         f"drop {last.kind}: the refit with it fits the frequencies (RMS {100 * final.rms_rel_error:.3g} %) "
-        "but "
-        f"does not determine its parameters (condition number {final.uncertainty.condition_number:.3g}); "
-        f"without it the refit's parameters are determined (RMS {100 * again.rms_rel_error:.3g} %, "
-        f"{again.status.value}): an effect the data cannot tell from the layers is not an answer"
+        f"but {unknown}; without it the refit's parameters are determined (RMS "
+        f"{100 * again.rms_rel_error:.3g} %, {again.status.value}): an effect the data cannot tell from "
+        "the layers is not an answer"
     )
     return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
+
+
+def _undetermined_amount(fit: FitResult, kind: str) -> tuple[str, ...]:
+    """The names of the parameters of effect ``kind`` that measure its amount
+    (``Effect.amount``), when ``fit`` determines none of them; else empty."""
+    amount = effect(kind).amount
+    own = [
+        (p.name, vague)
+        for p, vague in zip(fit.parameters, fit.uncertainty.undetermined)
+        if fit.effect_of.get(p) == kind and p.kind in amount
+    ]
+    return tuple(name for name, _ in own) if own and all(vague for _, vague in own) else ()
 
 
 def _continue_unfinished(round_: Round, candidates: list[Candidate], say) -> list[Candidate]:

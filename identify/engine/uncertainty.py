@@ -50,6 +50,9 @@ class Uncertainty:
     # Per parameter: on a bound of its own or at nu12's positive-definiteness limit (the
     # code that decisions read; ``flags`` word it for the report).
     bounded: tuple[bool, ...] = ()
+    # Per parameter: not determined by the scatter (std at least its own scale,
+    # ``updating.undetermined``), the code beside the fit's warning that names them.
+    undetermined: tuple[bool, ...] = ()
 
     @property
     def verdict(self) -> Verdict:

@@ -329,6 +329,7 @@ def update(
         )
         warnings += merged
     vague = undetermined(objective.space, current.values, uncertainty.std)
+    uncertainty = replace(uncertainty, undetermined=tuple(bool(v) for v in vague))
     status, message = _status(stop, uncertainty, statistics, options, vague.all())
     status, message = _bounded(status, message, objective.space, current.values, model.specimen)
     if vague.any() and not vague.all():

@@ -6,10 +6,12 @@ candidate from being refitted."""
 from dataclasses import replace
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from fem.solver.attachments import PointMass
 from fem.solver.sensitivity import condition_verdict
+from fem.specimen import Parameter
 from identify.diagnosis import diagnose as diagnose_module
 from identify.diagnosis.compare import compare
 from identify.diagnosis.diagnose import SELECTION_POLICY, Candidate, Diagnosis, Step, _candidate, _signs
@@ -239,14 +241,28 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
     assert [c.kind for c in out] == ["thickness", "orientation"]
 
 
-def _fit(status, rms=1e-3, condition=1e3):
-    """A refit as ``_determined_final`` reads it: status, misfit and conditioning."""
+#: A final refit's parameters as ``_determined_final`` reads them: a layer property and
+#: a point mass's amount and position (values SI).
+_PARAMETERS = (Parameter("E1", "steel"), Parameter("mass", "point_mass"), Parameter("y", "point_mass"))
+
+
+def _fit(status, rms=1e-3, condition=1e3, vague=()):
+    """A refit as ``_determined_final`` reads it: status, misfit, conditioning and which
+    parameters (of ``_PARAMETERS``, by kind) the scatter leaves undetermined."""
     verdict = condition_verdict(condition)
     return SimpleNamespace(
         status=status,
         rms_rel_error=rms,
         converged=status is FitStatus.CONVERGED,
-        uncertainty=SimpleNamespace(condition_number=condition, verdict=verdict),
+        parameters=_PARAMETERS,
+        values=np.array([200e9, 0.8e-3, 0.07]),
+        effect_of={p: "point_mass" for p in _PARAMETERS[1:]},
+        uncertainty=SimpleNamespace(
+            condition_number=condition,
+            verdict=verdict,
+            std=np.array([2e9, 2.5e-3, 1e3]),
+            undetermined=tuple(p.kind in vague for p in _PARAMETERS),
+        ),
     )
 
 
@@ -255,26 +271,33 @@ def _chosen(kind):
 
 
 @pytest.mark.parametrize(
-    "final_status, n_selected, again_condition, dropped",
+    "final_status, vague, n_selected, again_condition, dropped",
     [
-        (FitStatus.NOT_IDENTIFIABLE, 2, 1e4, True),  # blind22: the point mass taken out
-        (FitStatus.NOT_IDENTIFIABLE, 2, 1e9, False),  # without it no better determined: kept
-        (FitStatus.NOT_IDENTIFIABLE, 1, 1e4, False),  # the only effect: the baseline would be the answer
-        (FitStatus.CONVERGED, 2, 1e4, False),  # determined: nothing to do
+        (FitStatus.NOT_IDENTIFIABLE, (), 2, 1e4, True),  # blind22 (run 8): the point mass taken out
+        (FitStatus.NOT_IDENTIFIABLE, (), 2, 1e9, False),  # without it no better determined: kept
+        (FitStatus.NOT_IDENTIFIABLE, (), 1, 1e4, False),  # the only effect: the baseline would be the answer
+        (FitStatus.CONVERGED, (), 2, 1e4, False),  # determined: nothing to do
+        # A mass the data cannot tell from none (0.8 +- 2.5 g), the refit converged: taken out.
+        (FitStatus.CONVERGED, ("mass", "y"), 2, 1e4, True),
+        (FitStatus.CONVERGED, ("mass",), 1, 1e4, False),
+        # Its position undetermined but its mass not (a sensor on a line of symmetry): kept.
+        (FitStatus.CONVERGED, ("y",), 2, 1e4, False),
     ],
 )
 def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
-    monkeypatch, final_status, n_selected, again_condition, dropped
+    monkeypatch, final_status, vague, n_selected, again_condition, dropped
 ):
-    """The final refit fits the frequencies but its sensitivity matrix is singular: the
-    last selected effect is taken out and the selection before it refitted from the state
+    """The final refit fits the frequencies but does not determine the last selected
+    effect (its sensitivity matrix singular, or the effect's amount with a std at least its
+    value): that effect is taken out and the selection before it refitted from the state
     it was chosen on; the new final is kept only when it is determined, and only when an
     effect remains."""
     layerwise, mass = _chosen("layerwise"), _chosen("point_mass")
     selected = [layerwise, mass][:n_selected] if n_selected == 2 else [mass]
     starts = {c.kind: object() for c in selected}
     steps = [Step(i + 1, (), starts[c.kind], (c,), c, "add") for i, c in enumerate(selected)]
-    final = _fit(final_status, rms=2e-4, condition=3e9)
+    condition = 3e9 if final_status is FitStatus.NOT_IDENTIFIABLE else 1e5
+    final = _fit(final_status, rms=2e-4, condition=condition, vague=vague)
     calls = []
 
     def refit(refitting, state, chosen, say, policy, like=None):
@@ -289,6 +312,8 @@ def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
     again, step = out
     assert calls == [(starts["point_mass"], ["layerwise"])]  # from the state point_mass was chosen on
     assert step.chosen is None and step.candidates == (mass,) and step.reason.startswith("drop point_mass")
+    if vague:
+        assert "point_mass.mass 0.8 +- 2.5" in step.reason  # the amount in the spec's unit, g
     comparison = SimpleNamespace(at_noise_level=False)
     diagnosis = Diagnosis(
         _fit(FitStatus.POOR_FIT, rms=1e-2),
