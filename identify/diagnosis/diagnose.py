@@ -994,9 +994,10 @@ def _determined_final(
     taken out and the selection before it refitted in full; kept (the new final and a step
     that says why) when that refit is determined.  Not determined: the refit fits the
     frequencies but its sensitivity matrix is singular (``not_identifiable``: no parameter
-    has a std), or the effect's ``amount`` (a sensor's mass) has a std at least its value,
-    so the data cannot tell it from its absence: the misfit it removes is model error that
-    an effect of that size imitates, not a sign of the effect.  A candidate's own tests
+    has a std), or the effect's ``amount`` (a sensor's mass) has a std at least its value
+    (as reported: with the known inputs' tolerances), so the data cannot tell it from its
+    absence: the misfit it removes is model error that an effect of that size imitates, not
+    a sign of the effect.  A candidate's own tests
     (gain, plausibility, its conditioning against its start's) see neither: they are
     taken before the final refit frees every parameter together.  Only with two effects or
     more selected: without the one, the baseline would be the answer and its misfit is

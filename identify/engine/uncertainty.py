@@ -17,6 +17,7 @@ from fem.solver.sensitivity import GOOD_BELOW, SINGULAR_ABOVE, Verdict, conditio
 
 from .parameters import display
 from .statistics import FitStatistics
+from .stopping import UNDETERMINED_Z
 
 #: Relative std above which a parameter is flagged weakly identifiable.
 WEAK_REL_STD = 0.1
@@ -50,13 +51,24 @@ class Uncertainty:
     # Per parameter: on a bound of its own or at nu12's positive-definiteness limit (the
     # code that decisions read; ``flags`` word it for the report).
     bounded: tuple[bool, ...] = ()
-    # Per parameter: not determined by the scatter (std at least its own scale,
-    # ``updating.undetermined``), the code beside the fit's warning that names them.
-    undetermined: tuple[bool, ...] = ()
+    # Per parameter: the std of one unit of its fit variable z (the value itself for a
+    # modulus, a thickness, a mass; 1 for nu12, 1 rad for an angle, a plate length for a
+    # position), the scale ``undetermined`` reads the std against.
+    z_scale: np.ndarray | None = None
 
     @property
     def verdict(self) -> Verdict:
         return condition_verdict(self.condition_number)
+
+    @property
+    def undetermined(self) -> tuple[bool, ...]:
+        """Per parameter: not determined, its std (as it stands: with the known inputs'
+        share once the budget is added) at least ``UNDETERMINED_Z`` of its own scale, or
+        none at all; empty when the scale is not known."""
+        if self.z_scale is None:
+            return ()
+        std_z = np.asarray(self.std, dtype=float) / self.z_scale
+        return tuple(bool(v) for v in ~np.isfinite(std_z) | (std_z >= UNDETERMINED_Z))
 
     def with_covariance(self, extra: np.ndarray) -> Uncertainty:
         """The uncertainty with a further independent covariance added (the known
@@ -196,7 +208,9 @@ class Uncertainty:
             bool(on_bound[i]) or at_limit(parameter, value, specimen)
             for i, (parameter, value) in enumerate(zip(space.parameters, values))
         )
-        return cls(std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings), bounded)
+        return cls(
+            std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings), bounded, np.abs(dvdz)
+        )
 
 
 def at_limit(parameter, value: float, specimen) -> bool:

@@ -328,8 +328,7 @@ def update(
             objective, current, lone_close_modes(objective, current)
         )
         warnings += merged
-    vague = undetermined(objective.space, current.values, uncertainty.std)
-    uncertainty = replace(uncertainty, undetermined=tuple(bool(v) for v in vague))
+    vague = np.array(uncertainty.undetermined, dtype=bool)
     status, message = _status(stop, uncertainty, statistics, options, vague.all())
     status, message = _bounded(status, message, objective.space, current.values, model.specimen)
     if vague.any() and not vague.all():
@@ -397,14 +396,6 @@ def _bounded(status: FitStatus, message: str, space, values: np.ndarray, specime
         "unseen "
         "modes), a missing effect (run 'identify-layers diagnose'), or bounds set too tight"
     )
-
-
-def undetermined(space, values: np.ndarray, std: np.ndarray) -> np.ndarray:
-    """Which parameters the data do not determine: a std of at least ``UNDETERMINED_Z``
-    in z (the value itself for a modulus, a thickness or a mass, i.e. 100 %; 1 for nu12,
-    1 rad for an angle, a plate length for a position), or none at all."""
-    std_z = np.asarray(std, dtype=float) / np.abs(space.dvalue_dz(np.asarray(values, dtype=float)))
-    return ~np.isfinite(std_z) | (std_z >= UNDETERMINED_Z)
 
 
 def _overstated(statistics: FitStatistics) -> list[str]:

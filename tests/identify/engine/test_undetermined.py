@@ -1,5 +1,6 @@
 """The fit's code for parameters the scatter does not determine (``Uncertainty.undetermined``)."""
 
+import numpy as np
 import pytest
 
 from fem.solver.attachments import PointMass
@@ -31,6 +32,12 @@ def test_a_mass_the_data_cannot_tell_from_none_is_coded_undetermined(true_grams)
     if true_grams:
         assert not coded[MASS]
         assert abs(result.value(MASS) - true_grams * 1e-3) < 3 * result.std(MASS)
+        # The code reads the std as it stands: a known input's share (the budget's
+        # covariance) that widens the mass's std to its value makes it undetermined.
+        i = result.parameters.index(MASS)
+        extra = np.zeros((len(result.parameters),) * 2)
+        extra[i, i] = result.value(MASS) ** 2
+        assert result.uncertainty.with_covariance(extra).undetermined[i]
     else:
         assert coded[MASS], (result.value(MASS), result.std(MASS))
         assert result.std(MASS) >= result.value(MASS)
