@@ -997,11 +997,10 @@ def _determined_final(
     has a std), or the effect's ``amount`` (a sensor's mass) has a std at least its value
     (as reported: with the known inputs' tolerances), so the data cannot tell it from its
     absence: the misfit it removes is model error that an effect of that size imitates, not
-    a sign of the effect.  A candidate's own tests
-    (gain, plausibility, its conditioning against its start's) see neither: they are
-    taken before the final refit frees every parameter together.  Only with two effects or
-    more selected: without the one, the baseline would be the answer and its misfit is
-    what was to be explained."""
+    a sign of the effect.  A candidate's own tests (gain, plausibility, its conditioning
+    against its start's) see neither: they are taken before the final refit frees every
+    parameter together.  Only with two effects or more selected: without the one, the
+    baseline would be the answer and its misfit is what was to be explained."""
     if final is None or len(selected) < 2:
         return None
     last = selected[-1]
