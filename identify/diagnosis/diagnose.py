@@ -40,6 +40,7 @@ from fem.model import SpecimenModel
 from fem.numbers import finite_or_none
 from fem.solver.sensitivity import Verdict
 from fem.solver.threads import one_blas_thread
+from fem.specimen import Parameter
 
 from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
@@ -1008,7 +1009,11 @@ def _determined_final(
     if final.status is not FitStatus.NOT_IDENTIFIABLE and not vague:
         return None
     before = next(s for s in reversed(steps) if s.chosen is last)
-    why = "is not identifiable" if not vague else f"does not determine {last.kind}'s {', '.join(vague)}"
+    why = (
+        "is not identifiable"
+        if not vague
+        else f"does not determine {last.kind}'s {', '.join(p.name for p in vague)}"
+    )
     say(f"the refit with {' + '.join(c.kind for c in selected)} {why}: refitting without {last.kind}")
     again = _final(refitting, before.start, selected[:-1], say, policy)
     if again.status is FitStatus.NOT_IDENTIFIABLE or again.uncertainty.verdict == Verdict.SINGULAR:
@@ -1017,7 +1022,7 @@ def _determined_final(
         undetermined = "; ".join(
             f"{p.name} {display(p, v):.3g} +- {display(p, sd):.2g}"
             for p, v, sd in zip(final.parameters, final.values, final.uncertainty.std)
-            if p.name in vague
+            if p in vague
         )
         unknown = f"does not determine its amount ({undetermined}: the data cannot tell it from none)"
     else:
@@ -1033,16 +1038,16 @@ def _determined_final(
     return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
 
 
-def _undetermined_amount(fit: FitResult, kind: str) -> tuple[str, ...]:
-    """The names of the parameters of effect ``kind`` that measure its amount
-    (``Effect.amount``), when ``fit`` determines none of them; else empty."""
+def _undetermined_amount(fit: FitResult, kind: str) -> tuple[Parameter, ...]:
+    """The parameters of effect ``kind`` that measure its amount (``Effect.amount``),
+    when ``fit`` determines none of them; else empty."""
     amount = effect(kind).amount
     own = [
-        (p.name, vague)
-        for p, vague in zip(fit.parameters, fit.uncertainty.undetermined)
+        (p, vague)
+        for p, vague in zip(fit.parameters, fit.uncertainty.undetermined, strict=True)
         if fit.effect_of.get(p) == kind and p.kind in amount
     ]
-    return tuple(name for name, _ in own) if own and all(vague for _, vague in own) else ()
+    return tuple(p for p, _ in own) if own and all(vague for _, vague in own) else ()
 
 
 def _continue_unfinished(round_: Round, candidates: list[Candidate], say) -> list[Candidate]:

@@ -50,11 +50,11 @@ class Uncertainty:
     warnings: tuple[str, ...]
     # Per parameter: on a bound of its own or at nu12's positive-definiteness limit (the
     # code that decisions read; ``flags`` word it for the report).
-    bounded: tuple[bool, ...] = ()
+    bounded: tuple[bool, ...]
     # Per parameter: the std of one unit of its fit variable z (the value itself for a
     # modulus, a thickness, a mass; 1 for nu12, 1 rad for an angle, a plate length for a
     # position), the scale ``undetermined`` reads the std against.
-    z_scale: np.ndarray | None = None
+    z_scale: np.ndarray
 
     @property
     def verdict(self) -> Verdict:
@@ -64,9 +64,7 @@ class Uncertainty:
     def undetermined(self) -> tuple[bool, ...]:
         """Per parameter: not determined, its std (as it stands: with the known inputs'
         share once the budget is added) at least ``UNDETERMINED_Z`` of its own scale, or
-        none at all; empty when the scale is not known."""
-        if self.z_scale is None:
-            return ()
+        none at all."""
         std_z = np.asarray(self.std, dtype=float) / self.z_scale
         return tuple(bool(v) for v in ~np.isfinite(std_z) | (std_z >= UNDETERMINED_Z))
 

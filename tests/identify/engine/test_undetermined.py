@@ -14,7 +14,7 @@ MASS = Parameter("mass", "point_mass")
 
 @pytest.mark.parametrize("true_grams", [0.0, 3.0])
 def test_a_mass_the_data_cannot_tell_from_none_is_coded_undetermined(true_grams):
-    """A free sensor mass at a known point (120, 110) mm of the example's plate: measured
+    """A free sensor mass at a known point (120, 110) mm of the paper's plate: measured
     with no sensor there, the fitted mass's std is at least its value (its sensitivities
     vanish with it) and the code says undetermined while E1 of every identified material is
     determined; measured with a 3 g sensor, the mass comes back within 3 std and is
