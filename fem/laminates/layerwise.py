@@ -24,7 +24,7 @@ theory (the zig-zag of a cross-ply needs it: on the 3-D reference of a cross-ply
 aluminium on a soft bond line, one group for the whole laminate is 0.11 % off, one per
 ply 0.08 %).  "auto" (default): the same, except that adjacent layers of one material
 and angle are one group, and that all layers which are not soft (``soft_layers``: much
-softer in shear than the stack's stiffest layer, like a foam core or a bond line) and
+softer in shear than another layer in the same plane, like a foam core or a bond line) and
 carry less than ``RIGID_SHARE`` of the stack's shear compliance each (a sandwich's skins,
 a bonded metal plate) share one group: their shear strains are negligible, and every
 group costs 8 DOFs per node.  "blocks": soft layers alone, each run of adjacent stiff
@@ -84,9 +84,9 @@ from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
 
 #: Grouping rules of the layers into shear groups.
 GROUPINGS = ("auto", "blocks", "layers")
-#: A layer is "soft" when a transverse shear modulus (Qb44 or Qb55) is below this fraction
-#: of the largest one in the stack in the same plane: a PVC foam (35 MPa) or a flexible bond line (0.36 GPa)
-#: next to CFRP (3.5-5 GPa) or aluminium (26 GPa) is; carbon/glass plies (3.2-5 GPa)
+#: A layer is "soft" when a transverse shear modulus (Qb44 or Qb55) is below this
+#: fraction of the stack's largest in the same plane: a PVC foam (35 MPa) or a flexible
+#: bond line (0.36 GPa) next to CFRP (3.5-5 GPa) or aluminium (26 GPa) is; carbon/glass plies (3.2-5 GPa)
 #: next to aluminium are not.
 SOFT_SHEAR_RATIO = 0.1
 #: Stiff layers with less than this share of the stack's shear compliance int dz / G each

@@ -17,14 +17,14 @@ soft rolling-shear core: the thick-face effect of sandwich theory); the best sin
 fit leaves 0.22 % RMS (FSDT+RI) or 0.30 % (FSDT), above 2x the noise.  Only the layerwise
 model can explain these data, so it is the shear effect the diagnosis must end up with.
 
-Measured (one process, 49 s; 58 s on a machine about 1.8 x slower, since the plate
-alone is the first-order shear plate in the layerwise model): baseline RMS 8.08 % (8.26 %
-now); the shear candidates start at G23 = G12 / 16 (of ``fitting.SHEAR_STARTS``, by the
-linearised misfit; from the default G23 = G12 they stopped in a local minimum at 1.1-1.3 %
-and a 0.7 g point mass was then invented to absorb the rest); round 1 selects
-``layerwise`` (RMS 0.0495 %, 0.0501 % now; FSDT+RI 0.22 %, FSDT 0.30 %), round 2 stops at
-the noise level; G23 = 0.04009 +- 0.00005 GPa, G13 = 0.647 +- 0.007 GPa, E1, E2, G12
-within 1.8 std of the truth (1.3 now).
+Measured (one process, 49 s; on a later day the code just before took 87 s, and 62 s once
+the plate alone became the first-order shear plate in the layerwise model): baseline RMS
+8.08 % (8.26 % now); the shear candidates start at G23 = G12 / 16 (of
+``fitting.SHEAR_STARTS``, by the linearised misfit; from the default G23 = G12 they
+stopped in a local minimum at 1.1-1.3 % and a 0.7 g point mass was then invented to absorb
+the rest); round 1 selects ``layerwise`` (RMS 0.0495 %, 0.0501 % now; FSDT+RI 0.22 %, FSDT
+0.30 %), round 2 stops at the noise level; G23 = 0.04009 +- 0.00005 GPa, G13 = 0.647 +-
+0.007 GPa, E1, E2, G12 within 1.8 std of the truth (1.3 now).
 """
 
 import math
