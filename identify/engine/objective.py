@@ -62,6 +62,9 @@ class Objective:
     #: Whether the damped iteration screens its trial steps on Ritz models of this
     #: objective (``TrialScreen``; ``FitOptions.reanalysis``).
     trials_screened = True
+    #: Whether each iteration first steps to the minimum of the Ritz models of its point
+    #: (``updating.iterate``; ``FitOptions.reanalysis``).
+    reduced_steps = True
 
     def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
         self.model = model
@@ -200,6 +203,9 @@ class ShapeObjective(Objective):
     (``LaminateSolution.shape_derivatives``).  The set of shapes used is fixed at the first
     evaluation, so the residual keeps its length through the iterations."""
 
+    #: The Ritz models give no shapes at the points.
+    reduced_steps = False
+
     def __init__(self, model: SpecimenModel, measurements: Measurements, parameters, extra_modes: int = 3):
         super().__init__(model, measurements, parameters, extra_modes)
         table = measurements.table
@@ -322,6 +328,7 @@ class RitzObjective(Objective):
 
     #: Its own trials cost what a screen's do.
     trials_screened = False
+    reduced_steps = False
 
     def __init__(self, objective: Objective, at: Evaluation, extra: dict, assembled: bool = True):
         self.__dict__.update(objective.__dict__)

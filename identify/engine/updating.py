@@ -19,12 +19,13 @@ from scipy.stats import chi2 as chi2_distribution
 from fem import validation
 from fem.errors import MeasurementError, OptionsError
 from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
+from fem.solver.reduced_basis import OutsideBasis
 from fem.solver.sensitivity import Verdict
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
 from .ambiguity import lone_close_modes, settle_pairings
-from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, ShapeObjective, TrialScreen
+from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, RitzObjective, ShapeObjective, TrialScreen
 from .pairing import CLOSE_MODES
 from .parameters import UNITS, display
 from .repair import quick_repair
@@ -53,6 +54,20 @@ from .uncertainty import Uncertainty
 #: ``SCATTER_SETTLED``.
 SCATTER_ROUNDS = 4
 SCATTER_SETTLED = 0.1
+#: Each iteration's first trial (``FitOptions.reanalysis``) is where the iteration on the
+#: Ritz models of its point stops, after at most ``REDUCED_ITERATIONS``: where the misfit
+#: is far from zero (physics missing, a peak list) full Gauss-Newton steps converge only
+#: linearly, and the Ritz models carry the modes' nonlinearity between full solves.  On a
+#: long spruce plate's thick-plate refit (peak list, 28 peaks) the matching rounds took 4,
+#: 4 and 3 full steps instead of 8, 6 and 5, and ended within 5e-7 of the same values.
+#: The trial is made only within ``REDUCED_REACH`` in z and ``REDUCED_REACH_PER_STEP``
+#: times the full Gauss-Newton step: on the plate the two agree within 3 % (0.19 against
+#: 0.18, 0.028 against 0.028), while in a flat valley the Ritz minimum wanders along it,
+#: where its error of ~1e-5 in frequency moves the minimum far (a sandwich missing a 6 g
+#: sensor: 0.17 against 0.003, rejected by the full solve, 14 full solves instead of 10).
+REDUCED_ITERATIONS = 10
+REDUCED_REACH = 0.2
+REDUCED_REACH_PER_STEP = 2.0
 
 
 @dataclass(frozen=True)
@@ -70,9 +85,11 @@ class FitOptions:
     # this (units of the scatter): the misfit, what a diagnosis compares, is then settled
     # even where an ill-conditioned direction still creeps (off by default).
     stall_chi2: float = 0.0
-    # Once a trial step is rejected, screen the further trials of that iteration on a
-    # reduced basis (``objective.TrialScreen``) and solve in full only those it
-    # says descend; off: every trial is a full solve.
+    # Each iteration's first trial is the minimum of the Ritz models of its point
+    # (``REDUCED_ITERATIONS``), and once a trial step is rejected, the further trials
+    # of that iteration are screened on a reduced basis (``objective.TrialScreen``) and
+    # solved in full only where it says they descend; off: full Gauss-Newton steps only,
+    # every trial a full solve.
     reanalysis: bool = True
     # Measured mode shapes in the objective beside the frequencies (``ShapeObjective``);
     # off: they pin the pairing only.
@@ -173,7 +190,12 @@ def iterate(
         ):
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
         accepted, screen = None, None
-        for _ in range(options.max_damping_tries):
+        reduced = _reduced_minimum(objective, current, options, float(np.max(np.abs(gauss_newton))))
+        if reduced is not None:
+            trial = objective.evaluate(reduced, current.pairings, differentiate=False)
+            if objective.cost(trial) <= objective.cost(current):
+                accepted = (objective.differentiated(trial), space.to_z(reduced) - z, 0.0)
+        for _ in range(0 if accepted else options.max_damping_tries):
             gain = np.where(keep, s / np.where(keep, s**2 + damping, 1.0), 0.0)
             dz = np.zeros_like(z)
             dz[~held] = -vt.T @ (gain * ur)
@@ -251,6 +273,29 @@ def iterate(
         ):
             return current, Stop.MISFIT_STALLED, warnings
     return current, Stop.MAX_ITERATIONS, warnings
+
+
+def _reduced_minimum(
+    objective: Objective, current: Evaluation, options: FitOptions, gauss_newton: float
+) -> np.ndarray | None:
+    """The parameter values where the iteration on the Ritz models of ``current`` (its
+    full solves' modes as the basis, ``RitzObjective``: exact at ``current``, values and
+    derivatives) stops: a trial step for the full solve to accept or reject.  None where
+    the Ritz models do not apply, the point does not move, or it lies further than
+    ``REDUCED_REACH`` in z or ``REDUCED_REACH_PER_STEP`` times ``gauss_newton`` (the largest
+    z change of the full Gauss-Newton step)."""
+    if not (options.reanalysis and objective.reduced_steps):
+        return None
+    try:
+        ritz = RitzObjective(objective, current, {}, assembled=False)
+        start = ritz.evaluate(current.values, current.pairings)
+        branch = [Iteration(0, start.values, start.model_hz, 0.0, ritz.cost(start), 0.0, 0.0)]
+        end, _, _ = iterate(ritz, start, branch, replace(options, max_iterations=REDUCED_ITERATIONS))
+    except (OutsideBasis, np.linalg.LinAlgError):
+        return None
+    space = objective.space
+    reach = float(np.max(np.abs(space.to_z(end.values) - space.to_z(current.values))))
+    return end.values if 0.0 < reach <= min(REDUCED_REACH, REDUCED_REACH_PER_STEP * gauss_newton) else None
 
 
 def update(
