@@ -4,7 +4,6 @@ kept only where its full solve lowers the misfit.  It must end where the iterati
 solves alone ends, in fewer full solves, where the misfit is far from zero."""
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from fem.model import solve_laminate
@@ -12,8 +11,8 @@ from fem.solver.attachments import PointMass
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.engine.updating import FitOptions, Follow, Settle, update
-from identify.measurements import parse_measurements
 from tests.fem.test_reduced_basis import SANDWICH
+from tests.identify.engine.test_trial_screen import measured_modes
 
 #: The sandwich's skin constants and the core's shear moduli, from 1.3 x or 1 / 1.3 x the
 #: truth (nu12 from the truth).
@@ -34,19 +33,11 @@ def _fit(theory: dict, reanalysis: bool):
     Gauss-Newton steps converge only linearly.  Returns the fit and its full solves."""
     truth = parse_spec(SANDWICH).with_options(**theory, modes=10)
     hz = truth.with_attachments([PointMass(0.03, 0.05, 0.04, "sensor")]).solve("original").frequencies_hz
-    frame = pd.DataFrame(
-        {
-            "configuration": "original",
-            "mode": np.arange(1, len(hz) + 1),
-            "frequency_hz": hz,
-            "std_hz": 1e-3 * hz,
-        }
-    )
     start = truth.with_values({p: f * truth.value(p) for p, f in zip(PARAMETERS, START)})
     solve_laminate.cache_clear()
     result = update(
         start,
-        parse_measurements(frame, truth),
+        measured_modes(truth, hz),
         PARAMETERS,
         FitOptions(reanalysis=reanalysis),
         follow=Follow(settle=Settle.NONE),
