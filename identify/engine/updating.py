@@ -289,7 +289,7 @@ def _reduced_minimum(
     try:
         ritz = RitzObjective(objective, current, {}, assembled=False)
         start = ritz.evaluate(current.values, current.pairings)
-        branch = [Iteration(0, start.values, start.model_hz, 0.0, ritz.cost(start), 0.0, 0.0)]
+        branch = [Iteration(0, start.values, start.model_hz, ritz.rms(start), ritz.cost(start), 0.0, 0.0)]
         end, _, _ = iterate(ritz, start, branch, replace(options, max_iterations=REDUCED_ITERATIONS))
     except (OutsideBasis, np.linalg.LinAlgError):
         return None

@@ -57,8 +57,7 @@ def test_reduced_steps_end_where_full_steps_do_in_fewer_solves(theory):
     screen alone, without the reduced step, takes 16 and 11)."""
     full, full_solves = _fit(theory, reanalysis=False)
     reduced, reduced_solves = _fit(theory, reanalysis=True)
-    assert (
-        full.stop.converged and reduced.stop.converged
-    )  # the iteration converged; the misfit is the physics
+    # The iterations converged (the misfit left is the missing sensor's).
+    assert full.stop.converged and reduced.stop.converged
     assert np.all(np.abs(reduced.values - full.values) <= 0.02 * full.uncertainty.std + 1e-12 * full.values)
     assert reduced_solves <= 0.7 * full_solves, (reduced_solves, full_solves)
