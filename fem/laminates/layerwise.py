@@ -86,8 +86,8 @@ from .material import ELASTIC_CONSTANTS, SHEAR_MODULI, Material
 GROUPINGS = ("auto", "blocks", "layers")
 #: A layer is "soft" when a transverse shear modulus (Qb44 or Qb55) is below this
 #: fraction of the stack's largest in the same plane: a PVC foam (35 MPa) or a flexible
-#: bond line (0.36 GPa) next to CFRP (3.5-5 GPa) or aluminium (26 GPa) is; carbon/glass plies (3.2-5 GPa)
-#: next to aluminium are not.
+#: bond line (0.36 GPa) next to CFRP (3.5-5 GPa) or aluminium (26 GPa) is; carbon/glass
+#: plies (3.2-5 GPa) next to aluminium are not.
 SOFT_SHEAR_RATIO = 0.1
 #: Stiff layers with less than this share of the stack's shear compliance int dz / G each
 #: share one shear group under "auto" (a sandwich's skins: ~1e-3 each).
