@@ -19,7 +19,7 @@ user's start model (handbook values, nominal angles, no sensor, thin plate), by 
 the study's labels, and by the shapes (the 13 x 11 grid, and a 5 x 4 subset of it),
 against the start model's mode that carries the truth's (``blind_pairing``).
 
-    python -m studies.measured_shapes [--out DIR] [--seeds N] [--blind]
+    python -m studies.measured_shapes [--out DIR] [--seeds N] [--grid NX NY] [--blind]
 """
 
 from __future__ import annotations
@@ -226,6 +226,14 @@ def main() -> None:
     parser.add_argument("--out", help="report folder (default reports/measured_shapes)")
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument(
+        "--grid",
+        type=int,
+        nargs=2,
+        default=GRID,
+        metavar=("NX", "NY"),
+        help="the roving-hammer grid's points along x and y (default 5 4)",
+    )
+    parser.add_argument(
         "--example", action="store_true", help="write the bundled example's shape file and stop"
     )
     parser.add_argument(
@@ -253,14 +261,16 @@ def main() -> None:
         write_text(folder / "blind_pairing.txt", text)
         print(text)
         return
-    rows = pd.DataFrame([hidden_sensor_run(seed) for seed in range(1, args.seeds + 1)])
-    spacing = grid_spacing_mm()
+    grid = tuple(args.grid)
+    rows = pd.DataFrame([hidden_sensor_run(seed, grid) for seed in range(1, args.seeds + 1)])
+    spacing = grid_spacing_mm(grid)
     text = (
         rows.to_string(index=False, float_format=lambda x: f"{x:.3g}")
         + f"\n\ngrid spacing {spacing[0]:.1f} x {spacing[1]:.1f} mm\n"
     )
-    write_text(folder / "hidden_sensor.csv", rows.to_csv(index=False))
-    write_text(folder / "hidden_sensor.txt", text)
+    name = "hidden_sensor" if grid == GRID else f"hidden_sensor_{grid[0]}x{grid[1]}"
+    write_text(folder / f"{name}.csv", rows.to_csv(index=False))
+    write_text(folder / f"{name}.txt", text)
     print(text)
 
 

@@ -132,8 +132,8 @@ def test_shapes_place_a_hidden_sensor(example_spec):
     """The acceptance case: the shapes' point-mass map puts the hidden 3 g sensor within
     one grid spacing (33.8 x 45 mm) of (125, 110) mm, and weighs it within 1.5 g (the
     mass trades against the layers' densities and moduli as in the frequency fit).  The
-    per-point maps alone do not localise it on so coarse a grid: on seeds 3-5 their worst
-    points lie 21-132 mm away (studies.measured_shapes tabulates ten seeds)."""
+    per-point maps alone do not localise it: on seeds 3-5 their worst points lie 21-132 mm
+    away, and 10-130 mm on 9 x 7 and 13 x 11 grids (studies.measured_shapes, --grid)."""
     comparison = compare(example_spec.with_options(modes=8), study.hidden_sensor_data(seed=4))
     hint = comparison.shape_map.hint()
     dx, dy = np.abs(np.array(hint["xy"]) - [SENSOR.x, SENSOR.y]) * 1e3
