@@ -231,7 +231,7 @@ def main() -> None:
         nargs=2,
         default=GRID,
         metavar=("NX", "NY"),
-        help="the roving-hammer grid's points along x and y (default 5 4)",
+        help=f"the roving-hammer grid's points along x and y (default {GRID[0]} {GRID[1]})",
     )
     parser.add_argument(
         "--example", action="store_true", help="write the bundled example's shape file and stop"
