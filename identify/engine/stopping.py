@@ -37,6 +37,8 @@ FLAT_STEP = 1e-4
 #: ~2e-9 of round-off and chi^2 (~ the row count) about 1e-8 of itself.  When no damped
 #: step lowers the misfit and Gauss-Newton predicted less than this, the fit is at the
 #: minimum (the paper plate with a sensor: 2.7e-10 predicted, a step of 3e-7 in z).
+#: Where the solves are less precise it is judged by the step against the std instead
+#: (``updating._without_descent``).
 ROUNDOFF_COST = 1e-8
 
 

@@ -1,5 +1,7 @@
 """Multi-model identification against known truths (virtual experiments, paper 4.5)."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -284,3 +286,52 @@ def test_ambiguous_pair_count_reads_the_table_alone():
     )
     # a: 100/101 (1 %) counts, 101/110 (9 %) does not, 110/111 has a label; b: 2.9 % and 0.6 % count.
     assert ambiguous_pair_count(table) == 3
+
+
+class _RoundoffFloor:
+    """An objective whose trial solves come back worse than the point they leave, by
+    ``floor`` relative in frequency: it stands for the round-off of a thick plate's
+    solves (~1e-10), made larger than the decrease a step near the minimum makes."""
+
+    def __init__(self, objective, floor):
+        self._objective, self._floor = objective, floor
+
+    def __getattr__(self, name):
+        return getattr(self._objective, name)
+
+    def evaluate(self, values, pairings, track=True, differentiate=True):
+        e = self._objective.evaluate(values, pairings, track, differentiate)
+        if differentiate:
+            return e
+        away = np.sign(e.model_hz - self._objective.measured_hz)
+        return replace(e, model_hz=e.model_hz * (1 + self._floor * away))
+
+
+@pytest.mark.parametrize(("offset", "floor", "converged"), [(0.003, 1e-6, True), (0.3, 1e-3, False)])
+def test_no_descent_within_a_std_fraction_is_the_minimum(start, paper_model, offset, floor, converged):
+    """Where no trial step lowers the misfit (solves worse by ``floor`` than the
+    decrease a step makes), the fit is at its minimum when Gauss-Newton's step moves no
+    parameter by 1 % of its std (``WITHIN_STD``, converged), and has not converged when
+    it would move one by 30 % (``NO_DESCENT``).  Both starts predict a decrease above the
+    round-off rule's 1e-8 of chi^2, so the verdict rests on the step against the std."""
+    from identify.engine.objective import Objective
+    from identify.engine.stopping import ROUNDOFF_COST, Stop
+    from identify.engine.updating import Iteration, iterate
+
+    data = synthetic_measurements(paper_model, noise_rel=5e-4, seed=11, labels="close")
+    solved = fit(start, data)
+    assert solved.converged, solved.message
+    objective = Objective(start, data, list(solved.parameters))
+    at_minimum = objective.evaluate(solved.values, solved.pairings)
+    space = objective.space
+    off = space.to_values(space.to_z(solved.values) + offset * objective.std_z(at_minimum))
+    state = objective.evaluate(off, solved.pairings)
+    jacobian, r = objective.jacobian(state), objective.residual(state)
+    predicted = 0.5 * float(np.sum((np.linalg.pinv(jacobian) @ r) @ (jacobian.T @ r)))
+    assert predicted > 10 * ROUNDOFF_COST * objective.cost(state), "precondition: above the round-off rule"
+    history = [Iteration(0, state.values, state.model_hz, objective.rms(state), objective.cost(state), 0, 0)]
+    options = FitOptions(reanalysis=False)
+    _, stop, _ = iterate(_RoundoffFloor(objective, floor), state, history, options)
+    assert len(history) == 1, "precondition: no trial step accepted"
+    assert stop is (Stop.WITHIN_STD if converged else Stop.NO_DESCENT)
+    assert stop.converged is converged
