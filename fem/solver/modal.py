@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
+from numpy.lib.stride_tricks import as_strided
 
 from ..errors import ModelError
 from .assembly import UnitMatrices
@@ -56,8 +57,80 @@ def _solve(reversed_factor: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def _columns(solve, factor: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """A triangular solve applied to each column of x (n_dofs, k)."""
+    """A one-vector triangular solve applied to each column of x (n_dofs, k)."""
     return np.column_stack([solve(factor, c) for c in x.T])
+
+
+#: Band factors larger than this solve many vectors at once by dense blocks
+#: (``BandBlocks``), smaller ones one column at a time.  A small factor stays in cache,
+#: where the band kernel is as fast as the block kernels and has no per-block overhead.
+#: Measured on this project's machine (32 MB L3), U^-1 of the modes: 3,468 DOFs (6.3 MB
+#: of factor) 3.7 ms by columns against 4.2 ms by blocks; 5,808 DOFs (13 MB) 17 against
+#: 10 ms; 18,240 DOFs (61 MB) 193 against 42 ms.
+BLOCK_SOLVE_BYTES = 8 * 2**20
+
+
+class BandBlocks:
+    """The upper band factor U (LAPACK storage, Fortran-ordered) seen as dense b x b
+    blocks, b its semi-bandwidth, for triangular solves of many right-hand sides at once
+    (BLAS level 3: on a factor too large for the cache, where each one-column band solve
+    streams the whole factor from memory, 3.7-4.6x faster from 20 columns on at 18,240
+    DOFs; see ``BLOCK_SOLVE_BYTES``).
+
+    No copy: in band storage U_ij sits at flat offset b + i + j b, so the block of rows
+    i0.. and columns j0.. is a Fortran matrix with leading dimension b.  The diagonal
+    blocks D_k are upper triangular (their lower parts are other entries, which the
+    triangular kernels never read); the blocks O_k right of them couple block k to k + 1,
+    and only their lower triangle lies within the band.  The last n mod b DOFs form a
+    small tail block (copied)."""
+
+    def __init__(self, factor: np.ndarray):
+        width, n = factor.shape
+        b = width - 1
+        flat = factor.ravel(order="F")
+        if not np.shares_memory(flat, factor):
+            raise ValueError("the band factor must be Fortran-ordered")
+        self.b, self.n_full = b, n // b
+
+        def view(i0: int, j0: int, rows: int, cols: int) -> np.ndarray:
+            return as_strided(flat[b + i0 + j0 * b :], (rows, cols), (flat.itemsize, flat.itemsize * b))
+
+        self.diagonal = [view(k * b, k * b, b, b) for k in range(self.n_full)]
+        self.coupling = [view(k * b, (k + 1) * b, b, b) for k in range(self.n_full - 1)]
+        start, tail = self.n_full * b, n - self.n_full * b
+        self.tail = np.asfortranarray(np.triu(view(start, start, tail, tail)))
+        # Rows start - b.. against the tail's columns: within the band where column <= row.
+        self.tail_coupling = np.asfortranarray(np.tril(view(start - b, start, b, tail)))
+
+    def solve_transposed(self, x: np.ndarray) -> np.ndarray:
+        """U^-T x for x (n_dofs, k): forward substitution by blocks."""
+        b, y = self.b, np.array(x, dtype=float, order="F")
+        for k, block in enumerate(self.diagonal):
+            rows = slice(k * b, (k + 1) * b)
+            if k:
+                y[rows] -= sla.blas.dtrmm(
+                    1.0, self.coupling[k - 1], y[rows.start - b : rows.start], lower=1, trans_a=1
+                )
+            y[rows] = sla.blas.dtrsm(1.0, block, y[rows], trans_a=1)
+        start = self.n_full * b
+        if self.tail.size:
+            y[start:] -= self.tail_coupling.T @ y[start - b : start]
+            y[start:] = sla.blas.dtrsm(1.0, self.tail, y[start:], trans_a=1)
+        return y
+
+    def solve(self, y: np.ndarray) -> np.ndarray:
+        """U^-1 y for y (n_dofs, k): back substitution by blocks."""
+        b, z = self.b, np.array(y, dtype=float, order="F")
+        start = self.n_full * b
+        if self.tail.size:
+            z[start:] = sla.blas.dtrsm(1.0, self.tail, z[start:])
+            z[start - b : start] -= self.tail_coupling @ z[start:]
+        for k in range(self.n_full - 1, -1, -1):
+            rows = slice(k * b, (k + 1) * b)
+            if k < self.n_full - 1:
+                z[rows] -= sla.blas.dtrmm(1.0, self.coupling[k], z[rows.stop : rows.stop + b], lower=1)
+            z[rows] = sla.blas.dtrsm(1.0, self.diagonal[k], z[rows])
+        return z
 
 
 def solve_modes(
@@ -133,7 +206,11 @@ def solve_modes(
     # orthonormal basis of U r = U^-T (K - sigma M) r deflates the rigid-body modes.
     # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
     order, rank = units.band_order, units.rank
-    rigid_basis, _ = np.linalg.qr(_columns(_transposed_solve, factor, (units.matrix(shifted) @ rigid)[order]))
+    blocks = BandBlocks(factor) if factor.nbytes > BLOCK_SOLVE_BYTES else None
+    rigid_fields = (units.matrix(shifted) @ rigid)[order]
+    rigid_basis, _ = np.linalg.qr(
+        blocks.solve_transposed(rigid_fields) if blocks else _columns(_transposed_solve, factor, rigid_fields)
+    )
 
     def deflate(x: np.ndarray) -> np.ndarray:
         return x - rigid_basis @ (rigid_basis.T @ x)
@@ -152,7 +229,7 @@ def solve_modes(
         _, psi = spla.eigsh(transformed_mass, k=k, which="LA", v0=start, tol=1e-8)
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
-    phi = _columns(_solve, reversed_factor, psi)[rank]
+    phi = (blocks.solve(psi) if blocks else _columns(_solve, reversed_factor, psi))[rank]
     phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
     lam = np.einsum("ij,ij->j", phi, stiffness @ phi)
     order = np.argsort(lam)
