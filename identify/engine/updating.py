@@ -253,7 +253,7 @@ def iterate(
             return current, Stop.STEP_SMALL, warnings
         stalled = previous_cost - objective.cost(current) <= STALLED * previous_cost
         # Judged on a full Gauss-Newton step only: a damped step is short by construction.
-        if stalled and used == 0.0 and np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(current)):
+        if stalled and used == 0.0 and _within_std(objective, current, dz):
             return current, Stop.WITHIN_STD, warnings
         if objective.rms(current) < EXACT_RMS:
             return current, Stop.EXACT, warnings
@@ -287,9 +287,15 @@ def _without_descent(
     the step below 7e-4 of its std).  Otherwise no descent: the fit has not converged."""
     if reducible <= ROUNDOFF_COST * objective.cost(current):
         return Stop.GAUSS_NEWTON_SMALL
-    if np.all(np.abs(gauss_newton) < STEP_PER_STD * objective.std_z(current)[~held]):
-        return Stop.WITHIN_STD
-    return Stop.NO_DESCENT
+    step = np.zeros(len(held))
+    step[~held] = gauss_newton
+    return Stop.WITHIN_STD if _within_std(objective, current, step) else Stop.NO_DESCENT
+
+
+def _within_std(objective: Objective, e: Evaluation, dz: np.ndarray) -> bool:
+    """Whether the step ``dz`` (in z) moves no parameter by ``STEP_PER_STD`` of its std at
+    ``e``: the data cannot tell its end from ``e`` (``Stop.WITHIN_STD``)."""
+    return bool(np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(e)))
 
 
 def _reduced_minimum(
