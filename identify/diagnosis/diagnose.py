@@ -633,6 +633,11 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
     return [again if c is leader else c for c in candidates]
 
 
+def _prepare(job: dict):
+    """One candidate's pre-check, ``Refit.prepare`` (module level: runs in a worker process)."""
+    return job["refit"].prepare(job["kind"], job["hints"], job["start"], job["free_again"])
+
+
 def _add(job: dict):
     """One candidate's refit, ``Refit.add`` (module level: runs in a worker process)."""
     return job["refit"].add(
@@ -642,16 +647,28 @@ def _add(job: dict):
 
 def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again=()) -> list[Candidate]:
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
-    (here), then refitted most promising first (by the linearised bound), each only when
-    it could come near what the best so far explained (``RefitPolicy.prune_factor``); with a
-    pool, ``n_workers`` at a time.  ``starts``: kind -> a fit its refit starts from;
-    ``free_again``: shear moduli ``state`` holds, freed again with effects that free none
-    themselves (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
+    (side by side in the pool when there is one), then refitted most promising first (by
+    the linearised bound), each only when it could come near what the best so far
+    explained (``RefitPolicy.prune_factor``); with a pool, ``n_workers`` at a time.
+    ``starts``: kind -> a fit its refit starts from; ``free_again``: shear moduli
+    ``state`` holds, freed again with effects that free none themselves
+    (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
     state, pool = round_.state, round_.pool
     at_once = round_.n_workers if pool else 1
     out, ready = [], []
-    for kind in kinds:
-        prepared = round_.refit.prepare(kind, round_.hints, (starts or {}).get(kind), free_again)
+    jobs = [
+        dict(
+            refit=round_.refit,
+            kind=kind,
+            hints=round_.hints,
+            start=(starts or {}).get(kind),
+            free_again=free_again,
+        )
+        for kind in kinds
+    ]
+    # The pre-checks are independent of each other: with a pool they run side by side (a
+    # shear candidate's evaluates up to five starts, each a full solve of every configuration).
+    for prepared in pool.map(_prepare, jobs) if pool is not None and len(jobs) > 1 else map(_prepare, jobs):
         if isinstance(prepared, AddedEffect):
             out.append(_candidate(state, prepared))
         else:

@@ -1487,17 +1487,19 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
     (the best fit, notes on rivals that fit about as well)."""
     state, measurements, pool = refit.state, refit.measurements, refit.pool
     starts = tuple(hints) if hints else point_mass_starts(state.model, ())
-    ranked = []
-    for hint in starts:
-        for on in effect(kind).free(state.model, hint):
-            try:
-                left = Sensitivities.at_start(
-                    on.model, measurements, base + list(on.free), state.pairings
-                ).predicted_sum_squares(base + list(on.free))
-            except LayerIdError:  # a bare peak list has no mode numbers to linearise with: scan order
-                left = math.inf
-            ranked.append((left, on))
-    ranked.sort(key=lambda t: t[0])
+    switched = [on for hint in starts for on in effect(kind).free(state.model, hint)]
+    # One evaluation a start, independent of each other: side by side in the pool.
+    rankings = [
+        dict(
+            model=on.model,
+            measurements=measurements,
+            parameters=base + list(on.free),
+            pairings=state.pairings,
+        )
+        for on in switched
+    ]
+    lefts = pool.map(_linearised_left, rankings) if pool is not None else map(_linearised_left, rankings)
+    ranked = sorted(zip(lefts, switched, strict=True), key=lambda t: t[0])
     # Where measured shapes place the mass (``shape_point_map``), that start is fitted
     # whatever the frequencies' linearised step says: the shapes see the position, the
     # step only a frequency misfit that a wrong position can share.
@@ -1566,6 +1568,19 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
             "parameters are not unique with these modes; measure more modes to separate them"
         )
     return result, notes
+
+
+def _linearised_left(job: dict) -> float:
+    """The weighted sum of squares one linearised refit from ``job``'s start model would
+    leave (``Sensitivities.predicted_sum_squares``; module level: runs in a worker process);
+    infinite for a bare peak list, which has no mode numbers to linearise with (it keeps
+    the scan's order)."""
+    try:
+        return Sensitivities.at_start(
+            job["model"], job["measurements"], job["parameters"], job["pairings"]
+        ).predicted_sum_squares(job["parameters"])
+    except LayerIdError:
+        return math.inf
 
 
 def _position(on: SwitchedOn) -> list[Parameter]:

@@ -102,3 +102,20 @@ def test_held_properties_are_freed_only_in_the_final_refit_of_a_peak_list(sensor
         model, diagnosis.diagnose(model, peaks, ["point_mass"]).final.measurements, ["point_mass"]
     )
     assert ranked.selected and (True, Settle.QUICK) in calls
+
+
+def test_two_worker_processes_give_the_serial_diagnosis(sensor_peaks):
+    """With a pool (``workers=2``, as the command line runs a diagnosis) the candidates'
+    pre-checks, the point mass's linearised start ranking and the refits run in worker
+    processes: the same computations, so the same selection, steps and final values as the
+    serial diagnosis, to the last bit (one BLAS thread everywhere, the solver's start vector
+    seeded)."""
+    model, peaks = sensor_peaks
+    kinds = ["point_mass", "suspension", "rotary_inertia"]
+    serial = diagnose(model, peaks, kinds, workers=1)
+    pooled = diagnose(model, peaks, kinds, workers=2)
+    assert [c.kind for c in pooled.selected] == [c.kind for c in serial.selected] == ["point_mass"]
+    assert [s.reason for s in pooled.steps] == [s.reason for s in serial.steps]
+    assert pooled.final.parameters == serial.final.parameters
+    assert pooled.final.values.tolist() == serial.final.values.tolist()
+    assert pooled.final.statistics.sum_squares == serial.final.statistics.sum_squares
