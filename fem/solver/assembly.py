@@ -94,22 +94,48 @@ class UnitMatrices:
     def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
         """CSR indices/indptr of the global pattern and the aggregation matrix
         (nnz x G n_local^2) summing each element's local entries, those of its size's
-        matrices, into global ones."""
-        dofs = self.element_dofs
-        n_local = dofs.shape[1]
-        rows = np.repeat(dofs, n_local, axis=1).ravel()
-        cols = np.tile(dofs, (1, n_local)).ravel()
+        matrices, into global ones.
+
+        Every DOF belongs to a node (global DOF = node x dofs_per_node + field) and an
+        element couples all DOFs of its nodes, so the pattern is dense node-pair blocks:
+        the distinct pairs of nodes that share an element (16 per element, sorted once),
+        each a dofs_per_node^2 block.  In CSR order the rows of node a follow those of the
+        nodes before it (dofs_per_node^2 x their neighbour counts), each row of node a holds
+        its neighbours' blocks in node order, so an element entry's slot is arithmetic on
+        its pair's rank; the same arrays as sorting every element entry, 4-6x faster on a
+        layerwise mesh (``tests/fem/test_assembly_pattern.py``)."""
+        nodes = self.mesh.element_nodes
+        per_node, n_nodes = self.dofs_per_node, self.mesh.n_nodes
+        n_elements, corners = nodes.shape
+        n_local = corners * per_node
+        first_of_pair = np.repeat(nodes, corners, axis=1)
+        key = first_of_pair.astype(np.int64) * n_nodes + np.tile(nodes, (1, corners))
+        pairs, pair_of_entry = np.unique(key, return_inverse=True)
+        row_node, column_node = np.divmod(pairs, n_nodes)
+        neighbours = np.bincount(row_node, minlength=n_nodes)
+        first_pair = np.searchsorted(row_node, np.arange(n_nodes))
+        rank = np.arange(pairs.size) - first_pair[row_node]  # of the column node among the row node's
+        node_start = per_node * per_node * np.concatenate([[0], np.cumsum(neighbours)[:-1]])
+        # slot of entry (element, corner a, field i, corner b, field j), in the element's local order
+        block = node_start[first_of_pair] + rank[pair_of_entry.reshape(key.shape)] * per_node
+        row_length = (neighbours[first_of_pair] * per_node).reshape(n_elements, corners, 1, corners, 1)
+        field = np.arange(per_node)
+        slot = (
+            block.reshape(n_elements, corners, 1, corners, 1) + field[:, None, None] * row_length + field
+        ).ravel()
+        nnz = int(per_node * per_node * neighbours.sum())
+        lengths = np.repeat(neighbours * per_node, per_node)
+        indptr = np.concatenate([[0], np.cumsum(lengths)])
+        node_columns = (column_node[:, None] * per_node + field).ravel()
+        rows_node = np.repeat(np.arange(self.n_dofs) // per_node, lengths)
+        within = np.arange(nnz) - np.repeat(indptr[:-1], lengths)
+        columns = node_columns[first_pair[rows_node] * per_node + within]
         group = self.mesh.size_groups[1]
         local = (group[:, None] * n_local * n_local + np.arange(n_local * n_local)).ravel()
-        # Number the distinct (row, col) pairs in CSR order.
-        key = rows.astype(np.int64) * self.n_dofs + cols
-        unique, slot = np.unique(key, return_inverse=True)
-        g_rows, g_cols = np.divmod(unique, self.n_dofs)
-        indptr = np.searchsorted(g_rows, np.arange(self.n_dofs + 1))
         aggregate = sp.csr_matrix(
-            (np.ones(slot.size), (slot, local)), shape=(unique.size, len(self.elements) * n_local * n_local)
+            (np.ones(slot.size), (slot, local)), shape=(nnz, len(self.elements) * n_local * n_local)
         )
-        return g_cols.astype(np.int32), indptr.astype(np.int32), aggregate
+        return columns.astype(np.int32), indptr.astype(np.int32), aggregate
 
     @cached_property
     def stiffness_data(self) -> np.ndarray:

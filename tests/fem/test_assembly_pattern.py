@@ -1,0 +1,71 @@
+"""The global CSR pattern and aggregation matrix of a mesh (``UnitMatrices._pattern``),
+built from the node-pair blocks, against the direct construction: every element entry's
+(row, column) sorted and numbered, the way the pattern was built before."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from fem.elements import HermitePlate, LayerwisePlate, ShearDifferencePlate
+from fem.laminates.laminate import VOIGT_PAIRS
+from fem.solver.assembly import UnitMatrices
+from fem.solver.mesh import PlateMesh
+
+
+def sorted_pattern(units: UnitMatrices):
+    """Indices, indptr and aggregation by sorting every element entry's global (row,
+    column): the reference (``np.unique`` over n_elements x n_local^2 keys)."""
+    dofs = units.element_dofs
+    n_local = dofs.shape[1]
+    rows = np.repeat(dofs, n_local, axis=1).ravel()
+    cols = np.tile(dofs, (1, n_local)).ravel()
+    group = units.mesh.size_groups[1]
+    local = (group[:, None] * n_local * n_local + np.arange(n_local * n_local)).ravel()
+    key = rows.astype(np.int64) * units.n_dofs + cols
+    unique, slot = np.unique(key, return_inverse=True)
+    g_rows, g_cols = np.divmod(unique, units.n_dofs)
+    indptr = np.searchsorted(g_rows, np.arange(units.n_dofs + 1))
+    aggregate = sp.csr_matrix(
+        (np.ones(slot.size), (slot, local)), shape=(unique.size, len(units.elements) * n_local * n_local)
+    )
+    return g_cols.astype(np.int32), indptr.astype(np.int32), aggregate
+
+
+MESHES = {
+    "equal": PlateMesh(0.30, 0.20, 6, 4),
+    # graded towards the edges and with a sensor's footprint: several element sizes
+    "graded": PlateMesh.with_element_size(0.25, 0.16, 8, 0.004, bases=((0.10, 0.11, 0.05, 0.06),)),
+    "one element across": PlateMesh(0.10, 0.02, 5, 1),
+}
+ELEMENTS = [HermitePlate, ShearDifferencePlate, LayerwisePlate.with_groups(3, 1)]
+
+
+@pytest.mark.parametrize("mesh", MESHES.values(), ids=MESHES.keys())
+@pytest.mark.parametrize("kind", ELEMENTS, ids=lambda k: k.__name__)
+def test_node_block_pattern_is_the_sorted_one(mesh, kind):
+    """The same indices, indptr (as int32) and aggregation matrix, entry for entry, on
+    equal, graded and one-element-wide meshes for each element type."""
+    units = UnitMatrices(mesh, kind)
+    assert len(units.elements) > 1 or mesh is not MESHES["graded"]
+    indices, indptr, aggregate = units._pattern
+    ref_indices, ref_indptr, ref_aggregate = sorted_pattern(units)
+    assert indices.dtype == ref_indices.dtype and indptr.dtype == ref_indptr.dtype
+    np.testing.assert_array_equal(indices, ref_indices)
+    np.testing.assert_array_equal(indptr, ref_indptr)
+    assert aggregate.shape == ref_aggregate.shape
+    assert (aggregate != ref_aggregate).nnz == 0
+
+
+def test_pattern_assembles_the_scattered_element_matrices():
+    """A unit stiffness matrix through the pattern equals the element matrices added into
+    a dense global matrix one element at a time, to round-off (each global entry is a sum
+    of at most four element entries, added in another order: 1e-12 of the largest)."""
+    units = UnitMatrices(MESHES["graded"], ShearDifferencePlate)
+    unit = 12  # D11's unit matrix
+    stiffness = [element.unit_stiffness(VOIGT_PAIRS)[unit] for element in units.elements]
+    dense = np.zeros((units.n_dofs, units.n_dofs))
+    group = units.mesh.size_groups[1]
+    for e, dofs in enumerate(units.element_dofs):
+        dense[np.ix_(dofs, dofs)] += stiffness[group[e]]
+    assembled = units.matrix(units.stiffness_data[unit]).toarray()
+    np.testing.assert_allclose(assembled, dense, rtol=0, atol=1e-12 * np.abs(dense).max())
