@@ -8,8 +8,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from fem.errors import LayerIdError
 from fem.spec import parse_spec
 from fem.specimen import Parameter
+from identify.diagnosis.diagnose import diagnose
 from identify.engine import peak_lists
 from identify.engine.result import FitStatus
 from identify.fitting.driver import fit
@@ -108,6 +110,37 @@ def test_any_peak_list_ends_with_a_status(thin_truth, data):
     result = fit(model, parse_measurements(table, model))
     assert result.status in set(FitStatus)
     assert len(result.peaks.modes) == len(peaks_hz)
+
+
+@settings(
+    max_examples=3,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.data())
+def test_any_peak_list_is_diagnosed_and_refitted_with_a_status(thin_truth, data):
+    """The rest of the loop on such peak lists: ``diagnose`` (two candidates, to keep the
+    test short: the point mass, whose starts and screen are the peak-list paths most often
+    changed, and rotary inertia), then ``fit --effect`` with what it selects (a point mass
+    where it selects nothing).  Each ends with a status and accounts for every peak, or
+    with a clear error (``LayerIdError``: an effect the peaks cannot determine), never a
+    traceback."""
+    f = thin_truth.solve("original").frequencies_hz[:14]
+    peaks_hz = data.draw(peak_lists_of(f))
+    if len(peaks_hz) < 6:
+        return
+    model = long_plates.handbook_model()
+    peaks = parse_measurements(pd.DataFrame({"configuration": "original", "frequency_hz": peaks_hz}), model)
+    diagnosis = diagnose(model, peaks, ["point_mass", "rotary_inertia"])
+    assert diagnosis.baseline.status in set(FitStatus)
+    assert diagnosis.final is None or len(diagnosis.final.peaks.modes) == len(peaks_hz)
+    try:
+        refit = fit(model, peaks, [c.kind for c in diagnosis.selected] or ["point_mass"])
+    except LayerIdError as exc:
+        assert str(exc)
+        return
+    assert refit.status in set(FitStatus)
+    assert len(refit.peaks.modes) == len(peaks_hz)
 
 
 def test_a_property_on_its_bound_is_never_converged(thin_truth):
