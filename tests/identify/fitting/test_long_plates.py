@@ -71,6 +71,12 @@ def test_handbook_start_reaches_the_right_pairing(thin_truth):
     assert result.peaks.unseen["original"] == [5, 14, 23]
 
 
+#: Examples that each run whole fits: no deadline, and the module's fixture reused across them.
+WHOLE_FITS = settings(
+    deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+
+
 @st.composite
 def peak_lists_of(draw, frequencies):
     """A peak list drawn from a model spectrum: some modes missing, some pairs merged
@@ -92,11 +98,7 @@ def peak_lists_of(draw, frequencies):
     return np.sort(peaks)
 
 
-@settings(
-    max_examples=6,
-    deadline=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
-)
+@settings(WHOLE_FITS, max_examples=6)
 @given(data=st.data())
 def test_any_peak_list_ends_with_a_status(thin_truth, data):
     """Whatever peaks a recording gives (missing, merged, spurious, scatter up to 0.3 %),
@@ -112,11 +114,7 @@ def test_any_peak_list_ends_with_a_status(thin_truth, data):
     assert len(result.peaks.modes) == len(peaks_hz)
 
 
-@settings(
-    max_examples=3,
-    deadline=None,
-    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
-)
+@settings(WHOLE_FITS, max_examples=3)
 @given(data=st.data())
 def test_any_peak_list_is_diagnosed_and_refitted_with_a_status(thin_truth, data):
     """The rest of the loop on such peak lists: ``diagnose`` (two candidates, to keep the
