@@ -400,9 +400,10 @@ class Outcome:
 
 
 def _z(fit, truth_values: dict, measurement_only: bool = False) -> dict:
-    """Each scored property's error in std: the fit's std (measurements and the stated
-    inputs' tolerances), or with ``measurement_only`` the measurements' part alone, so that
-    a tolerance that widens the std cannot pass for a better estimate."""
+    """Each scored property's error in std: the fit's std (measurements, the stated
+    inputs' tolerances and a shear theory's own error against 3-D elasticity), or with
+    ``measurement_only`` the measurements' part alone, so that a tolerance that widens the
+    std cannot pass for a better estimate."""
     out = {}
     for p in fit.parameters:
         if p in truth_values:

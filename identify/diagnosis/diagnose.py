@@ -46,6 +46,7 @@ from ..engine.parameters import display, json_key
 from ..engine.result import FitResult, FitStatus
 from ..engine.ties import Tied
 from ..engine.updating import FitOptions, Settle
+from ..fitting.budget import with_theory_accuracy
 from ..fitting.driver import (
     AddedEffect,
     Refit,
@@ -988,6 +989,9 @@ def diagnose(
         steps.append(step)
         taken_out = (step.candidates[0].kind,)
     first = steps[0].candidates if steps else ()
+    # The answer's std with the selected theory's own error; every decision above read the
+    # measurements' scatter alone.
+    final = with_theory_accuracy(final) if final is not None else None
     return Diagnosis(
         baseline,
         comparison,

@@ -18,6 +18,12 @@ taken to second order over a normal angle error theta ~ N(0, u^2): with d1 = (f(
 f(-u)) / 2 and d2 = (f(+u) + f(-u) - 2 f(0)) / 2, df = f' theta + f'' theta^2 / 2 has the
 mean square (G d1)^2 + 3 (G d2)^2 in each property (E theta^4 = 3 u^4), entered as two
 inputs: the angle (column d1 / u) and its second order (column sqrt(3) d2 / u).
+
+The plate theory itself is an input too: a shear-deformable theory's frequencies carry
+its own error against 3-D elasticity (``ModelOptions.theory_std_rel``, a relative std
+measured on the 3-D references), taken as independent per mode, so it adds
+G diag((u f_i / sigma_i)^2) G^T with G = J_theta^+ (``with_theory_accuracy``).  It
+widens the reported std only: the diagnosis's decisions read the measurements' scatter.
 """
 
 from __future__ import annotations
@@ -48,6 +54,10 @@ class Budget:
     inputs: tuple[InputStd, ...]
     measurement_std: np.ndarray
     sensitivity: np.ndarray
+    # The plate theory's part (``with_theory_accuracy``): its relative frequency std and
+    # the covariance it adds [SI^2]; 0 and None for a thin-plate model.
+    theory_std_rel: float = 0.0
+    theory_covariance: np.ndarray | None = None
 
     @property
     def contributions(self) -> np.ndarray:
@@ -61,9 +71,16 @@ class Budget:
         return (self.sensitivity * u2[None, :]) @ self.sensitivity.T
 
     @property
+    def theory_std(self) -> np.ndarray:
+        """The plate theory's share of each parameter's std [SI] (zeros for a thin plate)."""
+        if self.theory_covariance is None:
+            return np.zeros(len(self.parameters))
+        return np.sqrt(np.diag(self.theory_covariance))
+
+    @property
     def total_std(self) -> np.ndarray:
-        """Measurement and inputs together [SI] (independent contributions)."""
-        return np.sqrt(self.measurement_std**2 + np.sum(self.contributions**2, axis=1))
+        """Measurement, inputs and the theory together [SI] (independent contributions)."""
+        return np.sqrt(self.measurement_std**2 + np.sum(self.contributions**2, axis=1) + self.theory_std**2)
 
     def table(self) -> pd.DataFrame:
         """One row per parameter in display units: value's std from the measurements,
@@ -76,6 +93,8 @@ class Budget:
                 "measurement": display(p, self.measurement_std[i]),
             }
             row.update({f"{u.name}": display(p, c) for u, c in zip(self.inputs, self.contributions[i])})
+            if self.theory_covariance is not None:
+                row["theory vs 3-D"] = display(p, self.theory_std[i])
             row["total"] = display(p, self.total_std[i])
             rows.append(row)
         return pd.DataFrame(rows)
@@ -83,6 +102,7 @@ class Budget:
     def to_dict(self) -> dict:
         return {
             "inputs": [{"input": u.name, "std_si": u.std} for u in self.inputs],
+            "theory_std_rel": self.theory_std_rel,
             "table": self.table().to_dict(orient="records"),
         }
 
@@ -176,4 +196,34 @@ def with_budget(result, consider: tuple[InputStd, ...] = ()):
     return replace(result, budget=budget, uncertainty=result.uncertainty.with_covariance(budget.covariance))
 
 
-__all__ = ["Budget", "uncertainty_budget", "with_budget"]
+def with_theory_accuracy(result):
+    """The result with its plate theory's own error in the std (the module doc), added to
+    its budget (one is made when it has none); as it is for a thin-plate model, an
+    unfinished fit, undefined std or a budget that already holds the theory's part, and
+    where the scatter is the misfit's own (estimated from the residuals, or the stated one
+    inflated by them): the theory's error is then in it already."""
+    u = result.model.options.theory_std_rel
+    budget = result.budget
+    statistics = result.statistics
+    if (
+        u == 0
+        or not statistics.scatter_known
+        or statistics.inflated
+        or (budget is not None and budget.theory_covariance is not None)
+        or not result.finished
+        or not np.all(np.isfinite(result.uncertainty.std))
+    ):
+        return result
+    objective = Objective(result.model, result.measurements, result.parameters)
+    e = objective.evaluate(result.values, result.pairings, track=False)
+    gain = np.linalg.pinv(e.derivatives / objective.sigma[:, None])  # d theta / d weighted residual [SI]
+    share = (u * objective.measured_hz / objective.sigma) ** 2
+    covariance = (gain * share[None, :]) @ gain.T
+    if budget is None:
+        p = len(result.parameters)
+        budget = Budget(result.parameters, (), result.uncertainty.std.copy(), np.zeros((p, 0)))
+    budget = replace(budget, theory_std_rel=u, theory_covariance=covariance)
+    return replace(result, budget=budget, uncertainty=result.uncertainty.with_covariance(covariance))
+
+
+__all__ = ["Budget", "uncertainty_budget", "with_budget", "with_theory_accuracy"]

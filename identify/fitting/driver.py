@@ -32,7 +32,7 @@ from ..engine.statistics import ASSUMED_SCATTER_REL
 from ..engine.ties import Tied, plain
 from ..engine.updating import FitOptions, Follow, Settle, update
 from ..measurements import Measurements
-from .budget import with_budget
+from .budget import with_budget, with_theory_accuracy
 from .causes import with_causes
 from .damping import identify_damping
 from .patterns import residual_patterns
@@ -228,9 +228,9 @@ def fit(
         with independent_refits(workers, worth_it) as pool:
             refitting = Refitting.from_baseline(model, measurements, baseline)
             result = fit_with_effects(refitting, list(effects), options or _EFFECT_OPTIONS, pool, progress)
-            return with_damping(with_budget(result))
+            return with_damping(with_theory_accuracy(with_budget(result)))
     fitted = fit_layers(model, measurements, parameters, options or FitOptions(), progress=progress)
-    return with_damping(with_budget(with_causes(fitted)))
+    return with_damping(with_theory_accuracy(with_budget(with_causes(fitted))))
 
 
 def _shapes_fit(model: SpecimenModel, kind: str) -> None:
