@@ -138,10 +138,7 @@ class Uncertainty:
                 "(spacing / sqrt 12) is in the parameters' std; a label or a second sensor position would "
                 "tell"
             )
-        u, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
-        gain = (vt.T / s) @ u.T  # dz = -gain dr
-        dvdz = objective.space.dvalue_dz(evaluation.values)
-        spread = dvdz[:, None] * ((gain * extra) @ gain.T) * dvdz[None, :]
+        spread = row_scatter_covariance(objective, evaluation, extra)
         covariance = self.covariance + spread
         std = np.sqrt(np.diag(covariance))
         widened = np.sqrt(np.diag(spread)) > 0.5 * self.std
@@ -209,6 +206,16 @@ class Uncertainty:
         return cls(
             std, covariance, correlation, cond, s_rel, weak, flags, tuple(warnings), bounded, np.abs(dvdz)
         )
+
+
+def row_scatter_covariance(objective, evaluation, extra: np.ndarray) -> np.ndarray:
+    """The parameters' covariance [SI^2] from a further scatter of each measured row,
+    independent between rows, ``extra`` its variance in weighted-residual units (of
+    sigma^2), through the linearised fit at ``evaluation``."""
+    u, s, vt = np.linalg.svd(objective.jacobian(evaluation), full_matrices=False)
+    gain = (vt.T / s) @ u.T  # dz = -gain dr
+    dvdz = objective.space.dvalue_dz(evaluation.values)
+    return dvdz[:, None] * ((gain * extra) @ gain.T) * dvdz[None, :]
 
 
 def at_limit(parameter, value: float, specimen) -> bool:

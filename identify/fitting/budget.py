@@ -22,7 +22,8 @@ inputs: the angle (column d1 / u) and its second order (column sqrt(3) d2 / u).
 The plate theory itself is an input too: a shear-deformable theory's frequencies carry
 its own error against 3-D elasticity (``ModelOptions.theory_std_rel``, a relative std
 measured on the 3-D references), taken as independent per mode, so it adds
-G diag((u f_i / sigma_i)^2) G^T with G = J_theta^+ (``with_theory_accuracy``).  It
+G diag((u f_i / sigma_i)^2) G^T with G = J_theta^+ (``with_theory_accuracy``, through
+``uncertainty.row_scatter_covariance``, as a merged peak's scatter).  It
 widens the reported std only: the diagnosis's decisions read the measurements' scatter.
 """
 
@@ -38,6 +39,7 @@ from fem.specimen import Parameter
 
 from ..engine.objective import Objective
 from ..engine.parameters import UNITS, display
+from ..engine.uncertainty import row_scatter_covariance
 
 #: Relative step of the central differences in the plate's length and width: the
 #: frequency error is O(step^2) ~ 1e-8, far below any input's effect.
@@ -216,9 +218,7 @@ def with_theory_accuracy(result):
         return result
     objective = Objective(result.model, result.measurements, result.parameters)
     e = objective.evaluate(result.values, result.pairings, track=False)
-    gain = np.linalg.pinv(e.derivatives / objective.sigma[:, None])  # d theta / d weighted residual [SI]
-    share = (u * objective.measured_hz / objective.sigma) ** 2
-    covariance = (gain * share[None, :]) @ gain.T
+    covariance = row_scatter_covariance(objective, e, (u * objective.measured_hz / objective.sigma) ** 2)
     if budget is None:
         p = len(result.parameters)
         budget = Budget(result.parameters, (), result.uncertainty.std.copy(), np.zeros((p, 0)))

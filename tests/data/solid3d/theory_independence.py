@@ -49,10 +49,7 @@ def freed(case: dict, model) -> list[Parameter]:
 
 def case_shifts(name: str, errors_pct: list[float]) -> dict:
     """Per scored property: (shift / theory std, shift / measurement std)."""
-    case = bd.load(name)
-    rng, noise = bd._case_rng(name)
-    start = bd.start_model(case, rng)
-    data = bd.measurements(case, start, noise, rng)
+    case, _, data = bd.case_start(name)
     model = bd.truth_model(case, "layerwise")
     wanted = bd._wanted(case, bd.truth_model(case))
     parameters = freed(case, model)
