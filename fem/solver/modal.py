@@ -42,18 +42,20 @@ def _first_bending_estimate(coefficients: np.ndarray, mass_per_area: float, span
 
 
 def _transposed_solve(factor: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """U^-T x for the upper band factor U of K - sigma M = U^T U (Fortran-ordered).
-
-    Both triangular solves run as forward substitutions, the fast direction of the BLAS
-    band kernel (a back substitution takes 2-3x longer on one vector)."""
+    """U^-T x for the upper band factor U of K - sigma M = U^T U (Fortran-ordered)."""
     return sla.blas.dtbsv(factor.shape[0] - 1, factor, x, lower=0, trans=1)
 
 
-def _solve(reversed_factor: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """U^-1 x, as a forward substitution on the reversed DOF order: J U J is lower
-    triangular, with band storage U[::-1, ::-1] (``reversed_factor``)."""
-    band = reversed_factor.shape[0] - 1
-    return sla.blas.dtbsv(band, reversed_factor, x[::-1].copy(), lower=1, trans=0)[::-1]
+def _solve(factor: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """U^-1 x: a back substitution on the band factor itself.
+
+    It was once a forward substitution on a reversed copy of the factor (measured then as
+    the BLAS band kernel's fast direction); with OpenBLAS 0.3.30 the back substitution
+    gives the same numbers bit for bit and is as fast (measured beside two other jobs:
+    12,240 DOFs, semi-bandwidth 683, 3.0-4.5 ms against 3.9-8.7 ms; 17,680 DOFs 9.6-9.9
+    against 9.7-10.3 ms; 2,856 DOFs 0.15 ms each), while the copy cost a factor's memory
+    (64-133 MB) and 34-171 ms a layerwise solve."""
+    return sla.blas.dtbsv(factor.shape[0] - 1, factor, x, lower=0, trans=0)
 
 
 def _columns(solve, factor: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -198,7 +200,6 @@ def solve_modes(
         raise ModelError(
             "the stiffness matrix is not positive semi-definite: check the material values and units"
         ) from exc
-    reversed_factor = np.asfortranarray(factor[::-1, ::-1])  # pbtrf's factor is Fortran-ordered already
     # Standard form: C = U^-T M U^-1 has the eigenvectors psi = U phi with eigenvalues
     # 1 / (omega^2 - sigma), so one M product and two triangular solves per Lanczos step
     # (the generalised shift-invert mode takes three M products).  A zero-energy field r
@@ -218,9 +219,7 @@ def solve_modes(
     transformed_mass = spla.LinearOperator(
         (n_dofs, n_dofs),
         dtype=float,
-        matvec=lambda x: deflate(
-            _transposed_solve(factor, (mass @ _solve(reversed_factor, deflate(x))[rank])[order])
-        ),
+        matvec=lambda x: deflate(_transposed_solve(factor, (mass @ _solve(factor, deflate(x))[rank])[order])),
     )
     start = deflate(np.random.default_rng(0).standard_normal(n_dofs))
     try:
@@ -229,7 +228,7 @@ def solve_modes(
         _, psi = spla.eigsh(transformed_mass, k=k, which="LA", v0=start, tol=1e-8)
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
-    phi = (blocks.solve(psi) if blocks else _columns(_solve, reversed_factor, psi))[rank]
+    phi = (blocks.solve(psi) if blocks else _columns(_solve, factor, psi))[rank]
     phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
     lam = np.einsum("ij,ij->j", phi, stiffness @ phi)
     order = np.argsort(lam)
