@@ -118,23 +118,36 @@ class UnitMatrices:
         node_start = per_node * per_node * np.concatenate([[0], np.cumsum(neighbours)[:-1]])
         # slot of entry (element, corner a, field i, corner b, field j), in the element's local order
         block = node_start[first_of_pair] + rank[pair_of_entry.reshape(key.shape)] * per_node
-        row_length = (neighbours[first_of_pair] * per_node).reshape(n_elements, corners, 1, corners, 1)
-        field = np.arange(per_node)
-        slot = (
-            block.reshape(n_elements, corners, 1, corners, 1) + field[:, None, None] * row_length + field
-        ).ravel()
         nnz = int(per_node * per_node * neighbours.sum())
         lengths = np.repeat(neighbours * per_node, per_node)
         indptr = np.concatenate([[0], np.cumsum(lengths)])
+        field = np.arange(per_node)
         node_columns = (column_node[:, None] * per_node + field).ravel()
         rows_node = np.repeat(np.arange(self.n_dofs) // per_node, lengths)
         within = np.arange(nnz) - np.repeat(indptr[:-1], lengths)
-        columns = node_columns[first_pair[rows_node] * per_node + within]
+        columns = node_columns[first_pair[rows_node] * per_node + within].astype(np.int32)
+        del rows_node, within
+        # The aggregation as a CSC matrix built in place: its column (size g, local entry j)
+        # holds the slots of entry j of every element of size g, in element order; the
+        # conversion to CSR sorts each row's columns, which is the order its sums run in.
+        # (A COO matrix of (slot, local) pairs gives the same CSR with twice the transient
+        # memory: 759 MB against a 209 MB result on a 17,680-DOF layerwise mesh.)
+        index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
+        block = block.astype(index).reshape(n_elements, corners, 1, corners, 1)
+        row_length = (neighbours[first_of_pair] * per_node).astype(index).reshape(block.shape)
+        offsets = field.astype(index)[:, None, None] * row_length + field.astype(index)
         group = self.mesh.size_groups[1]
-        local = (group[:, None] * n_local * n_local + np.arange(n_local * n_local)).ravel()
-        aggregate = sp.csr_matrix(
-            (np.ones(slot.size), (slot, local)), shape=(nnz, len(self.elements) * n_local * n_local)
+        counts = np.bincount(group, minlength=len(self.elements))
+        slots = np.concatenate(
+            [  # the slots of each size's elements, local entry major
+                (block[members] + offsets[members]).reshape(len(members), n_local * n_local).T.ravel()
+                for members in (np.flatnonzero(group == g) for g in range(len(self.elements)))
+            ]
         )
+        column_starts = np.concatenate([[0], np.cumsum(np.repeat(counts, n_local * n_local))])
+        aggregate = sp.csc_matrix(
+            (np.ones(slots.size), slots, column_starts), shape=(nnz, len(self.elements) * n_local * n_local)
+        ).tocsr()
         return columns.astype(np.int32), indptr.astype(np.int32), aggregate
 
     @cached_property

@@ -179,9 +179,9 @@ def solve_modes(
         rigid = all_rigid @ combos[:, ~held]
     else:
         rigid = all_rigid
-        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (
-            abs(stiffness).max() * np.linalg.norm(rigid, axis=0)
-        )
+        # the largest |K_ij| from the data (abs(stiffness) would copy the whole matrix)
+        largest = max(stiffness_data.max(), -stiffness_data.min())
+        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (largest * np.linalg.norm(rigid, axis=0))
         if leak.max() > RIGID_LEAK:
             raise ModelError(
                 f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free "
@@ -191,7 +191,8 @@ def solve_modes(
     if k >= n_dofs // 2:
         raise ModelError(f"mesh too coarse: {n_dofs} DOFs for {n_modes} elastic modes; refine the mesh")
     sigma = -0.1 * shift_scale
-    shifted = stiffness_data - sigma * mass_data
+    shifted = mass_data * -sigma  # K - sigma M, one array of temporaries fewer
+    shifted += stiffness_data
     try:
         factor = sla.cholesky_banded(
             units.banded(shifted), lower=False, overwrite_ab=True, check_finite=False
