@@ -137,18 +137,20 @@ class UnitMatrices:
         row_length = (neighbours[first_of_pair] * per_node).astype(index).reshape(block.shape)
         offsets = field.astype(index)[:, None, None] * row_length + field.astype(index)
         group = self.mesh.size_groups[1]
-        counts = np.bincount(group, minlength=len(self.elements))
+        sizes = [np.flatnonzero(group == g) for g in range(len(self.elements))]  # each size's elements
         slots = np.concatenate(
-            [  # the slots of each size's elements, local entry major
+            [  # local entry major
                 (block[members] + offsets[members]).reshape(len(members), n_local * n_local).T.ravel()
-                for members in (np.flatnonzero(group == g) for g in range(len(self.elements)))
+                for members in sizes
             ]
         )
-        column_starts = np.concatenate([[0], np.cumsum(np.repeat(counts, n_local * n_local))])
+        column_starts = np.concatenate(
+            [[0], np.cumsum(np.repeat([len(m) for m in sizes], n_local * n_local))]
+        )
         aggregate = sp.csc_matrix(
             (np.ones(slots.size), slots, column_starts), shape=(nnz, len(self.elements) * n_local * n_local)
         ).tocsr()
-        return columns.astype(np.int32), indptr.astype(np.int32), aggregate
+        return columns, indptr.astype(np.int32), aggregate
 
     @cached_property
     def stiffness_data(self) -> np.ndarray:
