@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from fem.elements import HermitePlate, LayerwisePlate, ShearDifferencePlate
 from fem.laminates.laminate import VOIGT_PAIRS
-from fem.solver.assembly import UnitMatrices
+from fem.solver.assembly import SHARED_ONES, UnitMatrices
 from fem.solver.mesh import PlateMesh
 
 
@@ -69,3 +69,29 @@ def test_pattern_assembles_the_scattered_element_matrices():
         dense[np.ix_(dofs, dofs)] += stiffness[group[e]]
     assembled = units.matrix(units.stiffness_data[unit]).toarray()
     np.testing.assert_allclose(assembled, dense, rtol=0, atol=1e-12 * np.abs(dense).max())
+
+
+def test_aggregations_share_one_read_only_array_of_ones():
+    """Every aggregation's data is a view of the shared ones (``SharedOnes``): read-only,
+    not counted in a unit set's bytes, and summing to the bit as an array of its own
+    would, for real and complex vectors and a dense block (how ``combined_data``,
+    damping's complex weights and ``stiffness_data`` use it)."""
+    small = UnitMatrices(MESHES["equal"], ShearDifferencePlate)
+    units = UnitMatrices(MESHES["graded"], LayerwisePlate.with_groups(3, 1))
+    aggregate, other = units._pattern[2], small._pattern[2]
+    assert SHARED_ONES.holds(aggregate.data) and SHARED_ONES.holds(other.data)
+    assert not aggregate.data.flags.writeable and aggregate.data.all()
+    with pytest.raises(ValueError, match="read-only"):
+        aggregate.data[0] = 2.0
+    own = sp.csr_matrix((np.ones(aggregate.nnz), aggregate.indices, aggregate.indptr), shape=aggregate.shape)
+    assert not SHARED_ONES.holds(own.data)
+    shared = units.nbytes
+    units.__dict__["_pattern"] = (*units._pattern[:2], own)
+    assert units.nbytes == shared + own.data.nbytes
+    rng = np.random.default_rng(7)
+    n = aggregate.shape[1]
+    real = rng.standard_normal(n) * 10.0 ** rng.integers(-8, 8, n)
+    for operand in (real, real - 1j * rng.standard_normal(n), rng.standard_normal((n, 5))):
+        product = aggregate @ operand
+        assert product.dtype == operand.dtype
+        np.testing.assert_array_equal(product, own @ operand)
