@@ -2,7 +2,7 @@
 
 The cases are ``tests/data/solid3d/blind/*.json`` (made by ``tests/data/solid3d/blind.py``:
 CalculiX C3D20R full-plate models with misaligned plies, a sensor on half of them, soft
-bond lines; 10 flexural modes per configuration) in three series and four halves
+bond lines; 10 flexural modes per configuration) in four series and five halves
 (``HALVES``, ``blind/index.json``):
 
 - 'dev': the first series (blind01-24: thick hybrid laminates, cross-plies, foam-core
@@ -10,7 +10,9 @@ bond lines; 10 flexural modes per configuration) in three series and four halves
 - 'heldout': the second series (blind25-36, the same families), held out;
 - 'dev3', 'heldout3': the third series (blind37-96), families the first two never drew
   (``balsa_sandwich``, ``thick_skins``, ``coating``, ``angle_ply`` and ``sensor``, a
-  sensor on every one of these stacks), split per family 6 and 6.
+  sensor on every one of these stacks), split per family 6 and 6;
+- 'heldout4': the fourth series (blind97-126), the third's families drawn again, 6 a
+  family, held out whole (drawn after heldout3 had been run).
 
 ``--half`` takes a half or a union of them (``SELECTIONS``: 'both' = dev + heldout,
 'both3' = dev3 + heldout3, 'all').
@@ -46,7 +48,7 @@ the summary's figures per family (``summary``: ``families`` in the JSON).
 13 x 11 grid, ``tests/data/solid3d/blind_shapes/``) as a SHAPES.csv table whose
 frequencies are those of the case's measurement rows.
 
-    python -m studies.blind_diagnosis [--half dev|heldout|both|dev3|heldout3|both3|all]
+    python -m studies.blind_diagnosis [--half dev|heldout|both|dev3|heldout3|heldout4|both3|all]
                                       [--case NAME] [--out DIR] [--jobs N]
 """
 
@@ -110,8 +112,8 @@ PHYSICS = {
 }
 IN_PLANE = ("E1", "E2", "G12", "nu12")
 #: The halves of ``index.json``: the first two series' development and held-out halves,
-#: and the third series'.
-HALVES = ("dev", "heldout", "dev3", "heldout3")
+#: the third series', and the fourth series (held out whole).
+HALVES = ("dev", "heldout", "dev3", "heldout3", "heldout4")
 #: ``--half`` names for unions of halves (any single half is a name too).
 SELECTIONS = {"both": ("dev", "heldout"), "both3": ("dev3", "heldout3"), "all": HALVES}
 
@@ -682,7 +684,8 @@ def main(argv=None) -> int:
         "--half",
         choices=(*HALVES, *SELECTIONS),
         default="dev",
-        help="dev, heldout (blind01-36), dev3, heldout3 (the third series, blind37-96), or a "
+        help="dev, heldout (blind01-36), dev3, heldout3 (the third series, blind37-96), "
+        "heldout4 (the fourth, blind97-126), or a "
         "union: both (dev + heldout), both3 (dev3 + heldout3), all",
     )
     parser.add_argument("--case", action="append", help="run only these cases")
