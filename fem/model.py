@@ -21,7 +21,7 @@ from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, at
 from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
-from .solver.mode_shapes import beam_coefficients, in_plane, label_of
+from .solver.mode_shapes import beam_coefficients, in_plane, label_of, nodal_line_counts
 from .solver.sensitivity import (
     ModalEnergies,
     eigenvalue_derivatives,
@@ -180,6 +180,14 @@ class LaminateSolution:
             "in-plane" if in_plane(self.units, s) else label_of(c)
             for s, c in zip(self.modes.shapes.T, self.shape_coefficients)
         )
+
+    @cached_property
+    def nodal_lines(self) -> np.ndarray:
+        """The nodal lines each mode crosses along x and along y, as a lab counts them on
+        the plate (``fem.solver.mode_shapes.nodal_line_counts``): (modes, 2), -1 for an
+        in-plane mode."""
+        counts = nodal_line_counts(self.units, self.modes.shapes)
+        return np.where((np.asarray(self.labels) == "in-plane")[:, None], -1, counts)
 
     def coefficient_derivatives(self, kinds) -> tuple[np.ndarray, np.ndarray]:
         """dX/dp and dI/dp of the laminate parameters ``kinds`` ((kind, target) pairs): the

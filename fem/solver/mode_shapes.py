@@ -12,6 +12,11 @@ A mode's label names its dominant product by the nodal lines crossed along x and
 y, "(i,j)", as before; a mode that mixes two products about equally (the square plate's
 ring and X modes, (2,0) + (0,2) and (2,0) - (0,2)) is labelled with both and the sign
 that tells them apart.  Beam functions are signed so that phi_k(0) > 0.
+
+A lab labels a mode the other way, by counting on the plate the nodal lines its
+deflection crosses along x and along y (``nodal_line_counts``).  The two readings agree on
+clean modes and part where a mode's lines bend: a skewed or curved line is one crossing
+to the lab but spreads over several beam-function products.
 """
 
 from __future__ import annotations
@@ -40,6 +45,10 @@ MIXED = 0.35
 #: shape: the share of a mixed label's second term (``MIXED`` of the first), so that both
 #: members of a mixed pair carry the label of either term.
 LABEL_SHARE = MIXED / (1 + MIXED)
+#: Nodal lines are counted where the deflection is clear of them: signs are read where
+#: |w| exceeds this fraction of the mode's largest (nearer a line, the interpolation and
+#: a measurement's noise flip them).
+NODAL_CLEAR = 0.05
 #: Free-free beam eigenvalues beta L of the first bending modes (then (2n + 1) pi / 2).
 _BETA = (4.730040745, 7.853204624, 10.995607838, 14.137165491, 17.278759657)
 
@@ -126,6 +135,29 @@ def beam_coefficients(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
     return c / np.where(norm > 0, norm, 1.0)[:, None, None]
 
 
+def _sign_changes(signs: np.ndarray) -> np.ndarray:
+    """Sign changes along axis 1 of signs (lines, points, modes) in {-1, 0, 1}, zeros
+    skipped: (lines, modes)."""
+    n = signs.shape[1]
+    at = np.where(signs != 0, np.arange(n)[None, :, None], -1)
+    before = np.concatenate([np.full_like(at[:, :1], -1), np.maximum.accumulate(at, axis=1)[:, :-1]], axis=1)
+    previous = np.where(before >= 0, np.take_along_axis(signs, np.maximum(before, 0), axis=1), 0)
+    return np.sum((signs != 0) & (previous != 0) & (signs != previous), axis=1)
+
+
+def nodal_line_counts(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
+    """The nodal lines each mode's deflection crosses along x and along y, as a lab counts
+    them: (modes, 2) ints.  Signs of w on the Gauss grid where |w| > ``NODAL_CLEAR`` of
+    the mode's largest, sign changes per grid line, the median (rounded down) over the
+    lines."""
+    w = (deflection_sampler(units) @ shapes).reshape(POINTS, POINTS, -1)  # (x, y, mode)
+    peak = np.abs(w).max(axis=(0, 1))
+    signs = np.where(np.abs(w) > NODAL_CLEAR * peak, np.sign(w), 0).astype(np.int8)
+    along_x = _sign_changes(np.transpose(signs, (1, 0, 2)))  # lines of constant y
+    along_y = _sign_changes(signs)
+    return np.floor(np.stack([np.median(along_x, axis=0), np.median(along_y, axis=0)], axis=1)).astype(int)
+
+
 def in_plane(units: UnitMatrices, shape: np.ndarray) -> bool:
     """True for a mode whose in-plane motion outweighs its deflection."""
     nodal = shape.reshape(units.mesh.n_nodes, -1)
@@ -168,6 +200,15 @@ def pattern(label: str, order: int = ORDER) -> np.ndarray | None:
     return out / np.linalg.norm(out)
 
 
+def single_term(label: str) -> tuple[int, int] | None:
+    """(i, j) of a label '(i,j)' with one term, None for a mixed or malformed label."""
+    match = _LABEL.match(label)
+    if not match or match.group(1):
+        return None
+    ((i, j),) = _TERM.findall(label)
+    return int(i), int(j)
+
+
 def affinity(coefficients: np.ndarray, label_pattern: np.ndarray) -> np.ndarray:
     """How well each mode (coefficients (m, order, order)) shows a labelled pattern: the
     squared cosine between them, 0..1 (a MAC on the beam-function basis)."""
@@ -191,6 +232,9 @@ __all__ = [
     "pattern",
     "affinity",
     "label_shares",
+    "nodal_line_counts",
+    "single_term",
     "ORDER",
+    "NODAL_CLEAR",
     "LABEL_SHARE",
 ]

@@ -1,10 +1,12 @@
 """Pairing measured modes with model modes, and tracking them through the updating.
 
 At the start a measured mode is paired with the model mode of the same rank, or of the
-same nodal-line label when the measurements give one.  After every update the paired
-model modes are followed by their shapes: the new model modes are assigned to the
-previous ones by the modal assurance criterion (MAC, mass-weighted), with an optimal
-one-to-one assignment, so two close modes that swap order keep their measured partners.
+same nodal-line label when the measurements give one (a model mode that holds the
+label's pattern of beam products, or whose nodal lines a lab would count as the label).
+After every update the paired model modes are followed by their shapes: the new model
+modes are assigned to the previous ones by the modal assurance criterion (MAC,
+mass-weighted), with an optimal one-to-one assignment, so two close modes that swap order
+keep their measured partners.
 
 A measured mode shape (roving hammer, laser vibrometer) pins its mode as a label does,
 more surely: the model modes it permits are those it resembles at the measured points
@@ -23,7 +25,7 @@ from scipy.optimize import linear_sum_assignment
 
 from fem.errors import MeasurementError
 from fem.solver.modal import Modes
-from fem.solver.mode_shapes import LABEL_SHARE, deflection_operator, label_shares
+from fem.solver.mode_shapes import LABEL_SHARE, deflection_operator, label_shares, single_term
 
 from ..measurements import ModeShape
 
@@ -93,11 +95,12 @@ def shape_permits(solution, shape: ModeShape) -> tuple[np.ndarray, np.ndarray]:
 
 
 def permits(solution, labels, shapes) -> tuple[np.ndarray | None, np.ndarray | None, list[str]]:
-    """Which model modes each measured row may pair with, by its label and its measured
-    shape: (rows, modes) bool and the affinity that breaks ties (the shape's MAC, else the
-    label's share), both None when no row has either; and a note for every shape that
-    permits no mode (that row is then left free: a shape that fits nothing says nothing
-    of which mode it is)."""
+    """Which model modes each measured row may pair with, by its label (a mode that holds
+    ``LABEL_SHARE`` of its pattern, or, for a label of one term, whose nodal lines a lab
+    would count so) and its measured shape: (rows, modes) bool and the affinity that
+    breaks ties (the shape's MAC, else the label's share), both None when no row has
+    either; and a note for every shape that permits no mode (that row is then left free:
+    a shape that fits nothing says nothing of which mode it is)."""
     if not any(labels) and not any(s is not None for s in shapes):
         return None, None, []
     n_model = len(solution.labels)
@@ -110,6 +113,11 @@ def permits(solution, labels, shapes) -> tuple[np.ndarray | None, np.ndarray | N
         if label:
             affinity[i] = label_shares(solution.shape_coefficients, solution.labels, label)
             allowed[i] = affinity[i] >= LABEL_SHARE
+            counted = single_term(label)
+            if counted is not None:
+                # A lab counts the nodal lines on the plate: a mode whose lines it would
+                # count so is permitted though bent lines spread its pattern.
+                allowed[i] |= np.all(solution.nodal_lines == counted, axis=1)
         if shape is not None:
             by_shape, mac = shape_permits(solution, shape)
             if by_shape.any():

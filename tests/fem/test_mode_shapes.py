@@ -5,7 +5,17 @@ import numpy as np
 import pytest
 
 from fem.model import ModelOptions, SpecimenModel
-from fem.solver.mode_shapes import ORDER, _beta, _gauss, affinity, beam_functions, label_of, pattern
+from fem.solver.mode_shapes import (
+    ORDER,
+    _beta,
+    _gauss,
+    _sign_changes,
+    affinity,
+    beam_functions,
+    label_of,
+    pattern,
+    single_term,
+)
 
 
 def test_beam_functions_are_the_free_free_modes():
@@ -66,3 +76,31 @@ def test_patterns_and_affinity():
     assert label_of(mixed) == "(0,2)-(2,0)"
     for bad in ("ring", "(1,2", "(1,2)*(2,1)", f"({ORDER},0)"):
         assert pattern(bad) is None
+
+
+def test_sign_changes_skip_the_points_near_a_line():
+    """Zeros (points too near a nodal line to read) are skipped, not counted as a sign."""
+    lines = np.array([[1, 1, 0, -1, -1, 0, 0, 1], [0, 0, 1, 0, 1, 1, 0, 0], [-1, 1, -1, 1, 0, 0, 0, 0]])
+    assert _sign_changes(lines[:, :, None])[:, 0].tolist() == [2, 0, 3]
+
+
+@pytest.mark.parametrize(
+    "options", [ModelOptions(modes=20), ModelOptions(modes=12, transverse_shear=True)], ids=["thin", "shear"]
+)
+def test_nodal_lines_count_what_the_pattern_names(paper_specimen, options):
+    """Two independent readings of the paper's square plate agree: on every mode the beam
+    products name with one term, the nodal lines counted on the plate are that term
+    (eight of the first twelve, twelve of the first twenty); the X and ring pairs cross
+    lines both ways; in-plane modes count none."""
+    solution = SpecimenModel(paper_specimen, options).solve("original")
+    counted = [tuple(c) for c in solution.nodal_lines.tolist()]
+    single = [(k, single_term(label)) for k, label in enumerate(solution.labels) if single_term(label)]
+    assert len(single) == (12 if options.modes == 20 else 8)
+    assert all(counted[k] == term for k, term in single)
+    assert counted[1] == counted[2] == (2, 2)
+
+
+def test_single_term_reads_one_term_labels_only():
+    assert single_term("( 3 , 1 )") == (3, 1)
+    for other in ("(0,2)+(2,0)", "(1,3)-(3,1)", "ring", "(1,2"):
+        assert single_term(other) is None

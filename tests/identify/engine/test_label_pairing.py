@@ -1,20 +1,21 @@
 """Pairing labelled measured modes with model modes at the start (``ModePairing.initial``,
 ``permits``): a label goes to the nearest-ranked model mode that holds its pattern,
-a member of a mixed pair included."""
+a member of a mixed pair included, or whose nodal lines a lab would count so."""
 
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from fem.solver.mode_shapes import LABEL_SHARE, ORDER, label_of
+from fem.solver.mode_shapes import LABEL_SHARE, ORDER, label_of, label_shares
 from identify.engine.pairing import ModePairing, permits
 from studies import blind_diagnosis
 
 
-def _solution(patterns: list[dict], in_plane=()) -> SimpleNamespace:
+def _solution(patterns: list[dict], in_plane=(), nodal_lines=None) -> SimpleNamespace:
     """A stand-in solution whose mode k has beam-basis shares ``patterns[k]`` ({(i, j): share});
-    the modes ``in_plane`` are labelled so."""
+    the modes ``in_plane`` are labelled so; nodal lines counted as the dominant pattern's
+    unless ``nodal_lines`` ({k: (nx, ny)}) says otherwise."""
     coefficients = np.zeros((len(patterns), ORDER, ORDER))
     for k, shares in enumerate(patterns):
         for term, share in shares.items():
@@ -22,7 +23,11 @@ def _solution(patterns: list[dict], in_plane=()) -> SimpleNamespace:
     n = len(patterns)
     modes = SimpleNamespace(eigenvalues=np.arange(1.0, n + 1), shapes=np.eye(n))
     labels = tuple("in-plane" if k in in_plane else label_of(c) for k, c in enumerate(coefficients))
-    return SimpleNamespace(modes=modes, shape_coefficients=coefficients, labels=labels)
+    counts = np.array([max(shares, key=shares.get) for shares in patterns])
+    for k, lines in (nodal_lines or {}).items():
+        counts[k] = lines
+    counts[list(in_plane)] = -1
+    return SimpleNamespace(modes=modes, shape_coefficients=coefficients, labels=labels, nodal_lines=counts)
 
 
 #: Ten modes of distinct pure patterns, then a sensor-mixed pair at ranks 10 and 12.
@@ -95,3 +100,33 @@ def test_blind33_sensor_mixed_mode_pairs_at_its_rank():
     pairing = ModePairing.initial("original", solution, list(range(1, 11)), [""] * 9 + ["(3,2)"])
     assert pairing.indices[9] == 9
     assert solution.frequencies_hz[9] == pytest.approx(modes[9]["frequency_hz"], rel=0.005)
+
+
+def test_a_mode_counted_as_the_label_is_permitted_though_its_pattern_is_spread():
+    """A mode whose nodal lines bend spreads its deflection over several beam products
+    (none holds ``LABEL_SHARE`` of the label's), but a lab counting its lines reads the
+    label: the count permits it.  A mixed label is read by its pattern only."""
+    pure = [(1, 3) if t == (3, 1) else t for t in _PURE]
+    patterns = [{t: 1.0} for t in pure] + [{(2, 3): 0.45, (3, 0): 0.35, (3, 1): 0.2}, {(3, 1): 1.0}]
+    solution = _solution(patterns, nodal_lines={9: (3, 1)})
+    assert solution.shape_coefficients[9][3, 1] ** 2 < LABEL_SHARE, "precondition: the share alone forbids it"
+    allowed = permits(solution, ["(3,1)", "(1,3)+(3,1)"], [None, None])[0]
+    assert np.flatnonzero(allowed[0]).tolist() == [9, 10]
+    assert np.flatnonzero(allowed[1]).tolist() == [7, 10]
+    pairing = ModePairing.initial("original", solution, list(range(1, 11)), [""] * 9 + ["(3,1)"])
+    assert pairing.indices[9] == 9
+
+
+def test_blind08_bent_mode_pairs_with_its_shape_partner():
+    """The real case (development blind08, a thick cross-ply, first-order shear at the
+    true values): the 3-D mode 10, labelled (3,1) by its nodal lines, resembles the plate
+    model's mode 10 most (the generator's MAC partner), whose pattern the beam products
+    read as '(2,3)+(3,0)' but whose lines count (3,1); the share alone sent it to mode 11."""
+    case = blind_diagnosis.load("blind08_cross_ply")
+    modes = case["configurations"][0]["modes"]
+    assert (modes[9]["label"], modes[9]["plate_mode"]) == ("(3,1)", 10)
+    solution = blind_diagnosis.truth_model(case).with_options(modes=14).solve("original")
+    assert solution.nodal_lines[9].tolist() == [3, 1]
+    assert label_shares(solution.shape_coefficients, solution.labels, "(3,1)")[9] < LABEL_SHARE
+    pairing = ModePairing.initial("original", solution, list(range(1, 11)), [""] * 9 + ["(3,1)"])
+    assert pairing.indices[9] == 9
