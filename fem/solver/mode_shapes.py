@@ -125,11 +125,16 @@ def deflection_sampler(units: UnitMatrices) -> sp.csr_matrix:
 _SAMPLERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+def _grid_deflection(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
+    """Each mode's w on the Gauss grid of the plate: (x, y, mode)."""
+    return (deflection_sampler(units) @ shapes).reshape(POINTS, POINTS, -1)
+
+
 def beam_coefficients(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
     """Coefficients c[m, i, j] of each mode's deflection on phi_i(x) psi_j(y), normalised
     to unit length per mode (shares c^2 sum to 1 over the basis)."""
     _, weight, phi = _gauss()
-    w = (deflection_sampler(units) @ shapes).reshape(POINTS, POINTS, -1)  # (x, y, mode)
+    w = _grid_deflection(units, shapes)
     c = np.einsum("xym,ix,jy->mij", w, phi * weight, phi * weight, optimize=True)
     norm = np.sqrt(np.sum(c**2, axis=(1, 2)))
     return c / np.where(norm > 0, norm, 1.0)[:, None, None]
@@ -150,7 +155,7 @@ def nodal_line_counts(units: UnitMatrices, shapes: np.ndarray) -> np.ndarray:
     them: (modes, 2) ints.  Signs of w on the Gauss grid where |w| > ``NODAL_CLEAR`` of
     the mode's largest, sign changes per grid line, the median (rounded down) over the
     lines."""
-    w = (deflection_sampler(units) @ shapes).reshape(POINTS, POINTS, -1)  # (x, y, mode)
+    w = _grid_deflection(units, shapes)
     peak = np.abs(w).max(axis=(0, 1))
     signs = np.where(np.abs(w) > NODAL_CLEAR * peak, np.sign(w), 0).astype(np.int8)
     along_x = _sign_changes(np.transpose(signs, (1, 0, 2)))  # lines of constant y
