@@ -134,7 +134,6 @@ N_CASES_3 = PER_FAMILY_3 * len(FAMILIES_3)
 #: cases each (blind97-blind126), all held out ('heldout4'): no rule was written from them.
 SEED_4 = 20_2031
 PER_FAMILY_4 = 6
-N_CASES_4 = PER_FAMILY_4 * len(FAMILIES_3)
 #: A sensor's square base on a sandwich: this side [mm] plus 1 mm per gram of its mass.
 SENSOR_BASE_MM = 5.0
 #: Elements across each side of a sensor's base in the solid model, per thickness factor of
