@@ -519,7 +519,7 @@ class AddedEffect:
     implausible: tuple[str, ...] = ()
     error: str = ""
     seconds: float = 0.0
-    pruned: bool = False  # not refitted: another effect explained clearly more (``prune_below``)
+    pruned: bool = False  # not refitted: its bound is short of ``prune_below`` (``PruneBelow``)
     held: tuple[Parameter, ...] = ()  # shear moduli held because they ran out (``_held_shear``)
     applicable: bool = True  # False: the effect has nothing to act on in this spec
     # the fit the refit contains where that is not the state: the state with rotary
@@ -957,13 +957,24 @@ class Refitting:
         return with_damping(with_causes(with_budget(result)))
 
 
+@dataclass(frozen=True)
+class PruneBelow:
+    """A candidate is not refitted when ``RefitPolicy.prune_factor`` x its linearised bound
+    (``Prepared.bound``) is below ``chi2``, a reduction of the weighted sum of squares:
+    ``of`` says whose (what another candidate of the round explained, or what this one
+    must explain to pay for itself)."""
+
+    chi2: float
+    of: str = "another effect explained in this round"
+
+
 def add_effect(
     refit: Refit,
     kind: str,
     hints=(),
     *,
     prepared: Prepared | None = None,
-    prune_below: float | None = None,
+    prune_below: PruneBelow | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> AddedEffect:
     """``refit.state`` (a finished fit, its effects on) refitted with effect ``kind``
@@ -971,8 +982,8 @@ def add_effect(
     (``prepare_effect``, unless ``prepared`` is given): it decides which transverse shear
     moduli to free and, when the augmented sensitivity matrix is singular, the refit is not
     run.  ``hints``: point-mass start positions from the residual scan; ``prune_below``: a
-    reduction of the weighted sum of squares another candidate achieved: a refit whose
-    bound does not come within ``refit.policy.prune_factor`` of it is not run.  The estimates'
+    refit whose bound does not come within ``refit.policy.prune_factor`` of it is not run
+    (``PruneBelow``).  The estimates'
     plausibility is judged against ``refit.nominal``; a point mass's refits from its
     several starts run side by side in ``refit.pool``."""
     started = time.perf_counter()
@@ -997,7 +1008,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
         )
     factor = refit.policy.prune_factor
-    if prune_below is not None and factor * ready.bound < prune_below:
+    if prune_below is not None and factor * ready.bound < prune_below.chi2:
         return AddedEffect(
             kind,
             None,
@@ -1007,7 +1018,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             pruned=True,
             error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
             f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
-            f"{factor:g} of the {prune_below:.4g} another effect explained in this round",
+            f"{factor:g} of the {prune_below.chi2:.4g} {prune_below.of}",
         )
     base = list(ready.base)
     refit = replace(
@@ -1639,6 +1650,7 @@ __all__ = [
     "prepare_effect",
     "AddedEffect",
     "Prepared",
+    "PruneBelow",
     "with_determined_shear",
     "spec_start",
     "restarted_from_spec",

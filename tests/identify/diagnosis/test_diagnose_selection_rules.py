@@ -224,7 +224,7 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 
     def refit(job):
         kind, below = job["kind"], job["prune_below"]
-        if below is not None and 2.0 * bounds[kind] < below:
+        if below is not None and 2.0 * bounds[kind] < below.chi2:
             return AddedEffect(kind, None, pruned=True)
         refitted.append(kind)
         statistics = SimpleNamespace(
@@ -395,15 +395,17 @@ def test_the_refit_policy_is_read_not_the_module_defaults():
     """The pruning rule reads the refit context's ``RefitPolicy``: a candidate whose
     linearised bound is 1/1.5 of what another explained is kept by the default factor 2
     (2/1.5 > 1) but pruned by a policy of factor 0.5, and the note states the factor used."""
-    from identify.fitting.driver import REFIT_POLICY, Prepared, RefitPolicy
+    from identify.fitting.driver import REFIT_POLICY, Prepared, PruneBelow, RefitPolicy
 
     prepared = Prepared("orientation", None, (), (), SimpleNamespace(singular=False), (), 100.0)
     strict = Refit(None, None, None, policy=RefitPolicy(prune_factor=0.5))
-    added = add_effect(strict, "orientation", prepared=prepared, prune_below=150.0)
+    added = add_effect(strict, "orientation", prepared=prepared, prune_below=PruneBelow(150.0))
     assert added.pruned and "less than 1/0.5 of the 150" in added.error
     assert REFIT_POLICY.prune_factor * prepared.bound >= 150.0  # the default would refit it
     default = Refit(None, None, None)
-    assert add_effect(default, "orientation", prepared=prepared, prune_below=300.0).pruned  # 2 x 100 < 300
+    assert add_effect(
+        default, "orientation", prepared=prepared, prune_below=PruneBelow(300.0)
+    ).pruned  # 2 x 100 < 300
     # The iteration budget too: a context built with a policy and no options iterates as
     # the policy says, the default context as the documented default.
     assert Refit(None, None, None, policy=RefitPolicy(effect_iterations=7)).options.max_iterations == 7
@@ -426,3 +428,28 @@ def test_the_default_policies_are_the_documented_ones():
     shown = {f.name: getattr(policy, f.name) for f in fields(policy) if f.name != "refits"}
     shown |= {f"refits.{f.name}": getattr(policy.refits, f.name) for f in fields(policy.refits)}
     assert documented == pytest.approx(shown)
+
+
+def test_at_the_noise_level_only_a_candidate_that_could_pay_is_refitted():
+    """A state at the noise level still runs a round (blind86: layerwise at 1.18 x the
+    scatter, the sensor's point mass then gains 14 / c), but a candidate is refitted only
+    where 2 x its linearised bound reaches what it must explain to pay: ``min_gain`` + k
+    ln n (c at its least, 1), here 10 + 3 ln 30 = 20.2 for a point mass's three
+    parameters; what another candidate explained prunes as before when it is larger."""
+    from identify.fitting.driver import Prepared
+
+    state = SimpleNamespace(statistics=SimpleNamespace(n=30, sum_squares=42.0))
+    at_noise = diagnose_module.Round(Refit(state, None, None), (), must_pay=True)
+    added = tuple(Parameter(k, "point_mass") for k in ("mass", "x", "y"))
+    check = SimpleNamespace(singular=False)
+    weak = Prepared("point_mass", None, (), added, check, (), 9.0)  # 2 x 9 = 18 < 20.2
+    floor = at_noise.job(weak, None)["prune_below"]
+    assert floor.chi2 == pytest.approx(10 + 3 * np.log(30))
+    pruned = add_effect(at_noise.refit, "point_mass", prepared=weak, prune_below=floor)
+    assert pruned.pruned and pruned.result is None
+    assert "less than 1/2 of the 20.2 it must explain to pay for itself at the noise level" in pruned.error
+    assert "after 3 ln 30" in pruned.error
+    # a larger reduction another candidate explained is the stricter test, as in any round
+    assert at_noise.job(weak, 100.0)["prune_below"].chi2 == 100.0
+    # away from the noise level nothing prunes before a candidate has paid
+    assert diagnose_module.Round(Refit(state, None, None), ()).job(weak, None)["prune_below"] is None
