@@ -22,13 +22,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import wraps
 
-#: The budget of the modal-solve cache [bytes]: about 50 solves of a long plate with
+#: The budget of the modal-solve cache [bytes]: about 25 solves of a long plate with
 #: shear, thousands of a thin one.  What a fit reuses is recent (a trial's sensitivities,
-#: the next refit's start): a thick-plate refit of a long spruce plate's peak list hits the
-#: cache as often at 256 MiB as at 1 GiB (259 hits, 128 misses, the same 151 s), and its
-#: process peaks at 1.56 GB instead of 1.78 GB; the plate's diagnosis at 2.29 GB instead
-#: of 2.98 GB, with the same answer (391 s alone).
-SOLVE_CACHE_BYTES = 1 << 28
+#: the next refit's start).  At 256 MiB against 1 GiB a thick-plate refit of a long spruce
+#: plate's peak list hit as often (259 hits, 128 misses, the same 151 s) and peaked at
+#: 1.56 GB instead of 1.78 GB.  At 128 MiB against 256 MiB, run side by side: that refit
+#: gives the same document, 493 hits / 253 misses against 495 / 251, 401 s against 398 s,
+#: 1.40 GB against 1.54 GB; blind25's diagnosis the same row, 1254 / 564 both, 297 s
+#: against 294 s, 2.53 GB against 2.66 GB.
+SOLVE_CACHE_BYTES = 1 << 27
 
 #: The budget of the unit-matrix cache [bytes]: the meshes one fit works on.  A layerwise
 #: unit set is 150-190 MB (15,708-20,592 DOFs; its aggregation's ones are shared,
