@@ -801,7 +801,6 @@ def diagnose(
     peak_list = measurements
     refitting = Refitting.from_baseline(model, peak_list, baseline, policy.refits)
     state, selected, steps, closed = baseline, [], [], set()
-    at_noise_level = False  # the state's misfit is consistent with the scatter
     # refinement -> (round, chi^2 it explained beyond, of what)
     margins: dict[str, tuple[int, float, str]] = {}
     pool = None
@@ -826,6 +825,11 @@ def diagnose(
             if n_workers > 1 and pool is None:
                 pool = worker_pool(n_workers)
 
+            # At the noise level the chi^2 test no longer rejects the model, but an effect
+            # may still pay for itself (a sensor on a sandwich at 1.18 x the scatter, the
+            # layers 5.7 std off without it: docs/diagnosis.md): the round refits only the
+            # candidates whose bound could pay.  (Not the baseline's: that returned above.)
+            at_noise_level = state.statistics.consistent
             # the candidates' data: a peak list's peaks as the state matched them
             this_round = Round(
                 refitting.refit(state, policy.candidate_options),
@@ -978,11 +982,6 @@ def diagnose(
             )
             selected.append(best)
             state = best.fit
-            # At the noise level the chi^2 test no longer rejects the model, but an effect
-            # may still pay for itself (blind86: a 5.4 g sensor at 1.18 x the scatter, the
-            # layers 5.7 std off without it): the next round refits only the candidates
-            # whose bound could pay.
-            at_noise_level = state.statistics.consistent
     finally:
         if pool is not None:
             pool.shutdown()
