@@ -61,7 +61,7 @@ import re
 import time
 import tomllib
 import traceback
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -705,14 +705,18 @@ def main(argv=None) -> int:
     if args.jobs > 1:
         # One process a case; each solve runs on one BLAS thread (fem.solver.threads).
         try:
+            # Each case is kept as it ends, not in the order of ``names``: a run stopped half
+            # way keeps every case that finished.
             with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-                for o in pool.map(run_case, names):
+                for future in as_completed([pool.submit(run_case, name) for name in names]):
+                    o = future.result()
                     _keep(o, args.out, stored)
                     outcomes.append(o)
         except BrokenProcessPool:
             # A worker killed from outside (the out-of-memory killer: a layerwise diagnosis
             # grew to 14 GB beside another of 10 GB on 23 GB): the unfinished cases are failures.
-            for name in names[len(outcomes) :]:
+            done = {o.case for o in outcomes}
+            for name in (n for n in names if n not in done):
                 case = load(name)
                 o = Outcome(
                     name,
@@ -730,6 +734,7 @@ def main(argv=None) -> int:
             o = run_case(name, progress=say)
             _keep(o, args.out, stored)
             outcomes.append(o)
+    outcomes.sort(key=lambda o: names.index(o.case))
     texts = []
     for half in HALVES:
         part = [o for o in outcomes if o.half == half]

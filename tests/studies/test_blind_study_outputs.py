@@ -89,11 +89,15 @@ def test_the_properties_are_also_scored_in_the_measurements_std_alone():
 def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monkeypatch):
     """The out-of-memory killer took one of two workers (run 8 of the dev half): the study
     still writes its table and summary, the unfinished cases counted as failures."""
+    import threading
+    from concurrent.futures import Future
     from concurrent.futures.process import BrokenProcessPool
 
     class Killed:
+        """The first case submitted ends; the second's process is killed."""
+
         def __init__(self, max_workers):
-            pass
+            self.submitted = 0
 
         def __enter__(self):
             return self
@@ -101,9 +105,18 @@ def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monke
         def __exit__(self, *exc):
             return False
 
-        def map(self, run, names):
-            yield study.Outcome(names[0], "hybrid", "dev", 5e-4, selected=("layerwise",), rms_after=2e-4)
-            raise BrokenProcessPool("a process was terminated abruptly")
+        def submit(self, run, name):
+            future = Future()
+            if self.submitted == 0:
+                future.set_result(
+                    study.Outcome(name, "hybrid", "dev", 5e-4, selected=("layerwise",), rms_after=2e-4)
+                )
+            else:  # killed after the first has ended (a timer: as_completed waits on it)
+                threading.Timer(
+                    0.05, future.set_exception, [BrokenProcessPool("terminated abruptly")]
+                ).start()
+            self.submitted += 1
+            return future
 
     monkeypatch.setattr(study, "ProcessPoolExecutor", Killed)
     names = ["blind04_hybrid", "blind05_cross_ply"]
