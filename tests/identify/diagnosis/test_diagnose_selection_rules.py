@@ -453,3 +453,85 @@ def test_at_the_noise_level_only_a_candidate_that_could_pay_is_refitted():
     assert at_noise.job(weak, 100.0)["prune_below"].chi2 == 100.0
     # away from the noise level nothing prunes before a candidate has paid
     assert diagnose_module.Round(Refit(state, None, None), ()).job(weak, None)["prune_below"] is None
+
+
+def _stats(sum_squares: float, k: int, n: int = 30):
+    """Fit statistics with a stated scatter: chi^2 ``sum_squares``, k parameters, n frequencies."""
+    return SimpleNamespace(
+        scatter_known=True,
+        sum_squares=sum_squares,
+        k=k,
+        n=n,
+        dof=n - k,
+        reduced_chi2=sum_squares / (n - k),
+        bic=sum_squares + k * np.log(n),
+    )
+
+
+def _tried(kind: str, state, sum_squares: float, k: int, implausible=()) -> Candidate:
+    fit = SimpleNamespace(statistics=_stats(sum_squares, k), finished=True, rms_rel_error=1e-3)
+    added = SimpleNamespace(kind=kind, result=fit, implausible=implausible, precheck=None, notes=())
+    return _candidate(state, added)
+
+
+@pytest.mark.parametrize(
+    "case", ["pays", "near_noise", "second_does_not_pay", "nested_skipped", "second_implausible"]
+)
+def test_far_from_the_noise_two_effects_that_pay_only_together_are_taken(monkeypatch, case):
+    """blind08's second round, in figures: layerwise at 0.709 % (reduced chi^2 ~ 400), a
+    point mass and the plies' orientation each take it to 0.64-0.65 %, so each alone loses
+    (gain / c about -6 at c ~ 350), while the oracle with both reaches 0.034 %.  Far from
+    the noise the round's best then has the next other explanation refitted on top of it;
+    when that pays on top and the pair pays over the state, the best is added (the reason
+    says why); near the noise, or when the pair does not pay, or the second is implausible,
+    the round stops as before.  A candidate nested with the best (thick_plate in
+    transverse_shear) is no second explanation."""
+    n, k = 30, 12
+    near = case == "near_noise"
+    state_chi2 = (n - k) * (10.0 if near else 400.0)
+    state = SimpleNamespace(statistics=_stats(state_chi2, k))
+    angles = _tried(
+        "orientation",
+        state,
+        0.84 * state_chi2,
+        k + 2,
+        ("angle 40 deg off the lay-up",) if case == "second_implausible" else (),
+    )
+    if case == "nested_skipped":
+        shear = _tried("transverse_shear", state, 0.82 * state_chi2, k + 2)
+        ordered = [shear, _tried("thick_plate", state, 0.83 * state_chi2, k + 2), angles]
+    else:
+        ordered = [_tried("point_mass", state, 0.82 * state_chi2, k + 3), angles]
+    assert all(c.scaled_gain < SELECTION_POLICY.min_gain for c in ordered)
+    # on top of the best: the misfit falls to 1.5 x the scatter, or only by 5 % more
+    on_top_chi2 = (
+        0.95 * ordered[0].fit.statistics.sum_squares if case == "second_does_not_pay" else 1.5 * (n - k - 5)
+    )
+    tried_on_top = []
+
+    def on_top(round_, kinds, starts=None, free_again=()):
+        tried_on_top.append((round_.state, tuple(kinds)))
+        return [_tried(kinds[0], round_.state, on_top_chi2, k + 5)]
+
+    monkeypatch.setattr(diagnose_module, "_try", on_top)
+    refitting = SimpleNamespace(
+        refit=lambda state, options: Refit(state, None, None, options), hints=lambda state: ()
+    )
+    this_round = diagnose_module.Round(Refit(state, None, None), ())
+    best = ordered[0]
+    reason = diagnose_module._paying_pair(
+        this_round, refitting, best, ordered, [], SELECTION_POLICY, lambda t: None
+    )
+    if near:
+        assert reason is None and not tried_on_top
+        return
+    if case == "second_implausible":
+        assert reason is None and not tried_on_top, "an implausible estimate is no second explanation"
+        return
+    assert tried_on_top == [(best.fit, ("orientation",))], "the second refitted on top of the best"
+    if case == "second_does_not_pay":
+        assert reason is None
+        return
+    assert reason.startswith(f"add {best.kind} for the pair with orientation")
+    pair_gain = (state_chi2 - on_top_chi2) / (on_top_chi2 / (n - k - 5)) - 5 * np.log(n)
+    assert f"the pair pays over this state (gain / c = {pair_gain:.1f})" in reason
