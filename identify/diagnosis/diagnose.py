@@ -1080,9 +1080,8 @@ def diagnose(
     taken_out = ()
     determined = _determined_final(refitting, final, steps, selected, say, policy)
     if determined is not None:
-        final, step = determined
+        final, step, taken_out = determined
         steps.append(step)
-        taken_out = (step.candidates[0].kind,)
     first = steps[0].candidates if steps else ()
     # The answer's std with the selected theory's own error; every decision above read the
     # measurements' scatter alone.
@@ -1106,7 +1105,7 @@ def _determined_final(
     selected: list[Candidate],
     say,
     policy: SelectionPolicy,
-) -> tuple[FitResult, Step] | None:
+) -> tuple[FitResult, Step, tuple[str, ...]] | None:
     """When the final refit does not determine the last selected effect, that effect is
     taken out and the selection before it refitted in full; kept (the new final and a step
     that says why) when that refit is determined.  Not determined: the refit fits the
@@ -1117,7 +1116,15 @@ def _determined_final(
     a sign of the effect.  A candidate's own tests (gain, plausibility, its conditioning
     against its start's) see neither: they are taken before the final refit frees every
     parameter together.  Only with two effects or more selected: without the one, the
-    baseline would be the answer and its misfit is what was to be explained."""
+    baseline would be the answer and its misfit is what was to be explained.
+
+    An undetermined amount is kept, with a step that says so, when the refit without the
+    effect is not consistent with the scatter and the effect pays for itself over it
+    (gain / c above ``min_gain``): the data then need an effect of that kind, only its
+    amount is uncertain with the known inputs' tolerances (blind81: a 2.02 g sensor
+    fitted as 3.43 +- 4.5 g, the misfit 0.216 % without it and 0.083 % with it, 1.5 x the
+    scatter; taken out, a skin's E1 ended 3.54 std off).  Returns (the final refit, the
+    step, the effects taken out)."""
     if final is None or len(selected) < 2:
         return None
     last = selected[-1]
@@ -1140,6 +1147,21 @@ def _determined_final(
             for p, v, sd in zip(final.parameters, final.values, final.uncertainty.std)
             if p in vague
         )
+        needed = _scaled_gain(again, final)
+        if not again.converged and needed > policy.min_gain:
+            reason = (
+                f"keep {last.kind}: the refit with it does not determine its amount ({undetermined}, with "
+                f"the known inputs' tolerances), but without it the refit is not consistent with the scatter "
+                f"(RMS {100 * again.rms_rel_error:.3g} %, {again.status.value}) and {last.kind} pays over it "
+                f"(gain / c = {needed:.1f}, RMS {100 * final.rms_rel_error:.3g} %): the data need an effect "
+                "of this kind; its amount is uncertain"
+            )
+            say(reason)
+            return (
+                final,
+                Step(len(steps) + 1, tuple(c.kind for c in selected), again, (last,), None, reason),
+                (),
+            )
         unknown = f"does not determine its amount ({undetermined}: the data cannot tell it from none)"
     else:
         unknown = (
@@ -1151,7 +1173,11 @@ def _determined_final(
         f"{100 * again.rms_rel_error:.3g} %, {again.status.value}): an effect the data cannot tell from "
         "the layers is not an answer"
     )
-    return again, Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason)
+    return (
+        again,
+        Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason),
+        (last.kind,),
+    )
 
 
 def _undetermined_amount(fit: FitResult, kind: str) -> tuple[Parameter, ...]:

@@ -246,13 +246,15 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 _PARAMETERS = (Parameter("E1", "steel"), Parameter("mass", "point_mass"), Parameter("y", "point_mass"))
 
 
-def _fit(status, rms=1e-3, condition=1e3, vague=()):
-    """A refit as ``_determined_final`` reads it: status, misfit, conditioning and which
-    parameters (of ``_PARAMETERS``, by kind) the scatter leaves undetermined."""
+def _fit(status, rms=1e-3, condition=1e3, vague=(), chi2=30.0, k=12):
+    """A refit as ``_determined_final`` reads it: status, misfit (RMS and chi^2 with k
+    parameters on 30 frequencies), conditioning and which parameters (of
+    ``_PARAMETERS``, by kind) the scatter leaves undetermined."""
     verdict = condition_verdict(condition)
     return SimpleNamespace(
         status=status,
         rms_rel_error=rms,
+        statistics=_stats(chi2, k),
         converged=status is FitStatus.CONVERGED,
         parameters=_PARAMETERS,
         values=np.array([200e9, 0.8e-3, 0.07]),
@@ -271,45 +273,66 @@ def _chosen(kind):
 
 
 @pytest.mark.parametrize(
-    "final_status, vague, n_selected, again_condition, dropped",
+    "final_status, vague, n_selected, again_condition, again_status, dropped",
     [
-        (FitStatus.NOT_IDENTIFIABLE, (), 2, 1e4, True),  # blind22 (run 8): the point mass taken out
-        (FitStatus.NOT_IDENTIFIABLE, (), 2, 1e9, False),  # without it no better determined: kept
-        (FitStatus.NOT_IDENTIFIABLE, (), 1, 1e4, False),  # the only effect: the baseline would be the answer
-        (FitStatus.CONVERGED, (), 2, 1e4, False),  # determined: nothing to do
-        # A mass the data cannot tell from none (0.8 +- 2.5 g), the refit converged: taken out.
-        (FitStatus.CONVERGED, ("mass", "y"), 2, 1e4, True),
-        (FitStatus.CONVERGED, ("mass",), 1, 1e4, False),
+        (FitStatus.NOT_IDENTIFIABLE, (), 2, 1e4, FitStatus.POOR_FIT, True),  # blind22 (run 8): taken out
+        (
+            FitStatus.NOT_IDENTIFIABLE,
+            (),
+            2,
+            1e9,
+            FitStatus.POOR_FIT,
+            False,
+        ),  # without it no better determined
+        (FitStatus.NOT_IDENTIFIABLE, (), 1, 1e4, FitStatus.POOR_FIT, False),  # the only effect: kept
+        (FitStatus.CONVERGED, (), 2, 1e4, FitStatus.POOR_FIT, False),  # determined: nothing to do
+        # A mass the data cannot tell from none (0.8 +- 2.5 g), the refit without it consistent with
+        # the scatter (blind22): taken out.
+        (FitStatus.CONVERGED, ("mass", "y"), 2, 1e4, FitStatus.CONVERGED, True),
+        (FitStatus.CONVERGED, ("mass",), 1, 1e4, FitStatus.CONVERGED, False),
         # Its position undetermined but its mass not (a sensor on a line of symmetry): kept.
-        (FitStatus.CONVERGED, ("y",), 2, 1e4, False),
+        (FitStatus.CONVERGED, ("y",), 2, 1e4, FitStatus.CONVERGED, False),
+        # The amount undetermined, but without it the refit is a poor fit the mass pays over
+        # (blind81): kept, with a step that says so.
+        (FitStatus.POOR_FIT, ("mass",), 2, 1e4, FitStatus.POOR_FIT, "kept"),
     ],
 )
 def test_an_effect_that_leaves_the_final_refit_undetermined_is_taken_out(
-    monkeypatch, final_status, vague, n_selected, again_condition, dropped
+    monkeypatch, final_status, vague, n_selected, again_condition, again_status, dropped
 ):
     """The final refit fits the frequencies but does not determine the last selected
     effect (its sensitivity matrix singular, or the effect's amount with a std at least its
     value): that effect is taken out and the selection before it refitted from the state
     it was chosen on; the new final is kept only when it is determined, and only when an
-    effect remains."""
+    effect remains.  An undetermined amount stays when the refit without it is not
+    consistent with the scatter and the effect pays for itself over that refit: chi^2
+    45 with 15 parameters against 400 with 12 is a gain / c of 355 / 3 - 3 ln 30 = 108."""
     layerwise, mass = _chosen("layerwise"), _chosen("point_mass")
     selected = [layerwise, mass][:n_selected] if n_selected == 2 else [mass]
     starts = {c.kind: object() for c in selected}
     steps = [Step(i + 1, (), starts[c.kind], (c,), c, "add") for i, c in enumerate(selected)]
     condition = 3e9 if final_status is FitStatus.NOT_IDENTIFIABLE else 1e5
-    final = _fit(final_status, rms=2e-4, condition=condition, vague=vague)
+    final = _fit(final_status, rms=2e-4, condition=condition, vague=vague, chi2=45.0, k=15)
     calls = []
 
     def refit(refitting, state, chosen, say, policy, like=None):
         calls.append((state, [c.kind for c in chosen]))
-        return _fit(FitStatus.POOR_FIT, rms=4e-4, condition=again_condition)
+        chi2 = 400.0 if again_status is FitStatus.POOR_FIT else 20.0
+        return _fit(again_status, rms=4e-4, condition=again_condition, chi2=chi2)
 
     monkeypatch.setattr(diagnose_module, "_final", refit)
     out = diagnose_module._determined_final(None, final, steps, selected, lambda text: None, SELECTION_POLICY)
     if not dropped:
         assert out is None
         return
-    again, step = out
+    if dropped == "kept":
+        kept, step, taken_out = out
+        assert kept is final and taken_out == ()
+        assert step.chosen is None and step.reason.startswith("keep point_mass")
+        assert "point_mass.mass 0.8 +- 2.5" in step.reason and "gain / c = 108.1" in step.reason
+        return
+    again, step, taken_out = out
+    assert taken_out == ("point_mass",)
     assert calls == [(starts["point_mass"], ["layerwise"])]  # from the state point_mass was chosen on
     assert step.chosen is None and step.candidates == (mass,) and step.reason.startswith("drop point_mass")
     if vague:
