@@ -1159,7 +1159,7 @@ def _determined_final(
             say(reason)
             return (
                 final,
-                Step(len(steps) + 1, tuple(c.kind for c in selected), again, (last,), None, reason),
+                Step(len(steps) + 1, tuple(c.kind for c in selected), final, (last,), None, reason),
                 (),
             )
         unknown = f"does not determine its amount ({undetermined}: the data cannot tell it from none)"
