@@ -537,64 +537,6 @@ def _nested(a: str, b: str, selected) -> bool:
     return x <= y or y <= x
 
 
-def _paying_pair(
-    round_: Round, refitting: Refitting, best: Candidate, ordered, selected, policy: SelectionPolicy, say
-) -> str | None:
-    """When nothing pays far from the noise (reduced chi^2 above ``far_from_noise``): the
-    round's ``best`` with the next selectable candidate in ``ordered`` that is another
-    explanation (not ``_nested``), each having explained some misfit alone, the second
-    refitted on top of the first.  The reason to add the
-    first (the second is then tried on top of it in the next round, as every candidate is)
-    when there the second pays for itself and the pair together pays over the round's
-    state; else None.  Far from the noise c is large, so an effect must explain a large
-    part of the misfit to pay, and two effects that each explain a part do not, one by one
-    (blind08: a sensor and misaligned plies on a hybrid, layerwise at 0.709 %; each alone
-    0.64-0.65 %, gain / c -6 at c ~ 380; the oracle with both 0.034 %).  One refit more,
-    only in a round that would otherwise stop far from the noise."""
-    state = round_.state
-    if state.statistics.reduced_chi2 <= policy.far_from_noise:
-        return None
-
-    def explains(c: Candidate) -> bool:
-        return c.selectable and c.fit.statistics.sum_squares < state.statistics.sum_squares
-
-    first = best
-    others = (
-        c for c in ordered if c is not first and explains(c) and not _nested(first.kind, c.kind, selected)
-    )
-    second = next(others, None)
-    if not explains(first) or second is None:
-        return None
-    say(f"  nothing pays alone far from the noise: {second.kind} refitted on top of {first.kind}")
-    ahead = Round(
-        refitting.refit(first.fit, policy.candidate_options),
-        refitting.hints(first.fit),
-        round_.pool,
-        round_.n_workers,
-        policy,
-    )
-    (on_top,) = _try(ahead, [second.kind])
-    joint = _scaled_gain(state, on_top.fit) if on_top.fit is not None else -math.inf
-    say(
-        f"  {second.kind} on top of {first.kind}: "
-        + (
-            f"RMS {100 * on_top.rms_rel_error:.4f} %, gain / c {on_top.scaled_gain:.1f} on top, "
-            f"{joint:.1f} for the pair"
-            if on_top.fit is not None
-            else on_top.error
-        )
-    )
-    if not (on_top.selectable and on_top.scaled_gain > policy.min_gain and joint > policy.min_gain):
-        return None
-    return (
-        f"add {first.kind} for the pair with {second.kind}: neither pays alone far from the noise (gain / c "
-        f"{first.scaled_gain:.1f} and {second.scaled_gain:.1f}), but {second.kind} refitted on top of "
-        f"{first.kind} pays (gain / c = {on_top.scaled_gain:.1f}, RMS {100 * on_top.rms_rel_error:.3g} %) "
-        f"and the pair pays over this state (gain / c = {joint:.1f}); {second.kind} is tried again in the "
-        "next round"
-    )
-
-
 def _eligible_kinds(kinds: list[str], selected: list[str], closed: set[str]) -> list[str]:
     """The candidates worth a refit on top of ``selected``: not closed (not identifiable,
     nothing to act on), changing the model, and not the same as an earlier one."""
@@ -960,10 +902,7 @@ def diagnose(
                     + f" ({c.added.seconds:.1f} s)"
                 )
             before = tuple(c.kind for c in selected)
-            pair = None
-            if best is not None and not best.scaled_gain > policy.min_gain:
-                pair = _paying_pair(this_round, refitting, best, ordered, names, policy, say)
-            if pair is None and (best is None or not best.scaled_gain > policy.min_gain):
+            if best is None or not best.scaled_gain > policy.min_gain:
                 if best is not None:
                     reason = (
                         f"the best, {best.kind}, does not pay for itself "
@@ -991,9 +930,9 @@ def diagnose(
                     )
                 )
                 break
-            reason = pair or f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
+            reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
             lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
-            if not pair and best is not plausible_best:
+            if best is not plausible_best:
                 reason += (
                     f"; preferred to {plausible_best.kind}: the same free parameters and physics a real "
                     "plate "
@@ -1001,7 +940,7 @@ def diagnose(
                     f"{(best.bic - plausible_best.bic) / c_hat:.1f} (/ c) lower, within "
                     f"{policy.complete_margin:g}"
                 )
-            elif not pair and lowest is not best:
+            elif lowest is not best:
                 reason += (
                     f"; preferred to {lowest.kind}, whose criterion is {best.bic - lowest.bic:.1f} lower but "
                     "whose estimate is implausible or singular"
@@ -1130,8 +1069,7 @@ def _determined_final(
     2.02 g sensor fitted as 3.43 +- 4.5 g, the misfit 0.216 % without it and 0.083 % with
     it; taken out, a skin's E1 ended 3.54 std off).  blind22's phantom 0.82 g mass is
     still taken out: without it the layerwise refit's 0.0329 % is within 0.020 % scatter
-    and the theory's 0.049 %.  Returns (the final refit, the
-    step, the effects taken out)."""
+    and the theory's 0.049 %.  Returns (the final refit, the step, the effects taken out)."""
     if final is None or len(selected) < 2:
         return None
     last = selected[-1]
