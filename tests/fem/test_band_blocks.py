@@ -53,6 +53,21 @@ def test_block_solves_match_dense_triangular_solves(b, blocks, tail, columns, se
     assert np.abs(solver.solve(x) - expected).max() <= 1e-10 * scale(expected)
 
 
+@settings(max_examples=40, deadline=None)
+@given(b=st.integers(1, 12), n_extra=st.integers(0, 40), seed=st.integers(0, 2**16))
+def test_forward_solve_on_the_reversed_factor_is_the_back_substitution(b, n_extra, seed):
+    """U^-1 x as a forward substitution on the reversed copy of the factor (what a factor
+    too large for the cache solves with, ``modal._reversed``) gives the back
+    substitution's numbers bit for bit (the same operations on the same numbers, in the
+    same order), and the dense triangular solve's within 1e-10 (the tolerance above)."""
+    n = b + 1 + n_extra
+    a, factor = _band_factor(n, b, seed)
+    x = np.random.default_rng(seed + 2).standard_normal(n)
+    forward = modal._solve_reversed(modal._reversed(factor), x)
+    np.testing.assert_array_equal(forward, modal._solve(factor, x))
+    np.testing.assert_allclose(forward, sla.solve_triangular(sla.cholesky(a), x), rtol=1e-10, atol=1e-12)
+
+
 def test_block_solves_need_the_fortran_factor():
     """A C-ordered copy of the band would be read with the wrong strides: refused."""
     _, factor = _band_factor(20, 4, 0)
