@@ -189,6 +189,13 @@ def iterate(
             or float(np.max(np.abs(gauss_newton))) < options.parameter_tolerance
         ):
             return current, Stop.GAUSS_NEWTON_SMALL, warnings
+        # A Gauss-Newton step that would be stalled and move no parameter by STEP_PER_STD
+        # of its std ends the iteration before it is paid for: the test ``WITHIN_STD``
+        # makes after a full step, made on the step's prediction.
+        step = np.zeros(len(z))
+        step[~held] = gauss_newton
+        if reducible <= STALLED * objective.cost(current) and _within_std(objective, current, step):
+            return current, Stop.WITHIN_STD, warnings
         accepted, screen = None, None
         reduced = _reduced_minimum(objective, current, options, float(np.max(np.abs(gauss_newton))))
         if reduced is not None:

@@ -53,8 +53,7 @@ def _fit(theory: dict, reanalysis: bool):
 def test_reduced_steps_end_where_full_steps_do_in_fewer_solves(theory):
     """Both converge, within 0.02 std of each other (each may stop once its steps are
     below 0.01 std, ``stopping.STEP_PER_STD``), the reduced one in at most 0.7 x the full
-    solves (measured: 7 against 19 on the thick plate, 7 against 11 layerwise; the trial
-    screen alone, without the reduced step, takes 16 and 11)."""
+    solves (measured: 6 against 17 on the thick plate, 6 against 10 layerwise)."""
     full, full_solves = _fit(theory, reanalysis=False)
     reduced, reduced_solves = _fit(theory, reanalysis=True)
     # The iterations converged (the misfit left is the missing sensor's).

@@ -335,3 +335,28 @@ def test_no_descent_within_a_std_fraction_is_the_minimum(start, paper_model, off
     assert len(history) == 1, "precondition: no trial step accepted"
     assert stop is (Stop.WITHIN_STD if converged else Stop.NO_DESCENT)
     assert stop.converged is converged
+
+
+@pytest.mark.parametrize(("offset", "steps"), [(5e-4, 0), (0.2, 1)])
+def test_a_step_that_would_end_the_fit_is_not_paid_for(start, paper_model, offset, steps):
+    """From ``offset`` std away from the solution (in z, every parameter by that share of
+    its own std): at 5e-4 std the Gauss-Newton step moves no parameter by 1/100 of its std
+    and would lower the misfit (chi^2 2.9 here) by less than 1e-4 of itself (1.1e-4 of
+    it: the correlated parameters' moves add up), so the iteration ends there
+    (``WITHIN_STD``) without a trial solve; at 0.2 std it takes a step, after which the same
+    test ends it.  Either way it ends within 1/100 std of the solution."""
+    from identify.engine.objective import Objective
+    from identify.engine.stopping import Stop
+    from identify.engine.updating import Iteration, iterate
+
+    data = synthetic_measurements(paper_model, noise_rel=5e-4, seed=11, labels="close")
+    solved = fit(start, data)
+    objective = Objective(start, data, list(solved.parameters))
+    std = objective.std_z(objective.evaluate(solved.values, solved.pairings))
+    space = objective.space
+    state = objective.evaluate(space.to_values(space.to_z(solved.values) + offset * std), solved.pairings)
+    history = [Iteration(0, state.values, state.model_hz, objective.rms(state), objective.cost(state), 0, 0)]
+    end, stop, _ = iterate(objective, state, history, FitOptions())
+    assert stop is Stop.WITHIN_STD
+    assert len(history) - 1 >= steps and (steps or len(history) == 1)
+    assert np.all(np.abs(space.to_z(end.values) - space.to_z(solved.values)) <= 0.01 * std)
