@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.lib.stride_tricks import as_strided
 
@@ -71,6 +72,15 @@ def _reversed(factor: np.ndarray) -> np.ndarray:
 def _solve_reversed(reversed_factor: np.ndarray, x: np.ndarray) -> np.ndarray:
     """U^-1 x by forward substitution on ``_reversed(U)``: J (J U J)^-1 J x."""
     return sla.blas.dtbsv(reversed_factor.shape[0] - 1, reversed_factor, x[::-1], lower=1, trans=0)[::-1]
+
+
+def _nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
+    """``matrix`` without its stored zeros, as ``copy()`` then ``eliminate_zeros()`` give it
+    (the same arrays), but built from the kept entries only: the copy of the whole pattern
+    is never made (a layerwise mesh's is tens of MB)."""
+    kept = matrix.data != 0
+    counts = np.concatenate([[0], np.cumsum(kept, dtype=matrix.indptr.dtype)])
+    return sp.csr_matrix((matrix.data[kept], matrix.indices[kept], counts[matrix.indptr]), shape=matrix.shape)
 
 
 def _columns(solve, factor: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -177,12 +187,10 @@ def solve_modes(
     dropped by their projection on the rigid-body space (their number is checked).
     """
     n_dofs = units.n_dofs
-    stiffness, mass = units.matrix(stiffness_data), units.matrix(mass_data)
+    stiffness = units.matrix(stiffness_data)
     # M shares K's pattern, but without rotary inertia only u-u, v-v and w-w entries are
-    # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.  (A copy:
-    # the pattern's index arrays are shared by every matrix of the mesh.)
-    mass = mass.copy()
-    mass.eliminate_zeros()
+    # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.
+    mass = _nonzeros(units.matrix(mass_data))
     all_rigid = units.rigid_body_modes
     n_suspension = 0
     if suspended:
@@ -208,10 +216,13 @@ def solve_modes(
     sigma = -0.1 * shift_scale
     shifted = mass_data * -sigma  # K - sigma M, one array of temporaries fewer
     shifted += stiffness_data
+    band = units.banded(shifted)
+    # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
+    order, rank = units.band_order, units.rank
+    rigid_fields = (units.matrix(shifted) @ rigid)[order]
+    del shifted  # not read again: let go before the factor and its reversed copy are made
     try:
-        factor = sla.cholesky_banded(
-            units.banded(shifted), lower=False, overwrite_ab=True, check_finite=False
-        )
+        factor = sla.cholesky_banded(band, lower=False, overwrite_ab=True, check_finite=False)
     except sla.LinAlgError as exc:
         raise ModelError(
             "the stiffness matrix is not positive semi-definite: check the material values and units"
@@ -221,8 +232,6 @@ def solve_modes(
     # (the generalised shift-invert mode takes three M products).  A zero-energy field r
     # is an eigenvector of C (M r = -(K - sigma M) r / sigma), so projecting out the
     # orthonormal basis of U r = U^-T (K - sigma M) r deflates the rigid-body modes.
-    # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
-    order, rank = units.band_order, units.rank
     blocks = BandBlocks(factor) if factor.nbytes > BLOCK_SOLVE_BYTES else None
     backwards = _reversed(factor) if blocks else None  # ``_reversed``: the large factors
 
@@ -230,7 +239,6 @@ def solve_modes(
         """U^-1 x, forwards in memory."""
         return _solve_reversed(backwards, x) if blocks else _solve(factor, x)
 
-    rigid_fields = (units.matrix(shifted) @ rigid)[order]
     rigid_basis, _ = np.linalg.qr(
         blocks.solve_transposed(rigid_fields) if blocks else _columns(_transposed_solve, factor, rigid_fields)
     )
