@@ -8,6 +8,7 @@ import scipy.sparse as sp
 
 from fem.elements import HermitePlate, LayerwisePlate, ShearDifferencePlate
 from fem.laminates.laminate import VOIGT_PAIRS
+from fem.solver import assembly
 from fem.solver.assembly import SHARED_ONES, UnitMatrices
 from fem.solver.mesh import PlateMesh
 
@@ -95,3 +96,32 @@ def test_aggregations_share_one_read_only_array_of_ones():
         product = aggregate @ operand
         assert product.dtype == operand.dtype
         np.testing.assert_array_equal(product, own @ operand)
+
+
+@pytest.mark.parametrize("kind", ELEMENTS, ids=lambda e: e.__name__)
+@pytest.mark.parametrize("mesh", MESHES.values(), ids=MESHES.keys())
+@pytest.mark.parametrize("chunk", [1, 97, 1 << 22])
+def test_band_layout_in_chunks_is_the_one_of_all_entries_at_once(monkeypatch, mesh, kind, chunk):
+    """The semi-bandwidth and the band slots worked out a chunk of rows at a time
+    (``BAND_CHUNK_ENTRIES``: one row, rows that split unevenly, all rows) are the integers
+    of the whole pattern at once (the construction they replace), index types included,
+    and the band they give holds the matrix's upper triangle."""
+    monkeypatch.setattr(assembly, "BAND_CHUNK_ENTRIES", chunk)
+    units = UnitMatrices(mesh, kind)
+    indices, indptr, _ = units._pattern
+    rows = units.rank[np.repeat(np.arange(units.n_dofs), np.diff(indptr))]
+    cols = units.rank[indices]
+    bandwidth = int(np.max(cols - rows))
+    upper = np.flatnonzero(cols >= rows)
+    flat = cols[upper] * (bandwidth + 1) + bandwidth + rows[upper] - cols[upper]
+    assert units.bandwidth == bandwidth
+    slots = units._banded_slots
+    for got, expected in zip(slots, (upper, flat)):
+        np.testing.assert_array_equal(got, expected)
+        assert got.dtype == np.int32
+    csr_rows = np.repeat(np.arange(units.n_dofs), np.diff(indptr))
+    data = np.sin(1e-3 * (csr_rows + indices) + 1e-6 * csr_rows * indices.astype(np.int64))  # symmetric
+    dense = units.matrix(data).toarray()[np.ix_(units.band_order, units.band_order)]
+    band = units.banded(data)
+    for d in range(bandwidth + 1):
+        np.testing.assert_array_equal(band[bandwidth - d, d:], np.diagonal(dense, d))
