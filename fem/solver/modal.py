@@ -7,12 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.lib.stride_tricks import as_strided
 
 from ..errors import ModelError
-from .assembly import UnitMatrices
+from .assembly import UnitMatrices, nonzeros
 
 #: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
 RIGID_LEAK = 1e-9
@@ -72,15 +71,6 @@ def _reversed(factor: np.ndarray) -> np.ndarray:
 def _solve_reversed(reversed_factor: np.ndarray, x: np.ndarray) -> np.ndarray:
     """U^-1 x by forward substitution on ``_reversed(U)``: J (J U J)^-1 J x."""
     return sla.blas.dtbsv(reversed_factor.shape[0] - 1, reversed_factor, x[::-1], lower=1, trans=0)[::-1]
-
-
-def _nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
-    """``matrix`` without its stored zeros, as ``copy()`` then ``eliminate_zeros()`` give it
-    (the same arrays), but built from the kept entries only: the copy of the whole pattern
-    is never made (a layerwise mesh's is tens of MB)."""
-    kept = matrix.data != 0
-    counts = np.concatenate([[0], np.cumsum(kept, dtype=matrix.indptr.dtype)])
-    return sp.csr_matrix((matrix.data[kept], matrix.indices[kept], counts[matrix.indptr]), shape=matrix.shape)
 
 
 def _columns(solve, factor: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -190,7 +180,7 @@ def solve_modes(
     stiffness = units.matrix(stiffness_data)
     # M shares K's pattern, but without rotary inertia only u-u, v-v and w-w entries are
     # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.
-    mass = _nonzeros(units.matrix(mass_data))
+    mass = nonzeros(units.matrix(mass_data))
     all_rigid = units.rigid_body_modes
     n_suspension = 0
     if suspended:

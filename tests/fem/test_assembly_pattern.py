@@ -5,6 +5,8 @@ built from the node-pair blocks, against the direct construction: every element 
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from fem.elements import HermitePlate, LayerwisePlate, ShearDifferencePlate
 from fem.laminates.laminate import VOIGT_PAIRS
@@ -109,8 +111,8 @@ def test_band_layout_in_chunks_is_the_one_of_all_entries_at_once(monkeypatch, me
     monkeypatch.setattr(assembly, "BAND_CHUNK_ENTRIES", chunk)
     units = UnitMatrices(mesh, kind)
     indices, indptr, _ = units._pattern
-    rows = units.rank[np.repeat(np.arange(units.n_dofs), np.diff(indptr))]
-    cols = units.rank[indices]
+    csr_rows = np.repeat(np.arange(units.n_dofs), np.diff(indptr))
+    rows, cols = units.rank[csr_rows], units.rank[indices]
     bandwidth = int(np.max(cols - rows))
     upper = np.flatnonzero(cols >= rows)
     flat = cols[upper] * (bandwidth + 1) + bandwidth + rows[upper] - cols[upper]
@@ -119,9 +121,33 @@ def test_band_layout_in_chunks_is_the_one_of_all_entries_at_once(monkeypatch, me
     for got, expected in zip(slots, (upper, flat)):
         np.testing.assert_array_equal(got, expected)
         assert got.dtype == np.int32
-    csr_rows = np.repeat(np.arange(units.n_dofs), np.diff(indptr))
     data = np.sin(1e-3 * (csr_rows + indices) + 1e-6 * csr_rows * indices.astype(np.int64))  # symmetric
     dense = units.matrix(data).toarray()[np.ix_(units.band_order, units.band_order)]
     band = units.banded(data)
     for d in range(bandwidth + 1):
         np.testing.assert_array_equal(band[bandwidth - d, d:], np.diagonal(dense, d))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.integers(1, 30),
+    density=st.floats(0.0, 1.0),
+    zeros=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**16),
+)
+def test_a_matrix_without_stored_zeros_is_the_copy_without_them(n, density, zeros, seed):
+    """``assembly.nonzeros`` (the mass matrix the Lanczos products use, the first unit
+    mass) holds the same arrays, bit for bit and in the same index types, as ``copy()``
+    then ``eliminate_zeros()``, for any share of stored zeros (empty rows, an empty
+    matrix), and leaves the matrix it reads as it was."""
+    rng = np.random.default_rng(seed)
+    matrix = sp.random(n, n, density=density, format="csr", random_state=rng)
+    matrix.data[rng.random(matrix.nnz) < zeros] = 0.0
+    before = matrix.copy()
+    expected = matrix.copy()
+    expected.eliminate_zeros()
+    kept = assembly.nonzeros(matrix)
+    for name in ("data", "indices", "indptr"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(expected, name))
+        assert getattr(kept, name).dtype == getattr(expected, name).dtype
+        np.testing.assert_array_equal(getattr(matrix, name), getattr(before, name))

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 import scipy.linalg as sla
-import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -67,29 +66,6 @@ def test_forward_solve_on_the_reversed_factor_is_the_back_substitution(b, n_extr
     forward = modal._solve_reversed(modal._reversed(factor), x)
     np.testing.assert_array_equal(forward, modal._solve(factor, x))
     np.testing.assert_allclose(forward, sla.solve_triangular(sla.cholesky(a), x), rtol=1e-10, atol=1e-12)
-
-
-@settings(max_examples=40, deadline=None)
-@given(
-    n=st.integers(1, 30),
-    density=st.floats(0.0, 1.0),
-    zeros=st.floats(0.0, 1.0),
-    seed=st.integers(0, 2**16),
-)
-def test_the_mass_without_stored_zeros_is_the_copy_without_them(n, density, zeros, seed):
-    """``modal._nonzeros`` (the mass matrix the Lanczos products use) holds the same
-    arrays, bit for bit and in the same index types, as ``copy()`` then
-    ``eliminate_zeros()``, for any share of stored zeros (empty rows, an empty matrix)."""
-    rng = np.random.default_rng(seed)
-    matrix = sp.random(n, n, density=density, format="csr", random_state=rng)
-    matrix.data[rng.random(matrix.nnz) < zeros] = 0.0
-    expected = matrix.copy()
-    expected.eliminate_zeros()
-    kept = modal._nonzeros(matrix)
-    for name in ("data", "indices", "indptr"):
-        np.testing.assert_array_equal(getattr(kept, name), getattr(expected, name))
-        assert getattr(kept, name).dtype == getattr(expected, name).dtype
-    assert matrix.nnz >= kept.nnz, "the original keeps its stored zeros"
 
 
 def test_block_solves_need_the_fortran_factor():
