@@ -2,17 +2,15 @@
 
 Elements of a structured mesh come in few sizes (one on an equal mesh, a few more
 where it is graded towards the edges), so one set of element unit matrices per size
-serves them all.  Assembly maps each element's n x n local entries of its size's
-matrices onto one global CSR pattern through a sparse aggregation matrix; a global matrix for any
-laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
+serves them all.  Assembly sums each element's n x n local entries of its size's
+matrices onto one global CSR pattern, node-pair block by block (``PairAggregation``);
+a global matrix for any laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
 cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
 element matrices (``combined_data``).
 """
 
 from __future__ import annotations
 
-import threading
-import weakref
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -31,12 +29,13 @@ GATHERED_COLUMNS = 20_000
 #: Element unit matrices are kept sparse above this [bytes] of dense storage (the
 #: layerwise element's 90-170 MB; the thin and shear elements' are a few MB).
 SPARSE_UNITS_ABOVE = 32 << 20
-#: Stored entries whose band positions are worked out at once (``bandwidth``,
-#: ``_banded_slots``, when a mesh is first solved): 8 MB a 64-bit temporary, where all of
-#: a layerwise mesh's entries at once made these steps a diagnosis's memory peak (blind25:
-#: 2.45-2.54 GB).  A 16,200-DOF layerwise mesh's 8.0 M entries: 77 MB at the peak (33 MB
-#: kept) instead of 226 MB, 0.10 s instead of 0.15 s, the same arrays.
-BAND_CHUNK_ENTRIES = 1 << 20
+#: Stored entries worked out at once: their band positions (``bandwidth``,
+#: ``_banded_slots``, when a mesh is first solved) and their sums (``PairAggregation``),
+#: 8 MB a 64-bit temporary, where all of a layerwise mesh's entries at once made the band
+#: positions a diagnosis's memory peak (blind25: 2.45-2.54 GB).  A 16,200-DOF layerwise
+#: mesh's 8.0 M entries: 77 MB at the peak (33 MB kept) instead of 226 MB, 0.10 s instead
+#: of 0.15 s, the same arrays.
+CHUNK_ENTRIES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -99,33 +98,26 @@ class UnitMatrices:
         return sp.hstack([sp.csr_matrix(first), *rest], format="csr")
 
     @cached_property
-    def _pattern(self) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
-        """CSR indices/indptr of the global pattern and the aggregation matrix
-        (nnz x G n_local^2) summing each element's local entries, those of its size's
-        matrices, into global ones.
+    def _pattern(self) -> tuple[np.ndarray, np.ndarray, PairAggregation]:
+        """CSR indices/indptr of the global pattern and the aggregation (``PairAggregation``)
+        summing each element's local entries, those of its size's matrices, into global ones.
 
         Every DOF belongs to a node (global DOF = node x dofs_per_node + field) and an
         element couples all DOFs of its nodes, so the pattern is dense node-pair blocks:
         the distinct pairs of nodes that share an element (16 per element, sorted once),
         each a dofs_per_node^2 block.  In CSR order the rows of node a follow those of the
         nodes before it (dofs_per_node^2 x their neighbour counts), each row of node a holds
-        its neighbours' blocks in node order, so an element entry's slot is arithmetic on
-        its pair's rank; the same arrays as sorting every element entry, 4-6x faster on a
+        its neighbours' blocks in node order, so an entry's column is arithmetic on its
+        pair's rank; the same arrays as sorting every element entry, 4-6x faster on a
         layerwise mesh (``tests/fem/test_assembly_pattern.py``)."""
         nodes = self.mesh.element_nodes
         per_node, n_nodes = self.dofs_per_node, self.mesh.n_nodes
-        n_elements, corners = nodes.shape
-        n_local = corners * per_node
-        first_of_pair = np.repeat(nodes, corners, axis=1)
-        key = first_of_pair.astype(np.int64) * n_nodes + np.tile(nodes, (1, corners))
+        corners = nodes.shape[1]
+        key = np.repeat(nodes, corners, axis=1).astype(np.int64) * n_nodes + np.tile(nodes, (1, corners))
         pairs, pair_of_entry = np.unique(key, return_inverse=True)
         row_node, column_node = np.divmod(pairs, n_nodes)
         neighbours = np.bincount(row_node, minlength=n_nodes)
         first_pair = np.searchsorted(row_node, np.arange(n_nodes))
-        rank = np.arange(pairs.size) - first_pair[row_node]  # of the column node among the row node's
-        node_start = per_node * per_node * np.concatenate([[0], np.cumsum(neighbours)[:-1]])
-        # slot of entry (element, corner a, field i, corner b, field j), in the element's local order
-        block = node_start[first_of_pair] + rank[pair_of_entry.reshape(key.shape)] * per_node
         nnz = int(per_node * per_node * neighbours.sum())
         lengths = np.repeat(neighbours * per_node, per_node)
         indptr = np.concatenate([[0], np.cumsum(lengths)])
@@ -135,34 +127,20 @@ class UnitMatrices:
         within = np.arange(nnz) - np.repeat(indptr[:-1], lengths)
         columns = node_columns[first_pair[rows_node] * per_node + within].astype(np.int32)
         del rows_node, within
-        # The aggregation as a CSC matrix built in place: its column (size g, local entry j)
-        # holds the slots of entry j of every element of size g, in element order; the
-        # conversion to CSR sorts each row's columns, which is the order its sums run in.
-        # (A COO matrix of (slot, local) pairs gives the same CSR with twice the transient
-        # memory: 759 MB against a 209 MB result on a 17,680-DOF layerwise mesh.)
-        index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
-        block = block.astype(index).reshape(n_elements, corners, 1, corners, 1)
-        row_length = (neighbours[first_of_pair] * per_node).astype(index).reshape(block.shape)
-        offsets = field.astype(index)[:, None, None] * row_length + field.astype(index)
-        group = self.mesh.size_groups[1]
-        sizes = [np.flatnonzero(group == g) for g in range(len(self.elements))]  # each size's elements
-        slots = np.concatenate(
-            [  # local entry major
-                (block[members] + offsets[members]).reshape(len(members), n_local * n_local).T.ravel()
-                for members in sizes
-            ]
+        # each element's (corner a, corner b) entries, as a column (size g, a, b) of the pair
+        # they fall on; sorted per row, so each pair's block sums them in that order
+        size = self.mesh.size_groups[1]
+        local = size[:, None] * corners * corners + np.arange(corners * corners)
+        blocks = sp.csr_matrix(
+            (np.ones(key.size), (pair_of_entry.ravel(), local.ravel())),
+            shape=(pairs.size, len(self.elements) * corners * corners),
         )
-        column_starts = np.concatenate(
-            [[0], np.cumsum(np.repeat([len(m) for m in sizes], n_local * n_local))]
-        )
-        # Its entries are all ones: built with one-byte ones, then given a view of the
-        # shared float ones as its data (``SharedOnes``), so the sums are what they were.
-        aggregate = sp.csc_matrix(
-            (np.ones(slots.size, dtype=bool), slots, column_starts),
-            shape=(nnz, len(self.elements) * n_local * n_local),
-        ).tocsr()
-        aggregate.data = SHARED_ONES.view(aggregate.nnz)
-        return columns, indptr.astype(np.int32), aggregate
+        blocks.sort_indices()
+        # runs of consecutive nodes with as many neighbours: (first pair, nodes, neighbours)
+        starts = np.flatnonzero(np.diff(neighbours, prepend=-1))
+        counts = np.diff(np.append(starts, n_nodes))
+        runs = np.column_stack([first_pair[starts], counts, neighbours[starts]])
+        return columns, indptr.astype(np.int32), PairAggregation(blocks, runs, per_node, corners)
 
     @cached_property
     def stiffness_data(self) -> np.ndarray:
@@ -240,10 +218,10 @@ class UnitMatrices:
         return np.concatenate(uppers), np.concatenate(flats)
 
     def _band_positions(self):
-        """The stored entries in chunks of whole CSR rows, about ``BAND_CHUNK_ENTRIES``
+        """The stored entries in chunks of whole CSR rows, about ``CHUNK_ENTRIES``
         each: (the chunk's first entry, each entry's row and column in ``band_order``)."""
         indices, indptr, _ = self._pattern
-        rows_per_chunk = max(1, BAND_CHUNK_ENTRIES * self.n_dofs // max(indices.size, 1))
+        rows_per_chunk = max(1, CHUNK_ENTRIES * self.n_dofs // max(indices.size, 1))
         for start in range(0, self.n_dofs, rows_per_chunk):
             stop = min(start + rows_per_chunk, self.n_dofs)
             first, last = int(indptr[start]), int(indptr[stop])
@@ -315,40 +293,60 @@ class UnitMatrices:
         )
 
 
-class SharedOnes:
-    """Read-only float ones that every aggregation matrix's data is a view of.  Its entries
-    are all ones, and a copy per mesh would be over half its bytes (124 of 221 MB on a
-    20,592-DOF layerwise mesh); with one array the unit sets of a diagnosis's meshes and
-    theories hold their index arrays only.  Grown to the largest aggregation asked for
-    (about 125 MB at 20,000 layerwise DOFs, outside ``UNIT_CACHE_BYTES``); an older, shorter
-    one lives while a matrix still views it.  Read-only, so no one can change what every
-    mesh sums with."""
+@dataclass(frozen=True)
+class PairAggregation:
+    """The sum of a mesh's element matrices into global CSR data, node-pair block by block.
 
-    def __init__(self):
-        self._made: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
-        self._ones = self._new(0)
-        self._lock = threading.Lock()
+    ``blocks`` (pairs x G corners^2, ones): row p holds the (size g, corner a, corner b)
+    of every element whose corners a and b are pair p's nodes, in that order.  Summing the
+    elements' (a, b) blocks of pn x pn entries along a row gives the pair's block; CSR
+    stores node a's rows one after another, each through all its pairs' blocks, so a run
+    of nodes with as many neighbours (``runs``: first pair, nodes, neighbours) is the same
+    span of data, its blocks' axes swapped.  Every global entry is the sum of its element
+    entries in the order (g, a, b), the order of an aggregation matrix with one column per
+    element entry, bit for bit, while its index arrays hold a 16th of an element's
+    entries (a layerwise mesh of 16,200 DOFs: kB instead of 87 MB)."""
 
-    def _new(self, n: int) -> np.ndarray:
-        ones = np.ones(n)
-        ones.flags.writeable = False
-        self._made[id(ones)] = ones
-        return ones
+    blocks: sp.csr_matrix
+    runs: np.ndarray
+    per_node: int
+    corners: int
 
-    def view(self, n: int) -> np.ndarray:
-        """n ones, a view of the shared array."""
-        with self._lock:
-            if self._ones.size < n:
-                self._ones = self._new(n)
-            return self._ones[:n]
+    def __matmul__(self, local: np.ndarray) -> np.ndarray:
+        """Global CSR data (nnz, ...) of element matrices ``local`` (G n_local^2, ...),
+        each of the G sizes' flattened in the element's local order; about
+        ``CHUNK_ENTRIES`` values summed at a time."""
+        pn, c = self.per_node, self.corners
+        tail = local.shape[1:]
+        width = int(np.prod(tail, dtype=np.int64))
+        by_pair = (
+            local.reshape(-1, c, pn, c, pn, width).transpose(0, 1, 3, 2, 4, 5).reshape(-1, pn * pn * width)
+        )
+        out = np.empty(
+            (self.blocks.shape[0] * pn * pn, *tail), dtype=np.result_type(self.blocks.dtype, local)
+        )
+        batch = max(1, CHUNK_ENTRIES // (pn * pn * width))  # pairs summed at a time
+        first, taken = 0, []
+        for run in (*self.runs, None):
+            if run is not None and (not taken or run[0] + run[1] * run[2] - first <= batch):
+                taken.append(run)
+                continue
+            last = taken[-1][0] + taken[-1][1] * taken[-1][2]
+            summed = (self.blocks[first:last] @ by_pair).reshape(-1, pn, pn, *tail)
+            for start, nodes, neighbours in taken:
+                span = slice(start * pn * pn, (start + nodes * neighbours) * pn * pn)
+                part = summed[start - first : start - first + nodes * neighbours]
+                out[span].reshape(nodes, pn, neighbours, pn, *tail)[...] = part.reshape(
+                    nodes, neighbours, pn, pn, *tail
+                ).swapaxes(1, 2)
+            if run is not None:
+                first, taken = run[0], [run]
+        return out
 
-    def holds(self, array: np.ndarray) -> bool:
-        """``array`` is a view of the shared ones (its bytes are no one unit set's)."""
-        base = array.base
-        return base is not None and self._made.get(id(base)) is base
-
-
-SHARED_ONES = SharedOnes()
+    @property
+    def nbytes(self) -> int:
+        blocks = self.blocks
+        return blocks.data.nbytes + blocks.indices.nbytes + blocks.indptr.nbytes + self.runs.nbytes
 
 
 def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
@@ -363,8 +361,8 @@ def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
 
 def _nbytes(part) -> int:
     """The bytes ``part`` (an array or a sparse matrix) holds of its own."""
-    if isinstance(part, np.ndarray):
-        return 0 if SHARED_ONES.holds(part) else part.nbytes
+    if isinstance(part, (np.ndarray, PairAggregation)):
+        return part.nbytes
     if sp.issparse(part):
         return sum(
             _nbytes(getattr(part, name)) for name in ("data", "indices", "indptr") if hasattr(part, name)
