@@ -3,7 +3,7 @@
 Elements of a structured mesh come in few sizes (one on an equal mesh, a few more
 where it is graded towards the edges), so one set of element unit matrices per size
 serves them all.  Assembly sums each element's n x n local entries of its size's
-matrices onto one global CSR pattern, node-pair block by block (``PairAggregation``);
+matrices onto one global CSR pattern, node-pair block by block (``PairBlocks``);
 a global matrix for any laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
 cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
 element matrices (``combined_data``).
@@ -29,12 +29,9 @@ GATHERED_COLUMNS = 20_000
 #: Element unit matrices are kept sparse above this [bytes] of dense storage (the
 #: layerwise element's 90-170 MB; the thin and shear elements' are a few MB).
 SPARSE_UNITS_ABOVE = 32 << 20
-#: Stored entries worked out at once: their band positions (``bandwidth``,
-#: ``_banded_slots``, when a mesh is first solved) and their sums (``PairAggregation``),
-#: 8 MB a 64-bit temporary, where all of a layerwise mesh's entries at once made the band
-#: positions a diagnosis's memory peak (blind25: 2.45-2.54 GB).  A 16,200-DOF layerwise
-#: mesh's 8.0 M entries: 77 MB at the peak (33 MB kept) instead of 226 MB, 0.10 s instead
-#: of 0.15 s, the same arrays.
+#: Global entries summed at once (``PairBlocks``): 8 MB of a vector's sums, the same
+#: again as element entries by pair, where all at once a second copy of every global entry
+#: is a temporary (64 MB at 16,200 layerwise DOFs, several times that for a block).
 CHUNK_ENTRIES = 1 << 20
 
 
@@ -98,9 +95,10 @@ class UnitMatrices:
         return sp.hstack([sp.csr_matrix(first), *rest], format="csr")
 
     @cached_property
-    def _pattern(self) -> tuple[np.ndarray, np.ndarray, PairAggregation]:
-        """CSR indices/indptr of the global pattern and the aggregation (``PairAggregation``)
-        summing each element's local entries, those of its size's matrices, into global ones.
+    def _pattern(self) -> tuple[np.ndarray, np.ndarray, PairBlocks]:
+        """CSR indices/indptr of the global pattern and its node-pair blocks (``PairBlocks``),
+        which sum each element's local entries, those of its size's matrices, into global
+        ones and lay a matrix out as a band.
 
         Every DOF belongs to a node (global DOF = node x dofs_per_node + field) and an
         element couples all DOFs of its nodes, so the pattern is dense node-pair blocks:
@@ -140,7 +138,8 @@ class UnitMatrices:
         starts = np.flatnonzero(np.diff(neighbours, prepend=-1))
         counts = np.diff(np.append(starts, n_nodes))
         runs = np.column_stack([first_pair[starts], counts, neighbours[starts]])
-        return columns, indptr.astype(np.int32), PairAggregation(blocks, runs, per_node, corners)
+        pair_nodes = np.stack([row_node, column_node]).astype(np.int32)
+        return columns, indptr.astype(np.int32), PairBlocks(blocks, pair_nodes, runs, per_node, corners)
 
     @cached_property
     def stiffness_data(self) -> np.ndarray:
@@ -199,42 +198,21 @@ class UnitMatrices:
         return np.argsort(self.band_order)
 
     @cached_property
-    def bandwidth(self) -> int:
-        """Upper semi-bandwidth of the global pattern in ``band_order``."""
-        return max(int(np.max(cols - rows)) for _, rows, cols in self._band_positions())
+    def _node_rank(self) -> np.ndarray:
+        """Position of each node in ``band_order`` (its fields follow one another there)."""
+        return self.rank[:: self.dofs_per_node] // self.dofs_per_node
 
     @cached_property
-    def _banded_slots(self) -> tuple[np.ndarray, np.ndarray]:
-        """Positions of the upper-triangle CSR entries (in ``band_order``) in LAPACK upper
-        banded storage, Fortran-ordered."""
-        b = self.bandwidth
-        index = np.int32 if (b + 1) * self.n_dofs < np.iinfo(np.int32).max else np.int64
-        uppers, flats = [], []
-        for first, rows, cols in self._band_positions():
-            upper = np.flatnonzero(cols >= rows)
-            flat = cols[upper] * (b + 1) + b + rows[upper] - cols[upper]
-            uppers.append((upper + first).astype(index))  # half the bytes of numpy's default
-            flats.append(flat.astype(index))
-        return np.concatenate(uppers), np.concatenate(flats)
-
-    def _band_positions(self):
-        """The stored entries in chunks of whole CSR rows, about ``CHUNK_ENTRIES``
-        each: (the chunk's first entry, each entry's row and column in ``band_order``)."""
-        indices, indptr, _ = self._pattern
-        rows_per_chunk = max(1, CHUNK_ENTRIES * self.n_dofs // max(indices.size, 1))
-        for start in range(0, self.n_dofs, rows_per_chunk):
-            stop = min(start + rows_per_chunk, self.n_dofs)
-            first, last = int(indptr[start]), int(indptr[stop])
-            rows = self.rank[np.repeat(np.arange(start, stop), np.diff(indptr[start : stop + 1]))]
-            yield first, rows, self.rank[indices[first:last]]
+    def bandwidth(self) -> int:
+        """Upper semi-bandwidth of the global pattern in ``band_order``."""
+        rows, columns = self._pattern[2].pair_nodes
+        farthest = int(np.max(self._node_rank[columns] - self._node_rank[rows]))
+        return (farthest + 1) * self.dofs_per_node - 1
 
     def banded(self, data: np.ndarray) -> np.ndarray:
         """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
         of a symmetric matrix given by CSR data, its DOFs in ``band_order``."""
-        upper, flat = self._banded_slots
-        out = np.zeros((self.bandwidth + 1) * self.n_dofs)
-        out[flat] = data[upper]
-        return out.reshape(self.n_dofs, self.bandwidth + 1).T
+        return self._pattern[2].banded(data, self._node_rank, self.bandwidth)
 
     def quadratic_forms(self, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """phi_i^T K_c phi_i and phi_i^T M_j phi_i for every unit stiffness matrix c, unit
@@ -294,20 +272,24 @@ class UnitMatrices:
 
 
 @dataclass(frozen=True)
-class PairAggregation:
-    """The sum of a mesh's element matrices into global CSR data, node-pair block by block.
+class PairBlocks:
+    """A mesh's global pattern as node-pair blocks: the pairs of nodes that share an
+    element, each a pn x pn block, in CSR order (by row node, then column node).
+
+    Its index arrays hold an entry per element and corner pair, or per pair, none per
+    stored entry (a layerwise mesh of 16,200 DOFs: kB instead of the 119 MB of an
+    aggregation matrix with one column per element entry and of the band's slots).
 
     ``blocks`` (pairs x G corners^2, ones): row p holds the (size g, corner a, corner b)
-    of every element whose corners a and b are pair p's nodes, in that order.  Summing the
-    elements' (a, b) blocks of pn x pn entries along a row gives the pair's block; CSR
-    stores node a's rows one after another, each through all its pairs' blocks, so a run
-    of nodes with as many neighbours (``runs``: first pair, nodes, neighbours) is the same
-    span of data, its blocks' axes swapped.  Every global entry is the sum of its element
-    entries in the order (g, a, b), the order of an aggregation matrix with one column per
-    element entry, bit for bit, while its index arrays hold a 16th of an element's
-    entries (a layerwise mesh of 16,200 DOFs: kB instead of 87 MB)."""
+    of every element whose corners a and b are pair p's nodes, in that order; summing the
+    elements' (a, b) blocks along a row gives the pair's block (``@``).  ``pair_nodes``
+    (2 x pairs): each pair's row and column node.  CSR stores node a's rows one after
+    another, each through all its pairs' blocks, so a run of nodes with as many neighbours
+    (``runs``: first pair, nodes, neighbours) is one span of data, a block's entries
+    ``nodes x pn x neighbours x pn`` apart."""
 
     blocks: sp.csr_matrix
+    pair_nodes: np.ndarray
     runs: np.ndarray
     per_node: int
     corners: int
@@ -315,7 +297,9 @@ class PairAggregation:
     def __matmul__(self, local: np.ndarray) -> np.ndarray:
         """Global CSR data (nnz, ...) of element matrices ``local`` (G n_local^2, ...),
         each of the G sizes' flattened in the element's local order; about
-        ``CHUNK_ENTRIES`` values summed at a time."""
+        ``CHUNK_ENTRIES`` values summed at a time.  Every global entry is the sum of its
+        element entries in the order (g, a, b), the order of an aggregation matrix with
+        one column per element entry, bit for bit."""
         pn, c = self.per_node, self.corners
         tail = local.shape[1:]
         width = int(np.prod(tail, dtype=np.int64))
@@ -343,10 +327,41 @@ class PairAggregation:
                 first, taken = run[0], [run]
         return out
 
+    def banded(self, data: np.ndarray, node_rank: np.ndarray, bandwidth: int) -> np.ndarray:
+        """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
+        of a symmetric matrix given by CSR ``data``, its nodes in the order ``node_rank``:
+        entry (row, column) at column (bandwidth + 1) + bandwidth + row - column.  Each
+        pair of a run whose column node comes later is copied whole, one on the diagonal
+        its upper triangle; the band positions are worked out per run and neighbour."""
+        pn, b = self.per_node, bandwidth
+        out = np.zeros((b + 1) * len(node_rank) * pn)
+        field = np.arange(pn)
+        within = field[:, None] + b * field[None, :]  # of entry (i, j) from its block's (0, 0)
+        upper = field[:, None] <= field[None, :]
+        rows, columns = node_rank[self.pair_nodes].astype(np.int64)
+        later = columns - rows
+        corner = columns * pn * b + b + rows * pn  # block (0, 0): column pn c, row pn r
+        for first, nodes, neighbours in self.runs:
+            pairs = slice(first, first + nodes * neighbours)
+            shape = (nodes, neighbours)
+            ahead, start = later[pairs].reshape(shape), corner[pairs].reshape(shape)
+            span = data[first * pn * pn : (first + nodes * neighbours) * pn * pn]
+            blocks = span.reshape(nodes, pn, neighbours, pn)
+            for q in range(neighbours):
+                whole = ahead[:, q] > 0
+                if whole.any():
+                    out[start[whole, q][:, None, None] + within] = blocks[whole, :, q, :]
+                diagonal = ahead[:, q] == 0
+                if diagonal.any():
+                    positions = start[diagonal, q][:, None, None] + within
+                    out[positions[:, upper]] = blocks[diagonal, :, q, :][:, upper]
+        return out.reshape(len(node_rank) * pn, b + 1).T
+
     @property
     def nbytes(self) -> int:
         blocks = self.blocks
-        return blocks.data.nbytes + blocks.indices.nbytes + blocks.indptr.nbytes + self.runs.nbytes
+        arrays = (blocks.data, blocks.indices, blocks.indptr, self.pair_nodes, self.runs)
+        return sum(a.nbytes for a in arrays)
 
 
 def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
@@ -361,7 +376,7 @@ def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
 
 def _nbytes(part) -> int:
     """The bytes ``part`` (an array or a sparse matrix) holds of its own."""
-    if isinstance(part, (np.ndarray, PairAggregation)):
+    if isinstance(part, (np.ndarray, PairBlocks)):
         return part.nbytes
     if sp.issparse(part):
         return sum(

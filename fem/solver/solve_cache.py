@@ -33,7 +33,7 @@ from functools import wraps
 SOLVE_CACHE_BYTES = 1 << 27
 
 #: The budget of the unit-matrix cache [bytes]: the meshes one fit works on.  A layerwise
-#: unit set is 46-80 MB once solved (9,720-16,200 DOFs: the bench's sandwich), a
+#: unit set is 34-58 MB once solved (9,720-16,200 DOFs: the bench's sandwich), a
 #: first-order shear set about 30 MB (7,140-7,920 DOFs), a thin plate's a few MB; the
 #: three configurations of a sandwich under two theories fit, while the meshes of earlier
 #: rounds (the divisions follow the highest mode matched) are let go.

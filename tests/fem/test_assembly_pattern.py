@@ -40,6 +40,7 @@ MESHES = {
     # graded towards the edges and with a sensor's footprint: several element sizes
     "graded": PlateMesh.with_element_size(0.25, 0.16, 8, 0.004, bases=((0.10, 0.11, 0.05, 0.06),)),
     "one element across": PlateMesh(0.10, 0.02, 5, 1),
+    "tall": PlateMesh(0.12, 0.20, 3, 7),  # the band order runs across its columns
 }
 ELEMENTS = [HermitePlate, ShearDifferencePlate, LayerwisePlate.with_groups(3, 1)]
 
@@ -73,15 +74,17 @@ def test_node_block_pattern_is_the_sorted_one(monkeypatch, mesh, kind, chunk):
 
 
 def test_aggregation_holds_no_array_per_element_entry():
-    """The aggregation's index arrays grow with the elements, not with their entries: on a
-    layerwise mesh (3,136 entries an element) it holds under 1 % of the bytes of an
+    """The node-pair blocks' index arrays grow with the elements, not with their entries:
+    on a layerwise mesh (3,136 entries an element) they hold under 1 % of the bytes of an
     aggregation matrix with one entry per element entry (8 bytes of index a column of
-    it; the one it replaced also held its ones)."""
+    it; the one they replaced also held its ones), and the band needs no slots either."""
     units = UnitMatrices(MESHES["graded"], LayerwisePlate.with_groups(3, 1))
-    aggregation = units._pattern[2]
-    assert units.nbytes == sum(part.nbytes for part in units._pattern)  # counted in the unit set
+    indices, _, pairs = units._pattern
+    units.banded(np.zeros(indices.size))
     entries = units.element_dofs.size * units.element_dofs.shape[1]
-    assert 0 < aggregation.nbytes < 0.01 * 8 * entries
+    assert 0 < pairs.nbytes < 0.01 * 8 * entries
+    # beside the CSR columns, a set laid out as a band holds arrays per DOF, none per entry
+    assert units.nbytes - indices.nbytes - pairs.nbytes <= 8 * 8 * units.n_dofs
 
 
 def test_pattern_assembles_the_scattered_element_matrices():
@@ -101,13 +104,12 @@ def test_pattern_assembles_the_scattered_element_matrices():
 
 @pytest.mark.parametrize("kind", ELEMENTS, ids=lambda e: e.__name__)
 @pytest.mark.parametrize("mesh", MESHES.values(), ids=MESHES.keys())
-@pytest.mark.parametrize("chunk", [1, 97, 1 << 22])
-def test_band_layout_in_chunks_is_the_one_of_all_entries_at_once(monkeypatch, mesh, kind, chunk):
-    """The semi-bandwidth and the band slots worked out a chunk of rows at a time
-    (``CHUNK_ENTRIES``: one row, rows that split unevenly, all rows) are the integers
-    of the whole pattern at once (the construction they replace), index types included,
-    and the band they give holds the matrix's upper triangle."""
-    monkeypatch.setattr(assembly, "CHUNK_ENTRIES", chunk)
+def test_band_from_pair_blocks_is_the_one_of_every_entry(mesh, kind):
+    """The semi-bandwidth and the band laid out from the node-pair blocks are those of
+    every stored entry's band position worked out at once (the construction they replace),
+    bit for bit, whether the band order runs across the mesh's rows or its columns (a
+    wide, a tall and a one-element-wide mesh), and the band holds the matrix's upper
+    triangle."""
     units = UnitMatrices(mesh, kind)
     indices, indptr, _ = units._pattern
     csr_rows = np.repeat(np.arange(units.n_dofs), np.diff(indptr))
@@ -116,13 +118,13 @@ def test_band_layout_in_chunks_is_the_one_of_all_entries_at_once(monkeypatch, me
     upper = np.flatnonzero(cols >= rows)
     flat = cols[upper] * (bandwidth + 1) + bandwidth + rows[upper] - cols[upper]
     assert units.bandwidth == bandwidth
-    slots = units._banded_slots
-    for got, expected in zip(slots, (upper, flat)):
-        np.testing.assert_array_equal(got, expected)
-        assert got.dtype == np.int32
     data = np.sin(1e-3 * (csr_rows + indices) + 1e-6 * csr_rows * indices.astype(np.int64))  # symmetric
-    dense = units.matrix(data).toarray()[np.ix_(units.band_order, units.band_order)]
+    reference = np.zeros((bandwidth + 1) * units.n_dofs)
+    reference[flat] = data[upper]
     band = units.banded(data)
+    np.testing.assert_array_equal(band, reference.reshape(units.n_dofs, bandwidth + 1).T)
+    assert band.flags.f_contiguous
+    dense = units.matrix(data).toarray()[np.ix_(units.band_order, units.band_order)]
     for d in range(bandwidth + 1):
         np.testing.assert_array_equal(band[bandwidth - d, d:], np.diagonal(dense, d))
 
