@@ -58,6 +58,7 @@ import argparse
 import json
 import math
 import re
+import resource
 import time
 import tomllib
 import traceback
@@ -338,6 +339,9 @@ class Outcome:
     # (``Step.above_start``): a shear or layerwise one is a fault (it can only descend)
     above_start: tuple[tuple[int, str], ...] = ()
     stack: str = ""  # the third series' stack (the ``sensor`` family's differ); else the family
+    # the peak resident memory of the process that ran the case, when it ended [GB]: the
+    # case's own with --jobs > 1 (a process a case), the largest so far with --jobs 1
+    peak_rss_gb: float = math.nan
 
     @property
     def true_effects(self) -> tuple[str, ...]:
@@ -397,6 +401,7 @@ class Outcome:
                 for k, (rms, z) in (self.oracle.without if self.oracle else {}).items()
             },
             "above_start": [f"round {number}: {kind}" for number, kind in self.above_start],
+            "peak_rss_gb": num(self.peak_rss_gb, 2),
             "error": self.error,
         }
 
@@ -513,6 +518,7 @@ def run_case(
     except Exception as exc:  # noqa: BLE001 - the study reports every failure and goes on
         out.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
         out.error += " | " + traceback.format_exc().strip().splitlines()[-3].strip()
+    out.peak_rss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6  # kB on Linux
     return out
 
 
@@ -560,6 +566,9 @@ def summary(outcomes: list[Outcome], per_family: bool = True) -> dict:
         "shear_refits_above_start": sum(_shear_above_start(o) for o in outcomes),
         "median_seconds": round(float(np.median(seconds)), 1) if seconds else None,
         "max_seconds": round(float(np.max(seconds)), 1) if seconds else None,
+        "max_peak_rss_gb": max(
+            (round(o.peak_rss_gb, 2) for o in outcomes if math.isfinite(o.peak_rss_gb)), default=None
+        ),
     }
     if per_family:
         out["families"] = {
@@ -703,11 +712,13 @@ def main(argv=None) -> int:
     names = args.case or case_names(args.half)
     outcomes = []
     if args.jobs > 1:
-        # One process a case; each solve runs on one BLAS thread (fem.solver.threads).
+        # One process a case (a fresh one each: its peak memory is the case's own, as a
+        # user's ``diagnose`` would have it, and no case inherits another's caches); each
+        # solve runs on one BLAS thread (fem.solver.threads).
         try:
             # Each case is kept as it ends, not in the order of ``names``: a run stopped half
             # way keeps every case that finished.
-            with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            with ProcessPoolExecutor(max_workers=args.jobs, max_tasks_per_child=1) as pool:
                 for future in as_completed([pool.submit(run_case, name) for name in names]):
                     o = future.result()
                     _keep(o, args.out, stored)

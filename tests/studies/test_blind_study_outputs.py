@@ -88,7 +88,8 @@ def test_the_properties_are_also_scored_in_the_measurements_std_alone():
 
 def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monkeypatch):
     """The out-of-memory killer took one of two workers (run 8 of the dev half): the study
-    still writes its table and summary, the unfinished cases counted as failures."""
+    still writes its table and summary, the unfinished cases counted as failures.  Its
+    workers run one case each (a fresh process, so a row's peak memory is its case's)."""
     import threading
     from concurrent.futures import Future
     from concurrent.futures.process import BrokenProcessPool
@@ -96,7 +97,8 @@ def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monke
     class Killed:
         """The first case submitted ends; the second's process is killed."""
 
-        def __init__(self, max_workers):
+        def __init__(self, max_workers, **options):
+            assert options == {"max_tasks_per_child": 1}
             self.submitted = 0
 
         def __enter__(self):
@@ -109,7 +111,15 @@ def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monke
             future = Future()
             if self.submitted == 0:
                 future.set_result(
-                    study.Outcome(name, "hybrid", "dev", 5e-4, selected=("layerwise",), rms_after=2e-4)
+                    study.Outcome(
+                        name,
+                        "hybrid",
+                        "dev",
+                        5e-4,
+                        selected=("layerwise",),
+                        rms_after=2e-4,
+                        peak_rss_gb=1.234,
+                    )
                 )
             else:  # killed after the first has ended (a timer: as_completed waits on it)
                 threading.Timer(
@@ -124,6 +134,9 @@ def test_a_killed_worker_leaves_the_unfinished_cases_as_failures(tmp_path, monke
     data = json.loads((tmp_path / "blind_dev.json").read_text(), parse_constant=lambda c: 1 / 0)
     assert [c["case"] for c in data["cases"]] == names
     assert "killed" in data["cases"][1]["error"] and data["summary"]["dev"]["tracebacks"] == 1
+    # the finished case's peak memory, the killed one's unknown, the largest in the summary
+    assert [c["peak_rss_gb"] for c in data["cases"]] == [1.23, None]
+    assert data["summary"]["dev"]["max_peak_rss_gb"] == 1.23
 
 
 def test_the_3d_top_face_shapes_load_as_a_shapes_table_that_pairs_with_the_plate_model():
