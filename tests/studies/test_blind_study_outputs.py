@@ -324,13 +324,14 @@ def test_the_stored_development_run_covers_the_half_and_a_run_is_said_against_it
     }
 
 
-def test_the_held_out_third_series_table_in_the_docs_is_the_stored_run():
-    """docs/diagnosis.md's heldout3 table counts the rows of ``blind_runs/heldout3.json``
-    (a case meets a criterion as the study's ``Outcome`` judges it: the true effects
-    selected, RMS within ``FLOOR_RATIO`` x its floor, every property within ``Z_MAX``
-    std), so the published figures cannot drift from the run."""
-    stored = study.load_run(study.RUNS / "heldout3.json")["cases"]
-    assert sorted(stored) == study.case_names("heldout3")
+@pytest.mark.parametrize("half", ["heldout3", "heldout4"])
+def test_the_held_out_third_and_fourth_series_tables_in_the_docs_are_the_stored_runs(half):
+    """docs/diagnosis.md's heldout3 and heldout4 tables count the rows of
+    ``blind_runs/<half>.json`` (a case meets a criterion as the study's ``Outcome`` judges
+    it: the true effects selected, RMS within ``FLOOR_RATIO`` x its floor, every property
+    within ``Z_MAX`` std), so the published figures cannot drift from the runs."""
+    stored = study.load_run(study.RUNS / f"{half}.json")["cases"]
+    assert sorted(stored) == study.case_names(half)
     families = {
         "angle_ply": "angle ply",
         "balsa_sandwich": "balsa core",
@@ -347,7 +348,7 @@ def test_the_held_out_third_series_table_in_the_docs_is_the_stored_run():
             counts[key][2] += row["ratio"] <= study.FLOOR_RATIO
             counts[key][3] += row["max_z"] <= study.Z_MAX
     text = (Path(__file__).resolve().parents[2] / "docs" / "diagnosis.md").read_text()
-    table = text.split("**The held-out half (heldout3)")[1].split("\n\n")[1]
+    table = text.split(f"**The held-out half ({half})")[1].split("\n\n")[1]
     for label, (n, selected, rms, properties) in counts.items():
         if label == "all":
             figures = [f"{k} ({round(100 * k / n)} %)" for k in (selected, rms, properties)]
