@@ -3,10 +3,10 @@
 Elements of a structured mesh come in few sizes (one on an equal mesh, a few more
 where it is graded towards the edges), so one set of element unit matrices per size
 serves them all.  Assembly sums each element's n x n local entries of its size's
-matrices onto one global CSR pattern, node-pair block by block (``PairBlocks``);
-a global matrix for any laminate is then a weighted sum of data arrays: ``K.data = X @ stiffness_data``, or,
-cheaper in memory for elements with many DOFs, the aggregation of the weighted sum of
-element matrices (``combined_data``).
+matrices onto one global CSR pattern, node-pair block by block (``PairBlocks``); a
+global matrix for any laminate is then a weighted sum of data arrays:
+``K.data = X @ stiffness_data``, or, cheaper in memory for elements with many DOFs, the
+aggregation of the weighted sum of element matrices (``combined_data``).
 """
 
 from __future__ import annotations
@@ -310,22 +310,27 @@ class PairBlocks:
             (self.blocks.shape[0] * pn * pn, *tail), dtype=np.result_type(self.blocks.dtype, local)
         )
         batch = max(1, CHUNK_ENTRIES // (pn * pn * width))  # pairs summed at a time
-        first, taken = 0, []
-        for run in (*self.runs, None):
-            if run is not None and (not taken or run[0] + run[1] * run[2] - first <= batch):
-                taken.append(run)
-                continue
-            last = taken[-1][0] + taken[-1][1] * taken[-1][2]
-            summed = (self.blocks[first:last] @ by_pair).reshape(-1, pn, pn, *tail)
-            for start, nodes, neighbours in taken:
-                span = slice(start * pn * pn, (start + nodes * neighbours) * pn * pn)
-                part = summed[start - first : start - first + nodes * neighbours]
-                out[span].reshape(nodes, pn, neighbours, pn, *tail)[...] = part.reshape(
-                    nodes, neighbours, pn, pn, *tail
-                ).swapaxes(1, 2)
-            if run is not None:
-                first, taken = run[0], [run]
+        runs, ends = self.runs, self.runs[:, 0] + self.runs[:, 1] * self.runs[:, 2]
+        start = 0
+        while start < len(runs):  # consecutive runs of at most ``batch`` pairs (one at least)
+            first, stop = runs[start, 0], start + 1
+            while stop < len(runs) and ends[stop] - first <= batch:
+                stop += 1
+            summed = (self.blocks[first : ends[stop - 1]] @ by_pair).reshape(-1, pn, pn, *tail)
+            for run in runs[start:stop]:
+                offset, nodes, neighbours = run[0] - first, run[1], run[2]
+                part = summed[offset : offset + nodes * neighbours].reshape(nodes, neighbours, pn, pn, *tail)
+                self._run_blocks(out, run)[...] = part.swapaxes(1, 2)
+            start = stop
         return out
+
+    def _run_blocks(self, data: np.ndarray, run) -> np.ndarray:
+        """A run's span of CSR ``data`` (nnz, ...) as its blocks, a view: [n, i, q, j] is row
+        field i of the run's n-th node against column field j of its q-th neighbour."""
+        first, nodes, neighbours = run
+        pn = self.per_node
+        span = data[first * pn * pn : (first + nodes * neighbours) * pn * pn]
+        return span.reshape(nodes, pn, neighbours, pn, *data.shape[1:])
 
     def banded(self, data: np.ndarray, node_rank: np.ndarray, bandwidth: int) -> np.ndarray:
         """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
@@ -341,12 +346,12 @@ class PairBlocks:
         rows, columns = node_rank[self.pair_nodes].astype(np.int64)
         later = columns - rows
         corner = columns * pn * b + b + rows * pn  # block (0, 0): column pn c, row pn r
-        for first, nodes, neighbours in self.runs:
+        for run in self.runs:
+            first, nodes, neighbours = run
             pairs = slice(first, first + nodes * neighbours)
             shape = (nodes, neighbours)
             ahead, start = later[pairs].reshape(shape), corner[pairs].reshape(shape)
-            span = data[first * pn * pn : (first + nodes * neighbours) * pn * pn]
-            blocks = span.reshape(nodes, pn, neighbours, pn)
+            blocks = self._run_blocks(data, run)
             for q in range(neighbours):
                 whole = ahead[:, q] > 0
                 if whole.any():
@@ -375,7 +380,7 @@ def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
 
 
 def _nbytes(part) -> int:
-    """The bytes ``part`` (an array or a sparse matrix) holds of its own."""
+    """The bytes ``part`` (an array, a sparse matrix or node-pair blocks) holds of its own."""
     if isinstance(part, (np.ndarray, PairBlocks)):
         return part.nbytes
     if sp.issparse(part):
