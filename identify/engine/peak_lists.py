@@ -22,7 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from fem.model import SpecimenModel
+from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
@@ -61,12 +61,15 @@ def _by_rank(peaks: Measurements) -> Measurements:
 
 def _options(options: FitOptions, peaks: Measurements, ranked: Measurements) -> FitOptions:
     """The fit's options with enough extra modes that it solves every mode the matching
-    needs (the most peaks of a configuration + ``EXTRA_MODES``).  The matching then
-    solves the fit's own model (:func:`_solver`) and, at a solution, reuses its solves
-    (``fem.model.solve_laminate`` is cached) instead of solving a second model."""
+    needs (the most peaks of a configuration + ``EXTRA_MODES``), as far as a model may
+    solve beyond its highest matched mode (a far model's matching can keep 6 of 13 peaks).
+    The matching then solves the fit's own model (:func:`_solver`) and, at a solution,
+    reuses its solves (``fem.model.solve_laminate`` is cached) instead of solving a second
+    model."""
     most = int(peaks.table.groupby("configuration").size().max())
     highest = int(ranked.table["mode"].max())
-    return replace(options, extra_modes=max(options.extra_modes, most + EXTRA_MODES - highest))
+    needed = min(most + EXTRA_MODES - highest, MAX_SOLVED_MODES - MAX_MODES)
+    return replace(options, extra_modes=max(options.extra_modes, needed))
 
 
 def _solver(
@@ -213,6 +216,17 @@ def fit_peak_list(
         tightening = round_ < len(narrowing)
         tolerance = narrowing[round_] if tightening else model_error(result)
         again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
+        kept = sum(int(m.matched.sum()) for m in again.values())
+        if kept < len(parameters):
+            # A fit still far off (a start in the wrong basin) matches too few peaks at this
+            # tolerance to fit its unknowns: the last matching stays.
+            notes.append(
+                f"re-matching at {tolerance:.2%} kept {kept} of {len(peaks)} peaks, fewer than the "
+                f"{len(parameters)} unknowns: the last matching was kept (the model is far from the peaks)"
+            )
+            if tightening:
+                continue
+            break
         unchanged = all(np.array_equal(again[c].modes, matches[c].modes) for c in matches)
         if not tightening and _signature(again) == seen[-1]:
             matches = again

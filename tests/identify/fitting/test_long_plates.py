@@ -71,6 +71,56 @@ def test_handbook_start_reaches_the_right_pairing(thin_truth):
     assert result.peaks.unseen["original"] == [5, 14, 23]
 
 
+#: Two peak lists hypothesis drew from ``thin_truth`` (modes 1-14): the first has modes 1-3
+#: missing and six spurious peaks, the second modes 1, 2, 9, 10 and 13 missing, two pairs
+#: merged and two spurious peaks.  The screened start of each lands E1 near 7 GPa (truth
+#: 12.2), so the re-matching at the narrowed tolerances keeps few peaks: the first's at 1 %
+#: up to mode 6 of 13 peaks (it asked for 11 extra modes, above the 10 allowed:
+#: OptionsError), the second's at 0.3 % only 3 peaks for 4 unknowns (MeasurementError).
+FAR_OFF_PEAK_LISTS = {
+    "modes 1-3 missing, 6 spurious": [
+        42.10203466,
+        42.16564544,
+        66.50851825,
+        147.59819646,
+        167.3806003,
+        180.60243776,
+        223.05237931,
+        272.85729876,
+        273.08789236,
+        323.83312187,
+        436.0097716,
+        523.60355234,
+        567.61488987,
+    ],
+    "modes 1-2 missing, 2 merged, 2 spurious": [
+        66.56295006,
+        133.58005748,
+        147.44374899,
+        180.70685848,
+        222.73590518,
+        272.56573177,
+        339.34182065,
+        436.09854956,
+        523.83025677,
+    ],
+}
+
+
+@pytest.mark.parametrize("peaks_hz", FAR_OFF_PEAK_LISTS.values(), ids=FAR_OFF_PEAK_LISTS.keys())
+def test_a_fit_far_from_its_peaks_keeps_a_matching_it_can_fit(peaks_hz):
+    """A re-matching that keeps fewer peaks than unknowns is not fitted: the last matching
+    stays, the result says so and ends with a status (here poor_fit: the fit is in the wrong
+    basin and its misfit says it), accounting for every peak."""
+    model = long_plates.handbook_model()
+    peaks = parse_measurements(pd.DataFrame({"configuration": "original", "frequency_hz": peaks_hz}), model)
+    result = fit(model, peaks)
+    assert result.status is FitStatus.POOR_FIT, result.message
+    assert len(result.peaks.modes) == len(peaks_hz)
+    assert any("fewer than the 4 unknowns: the last matching was kept" in w for w in result.warnings)
+    assert int(result.peaks.matched.sum()) >= 4
+
+
 #: Examples that each run whole fits: no deadline, and the module's fixture reused across them.
 WHOLE_FITS = settings(
     deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
