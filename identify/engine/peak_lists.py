@@ -22,6 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from fem.errors import MeasurementError
 from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
 
@@ -199,6 +200,13 @@ def fit_peak_list(
         matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
         model, matches, note = _screened_start(handbook, model, matches, peaks, parameters, options)
         notes += [note] if note else []
+    matched = sum(int(m.matched.sum()) for m in matches.values())
+    if matched < len(parameters):
+        raise MeasurementError(
+            f"only {matched} of {len(peaks)} peaks match a mode of the start model, fewer than the "
+            f"{len(parameters)} unknowns: the peaks are not this specimen's modes, or the start is far off; "
+            "check the units (Hz) and the start properties, or give the mode numbers (a 'mode' column)"
+        )
     # From a solution's matching the model is as close as it gets: no narrowing rounds, its
     # own error is the tolerance at once.
     narrowing = TIGHTENING if start_matches is None else ()

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fem.errors import LayerIdError
+from fem.errors import LayerIdError, MeasurementError
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.diagnosis.diagnose import diagnose
@@ -119,6 +119,16 @@ def test_a_fit_far_from_its_peaks_keeps_a_matching_it_can_fit(peaks_hz):
     assert len(result.peaks.modes) == len(peaks_hz)
     assert any("fewer than the 4 unknowns: the last matching was kept" in w for w in result.warnings)
     assert int(result.peaks.matched.sum()) >= 4
+
+
+def test_peaks_no_start_can_match_are_a_clear_error():
+    """Five peaks 1 Hz apart (no plate has such a spectrum) leave one peak matched at the
+    start for 4 unknowns: an error that says how many peaks matched and what to check, not
+    the fit's 'measure at least as many modes' (the list has more peaks than unknowns)."""
+    model = long_plates.handbook_model()
+    table = pd.DataFrame({"configuration": "original", "frequency_hz": [100.0, 101.0, 102.0, 103.0, 104.0]})
+    with pytest.raises(MeasurementError, match=r"only 1 of 5 peaks match a mode of the start model.*units"):
+        fit(model, parse_measurements(table, model))
 
 
 #: Examples that each run whole fits: no deadline, and the module's fixture reused across them.
