@@ -225,11 +225,12 @@ def fit_peak_list(
         tolerance = narrowing[round_] if tightening else model_error(result)
         again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
         kept = sum(int(m.matched.sum()) for m in again.values())
-        if kept < len(parameters):
+        if kept <= len(parameters):
             # A fit still far off (a start in the wrong basin) matches too few peaks at this
-            # tolerance to fit its unknowns: the last matching stays.
+            # tolerance to fit its unknowns and test the fit (``_without_redundancy``): the
+            # last matching stays.
             notes.append(
-                f"re-matching at {tolerance:.2%} kept {kept} of {len(peaks)} peaks, fewer than the "
+                f"re-matching at {tolerance:.2%} kept {kept} of {len(peaks)} peaks, no more than the "
                 f"{len(parameters)} unknowns: the last matching was kept (the model is far from the peaks)"
             )
             if tightening:
