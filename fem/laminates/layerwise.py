@@ -38,7 +38,9 @@ plate bonded on one side) the flexural modes squeeze the core, which the 3-D ref
 shows lowers the bonded sandwich's modes by up to 0.23 % (a solid model with a 100x stiffer
 core through the thickness, run for this check).  The through-thickness modulus is the
 layer's E3 (a material attribute ``E3`` when it has one, else E2: exact for isotropic
-cores and unidirectional plies; a honeycomb needs its own E3, or ``core_stretch = false``).
+cores and unidirectional plies; a honeycomb needs its own E3, or ``core_stretch = false``;
+the ``layerwise`` effect holds it at an identified E2's start value,
+``fem.effects.Layerwise.held_normal_moduli``).
 Poisson coupling to the in-plane strains is neglected (the 3-D check: setting the foam's
 nu13, nu23 to 0 moves the frequencies by at most 0.034 %), so the in-plane stiffness stays
 the plane-stress Qbar.
