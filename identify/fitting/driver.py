@@ -1384,14 +1384,16 @@ def released(
 ) -> FitResult:
     """``result`` refitted with the layer properties the thin-plate fit held
     (``fit_holding_bounds``) free again where the data then determine them: all at once,
-    else one at a time (blind hybrid: freeing a ply's nu12 and the other's E1 together
-    sent one to a bound, while one of them alone is determined).  A freed property must not
-    end at a bound, run off or be implausible.  Not judged by the criterion: holding was
-    for choosing the effects; a property held at a handbook value 30 % off moves the
-    others by several of their std (blind cross-ply: 7.5; blind hybrid: 13.9), while freed
-    it costs only its own std.  Those still held carry their handbook scatter into the
-    others' std (``with_held_scatter``).  ``settle``: the pairing check of the answer, made
-    once, at it (the tries to free check only the re-pairings that lower the misfit)."""
+    else one at a time (blind hybrid: freeing a ply's nu12 and the other's E1 together sent
+    one to a bound, while one of them alone is determined). A freed property must not end at
+    a bound, run off or be implausible, nor, one at a time, may one freed before it
+    (blind99: a coating's E2 ran off to 0.5 MPa while the next was freed). Not judged by the
+    criterion: holding was for choosing the effects; a property held at a handbook value
+    30 % off moves the others by several of their std (blind cross-ply: 7.5; blind hybrid:
+    13.9), while freed it costs only its own std. Those still held carry their handbook
+    scatter into the others' std (``with_held_scatter``). ``settle``: the pairing check of
+    the answer, made once, at it (the tries to free check only the re-pairings that lower
+    the misfit)."""
     every = baseline.model.specimen.material_parameters()
     held = [
         p
@@ -1414,11 +1416,14 @@ def released(
     def freeing(fitted: FitResult, free: list[Parameter]) -> FitResult | None:
         free_too = list(fitted.parameters) + free
         freed = fit_layers(fitted.model, measurements, free_too, options, Follow.on(fitted, quick))
+        # Every property this release frees, those freed before ``free`` one at a time too:
+        # freeing the next one must not send an earlier one off.
+        judged = [p for p in free_too if p in held]
         if (
             not freed.finished
-            or any(p in free for p in at_bounds(freed))
-            or any(_ran_off(freed.value(p), baseline.model.value(p)) for p in free)
-            or implausible(free, freed.specimen, nominal, first_hz, freed.model.input_std)
+            or any(p in judged for p in at_bounds(freed))
+            or any(_ran_off(freed.value(p), baseline.model.value(p)) for p in judged)
+            or implausible(judged, freed.specimen, nominal, first_hz, freed.model.input_std)
         ):
             return None
         return freed
