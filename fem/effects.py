@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .errors import NotApplicableError, SpecError
-from .laminates.layerwise import LayerwiseLaminate, soft_layers
+from .laminates.layerwise import LayerwiseLaminate, soft_layers, stretching_layers
 from .model import SpecimenModel
 from .solver.attachments import PointMass, Suspension
 from .specimen import Parameter
@@ -250,12 +250,13 @@ class Layerwise(Effect):
         polymer coating (E = 0.82 GPa) on aluminium, its 9.5 g sensor not yet in the model,
         took E2 = 3.5 MPa, the coating's mass bouncing on it imitating the sensor, at 0.83 %
         std and 28,000 std from the truth."""
-        options, specimen = model.options, model.specimen
+        specimen = model.specimen
+        if not model.options.core_stretch:
+            return []
         stretching = set()
         for configuration in specimen.configurations:
             laminate = specimen.laminate(configuration)
-            stack = LayerwiseLaminate.of(laminate, options.layer_groups, options.core_stretch)
-            stretching |= {laminate.layers[k].material.name for k in stack.stretch}
+            stretching |= {laminate.layers[k].material.name for k in stretching_layers(laminate)}
         return [
             replace(m, E3=m.E2)
             for m in specimen.materials.values()

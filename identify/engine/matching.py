@@ -56,6 +56,11 @@ class Match:
         return self.modes >= 0
 
 
+def matched_count(matches: dict[str, Match]) -> int:
+    """How many peaks the configurations' matchings ``matches`` match, in all."""
+    return sum(int(m.matched.sum()) for m in matches.values())
+
+
 def _sigma(peaks_hz: np.ndarray, std_hz: np.ndarray | None) -> np.ndarray:
     return std_hz if std_hz is not None else ASSUMED_SCATTER_REL * peaks_hz
 
@@ -136,4 +141,4 @@ def align(
     return best[1]
 
 
-__all__ = ["Match", "match", "align", "GATE", "SHAPE_GATE"]
+__all__ = ["Match", "match", "matched_count", "align", "GATE", "SHAPE_GATE"]

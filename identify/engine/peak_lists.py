@@ -27,7 +27,7 @@ from fem.model import MAX_MODES, MAX_SOLVED_MODES, SpecimenModel
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
-from .matching import GATE, SHAPE_GATE, Match, align, match
+from .matching import GATE, SHAPE_GATE, Match, align, match, matched_count
 from .objective import solving_model
 from .pairing import permits
 from .parameters import display
@@ -157,7 +157,7 @@ def _screened_start(
         for p, v in screened.values.items()
         if not np.isclose(v, scaled.value(p), rtol=1e-6)
     )
-    count = sum(int(m.matched.sum()) for m in screened.matches.values())
+    count = matched_count(screened.matches)
     scaled_cost = (
         f"{screened.scaled_cost:.3g}" if np.isfinite(screened.scaled_cost) else "inadmissible"
     )  # polished onto an inadmissible material
@@ -200,7 +200,7 @@ def fit_peak_list(
         matches = _match_all(_solver(model, peaks, options), peaks, None) if note else matches
         model, matches, note = _screened_start(handbook, model, matches, peaks, parameters, options)
         notes += [note] if note else []
-    matched = sum(int(m.matched.sum()) for m in matches.values())
+    matched = matched_count(matches)
     if matched < len(parameters):
         raise MeasurementError(
             f"only {matched} of {len(peaks)} peaks match a mode of the start model, fewer than the "
@@ -224,7 +224,7 @@ def fit_peak_list(
         tightening = round_ < len(narrowing)
         tolerance = narrowing[round_] if tightening else model_error(result)
         again = _match_all(_solver(result.model, peaks, options, ranked), peaks, tolerance)
-        kept = sum(int(m.matched.sum()) for m in again.values())
+        kept = matched_count(again)
         if kept <= len(parameters):
             # A fit still far off (a start in the wrong basin) matches too few peaks at this
             # tolerance to fit its unknowns and test the fit (``_without_redundancy``): the

@@ -38,7 +38,7 @@ from fem.specimen import Parameter
 
 from ..measurements import Measurements
 from . import ties
-from .matching import START_TOLERANCE, Match, match
+from .matching import START_TOLERANCE, Match, match, matched_count
 from .parameters import ParameterSpace
 
 #: Basis modes per model mode of the screen's reduced model (Ritz error 0.01-0.04 % at
@@ -154,13 +154,13 @@ class _Search:
             if spectra is None:
                 return z
             pairs = self.matches(spectra, tolerance)
-            if sum(int(m.matched.sum()) for m in pairs.values()) <= len(z):
+            if matched_count(pairs) <= len(z):
                 return z
 
             def residuals(trial, pairs=pairs):
                 spectra = self.spectra(trial)
                 if spectra is None:
-                    return np.full(len(trial) + sum(int(m.matched.sum()) for m in pairs.values()), 1e3)
+                    return np.full(len(trial) + matched_count(pairs), 1e3)
                 # the start as a prior: a direction no peak sets stays there
                 out = [(trial - self.z_start) / half]
                 for name, m in pairs.items():
