@@ -9,7 +9,8 @@ show which:
   mixed up in the file), or one configuration alone carries the misfit (its added
   layers or its data);
 - pairing: residuals that alternate in sign from mode to mode (a peak list matched off
-  by a mode, a start too far away);
+  by a mode, a start too far away), or a peak list of which fewer than half the peaks
+  match a mode at the solution (its misfit on the rest then says nothing);
 - missing physics: a smooth pattern over the modes (``compare``'s signatures): run
   ``diagnose``;
 - data: none of these, and the misfit is large: the data may not belong to this spec.
@@ -26,6 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..engine.objective import solving_model
+from ..engine.peak_lists import MATCHED_SHARE
 from ..engine.result import FitResult, FitStatus
 from ..engine.statistics import weighted_residuals
 from .patterns import PATTERN_SHARE, residual_patterns
@@ -150,6 +152,24 @@ def _pairing(result: FitResult) -> Cause | None:
     )
 
 
+def _few_matched(result: FitResult) -> Cause | None:
+    """A peak-list fit that matched fewer than ``MATCHED_SHARE`` of its peaks: its misfit
+    on the peaks it kept says nothing of the others, so this cause comes first whatever
+    their residuals show."""
+    if result.peaks is None:
+        return None
+    matched, listed = int(result.peaks.matched.sum()), len(result.peaks.matched)
+    if matched >= MATCHED_SHARE * listed:
+        return None
+    return Cause(
+        "pairing",
+        1.0,
+        f"{matched} of {listed} peaks matched: the left-out peaks near unseen modes are likely real modes "
+        "that a far model (several effects missing, a wrong basin) cannot place; give the mode numbers you "
+        "know (a 'mode' column) or run 'identify-layers diagnose'",
+    )
+
+
 def _missing_physics(result: FitResult) -> Cause | None:
     patterns, *_ = residual_patterns(
         solving_model(result.model, result.measurements),
@@ -180,6 +200,9 @@ def with_causes(result: FitResult) -> FitResult:
 
 def likely_causes(result: FitResult) -> tuple[Cause, ...]:
     """The causes the residuals of a poor fit show, most likely first (never empty)."""
+    few = _few_matched(result)
+    if few is not None:
+        return (few,)
     found = [c for c in (_units(result), _configurations(result), _pairing(result)) if c is not None]
     if not any(c.score >= NAMED for c in found):
         physics = _missing_physics(result)

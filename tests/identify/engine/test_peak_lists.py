@@ -1,6 +1,8 @@
 """Peak lists as recordings give them: no mode numbers, modes missing, spurious
 peaks; ranks with gaps; the matching itself against hand-worked cases."""
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -8,6 +10,7 @@ import pytest
 from identify.engine.matching import GATE, align, match
 from identify.engine.peak_lists import _without_redundancy
 from identify.engine.result import FitStatus
+from identify.fitting.causes import with_causes
 from identify.fitting.driver import fit
 from identify.measurements import parse_measurements
 from identify.recordings.synthetic import synthetic_measurements
@@ -156,3 +159,8 @@ def test_a_fit_that_matches_fewer_than_half_the_peaks_is_not_converged(
     assert judged.converged is converged, judged.message
     if not converged:
         assert judged.status is FitStatus.POOR_FIT and "15 of 31 peaks match a mode" in judged.message
+        # Its likely cause is the matching, not a pattern in the residuals of the peaks it kept
+        # (here the list's own 15 peaks, so the judged fit is given 16 more left out).
+        left_out = replace(judged.peaks, modes=np.concatenate([judged.peaks.modes, np.zeros(16, int)]))
+        causes = with_causes(replace(judged, peaks=left_out)).causes
+        assert [c.kind for c in causes] == ["pairing"] and "15 of 31 peaks matched" in causes[0].text
