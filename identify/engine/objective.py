@@ -407,9 +407,16 @@ class TrialScreen:
         return self.ritz.cost(trial) <= self.cost
 
 
-def relative_sensitivity(e: Evaluation) -> np.ndarray:
-    """The paper's normalised sensitivity matrix (p / f) df/dp of the paired modes."""
-    return e.derivatives * e.values[None, :] / e.model_hz[:, None]
+def relative_sensitivity(e: Evaluation, space: ParameterSpace) -> np.ndarray:
+    """The paper's normalised sensitivity matrix (p / f) df/dp of the paired modes.  A
+    parameter at exactly zero (held on a bound of zero: nu12 = 0, a position on an edge)
+    is scaled by the unit of its fit variable instead (``ParameterSpace.dvalue_dz``: 1 for
+    nu12, a plate length for a position): there p / f makes its column zero, the matrix
+    singular and every parameter's std void, although the frequencies see it (a real-like
+    spruce plate's thin-plate fit, nu12 on its bound of 0: E1, E2, G12 all "not
+    identifiable")."""
+    scale = np.where(e.values != 0, e.values, space.dvalue_dz(e.values))
+    return e.derivatives * scale[None, :] / e.model_hz[:, None]
 
 
 __all__ = [

@@ -169,7 +169,7 @@ class Uncertainty:
         if not statistics.scatter_known and statistics.dof <= 0:
             warnings.append("no redundancy to estimate the scatter: give std_hz or measure more modes")
         scale = statistics.noise_scale
-        relative = relative_sensitivity(evaluation)
+        relative = relative_sensitivity(evaluation, space)
         cond = condition_number(relative)
         _, s_rel, vt_rel = np.linalg.svd(relative, full_matrices=False)
         # Relative to the largest; all zero when no paired mode moves (frequencies in kHz).

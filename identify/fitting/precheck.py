@@ -57,7 +57,7 @@ class Sensitivities:
         scatter = 1.0 if measurements.has_std else ASSUMED_SCATTER_REL
         return cls(
             tuple(parameters),
-            relative_sensitivity(evaluation),
+            relative_sensitivity(evaluation, objective.space),
             objective.jacobian(evaluation),
             scatter,
             objective.residual(evaluation),
