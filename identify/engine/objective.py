@@ -407,15 +407,23 @@ class TrialScreen:
         return self.ritz.cost(trial) <= self.cost
 
 
+#: A parameter whose value is below this share of its fit variable's unit is at zero for
+#: the relative sensitivity matrix (``relative_sensitivity``): nu12 held on its bound (a
+#: real-like spruce plate's fit ended at 1e-10) is; a modulus, whose unit is its value,
+#: never is.
+NEGLIGIBLE_VALUE = 1e-6
+
+
 def relative_sensitivity(e: Evaluation, space: ParameterSpace) -> np.ndarray:
     """The paper's normalised sensitivity matrix (p / f) df/dp of the paired modes.  A
-    parameter at exactly zero (held on a bound of zero: nu12 = 0, a position on an edge)
-    is scaled by the unit of its fit variable instead (``ParameterSpace.dvalue_dz``: 1 for
-    nu12, a plate length for a position): there p / f makes its column zero, the matrix
-    singular and every parameter's std void, although the frequencies see it (a real-like
-    spruce plate's thin-plate fit, nu12 on its bound of 0: E1, E2, G12 all "not
-    identifiable")."""
-    scale = np.where(e.values != 0, e.values, space.dvalue_dz(e.values))
+    parameter at zero (below ``NEGLIGIBLE_VALUE`` of its fit variable's unit: nu12 held on
+    its bound, a position on an edge) is scaled by that unit instead
+    (``ParameterSpace.dvalue_dz``: 1 for nu12, a plate length for a position): there
+    p / f makes its column vanish, the matrix singular and every parameter's std void,
+    although the frequencies see it (real-like spruce plates' thin-plate fits, nu12 on its
+    bound: E1, E2, G12 all "not identifiable", condition number inf or 2e11)."""
+    unit = space.dvalue_dz(e.values)
+    scale = np.where(np.abs(e.values) > NEGLIGIBLE_VALUE * np.abs(unit), e.values, unit)
     return e.derivatives * scale[None, :] / e.model_hz[:, None]
 
 
