@@ -29,15 +29,17 @@ def _fixed(x: float, decimals: int) -> str:
 def with_std(value: float, std: float, unit: str = "", digits: int = STD_DIGITS) -> str:
     """``value ± std unit (rel %)`` rounded to the std's ``digits`` significant digits,
     e.g. ``67.8 ± 1.2 GPa (1.7 %)``; without a finite positive std, ``value`` to 4
-    significant digits and ``± n/a``."""
+    significant digits and ``± n/a``.  A value that reads as zero at that precision has no
+    relative std (nu12 held at 1e-10 with a std of 0.20 read "(200000000000 %)")."""
     tail = f" {unit}" if unit else ""
     if not math.isfinite(value):
         return "n/a"
     if not (math.isfinite(std) and std > 0):
         return f"{value:.4g} ± n/a{tail}"
     decimals = _decimals(std, digits)
-    rel = f" ({percent(std / abs(value), digits)})" if value else ""
-    return f"{_fixed(value, decimals)} ± {_fixed(std, decimals)}{tail}{rel}"
+    shown = _fixed(value, decimals)
+    rel = f" ({percent(std / abs(value), digits)})" if float(shown) != 0 else ""
+    return f"{shown} ± {_fixed(std, decimals)}{tail}{rel}"
 
 
 def percent(rel: float, digits: int = STD_DIGITS) -> str:

@@ -16,6 +16,10 @@ from identify.reporting.rounding import percent, status_line, with_std
         (201.09, 0.99, "GPa", "201.09 ± 0.99 GPa (0.49 %)"),  # 0.99 stays 2 digits
         (12345.6, 234.5, "N/m", "12350 ± 230 N/m (1.9 %)"),  # std above 10: tens
         (-3.14159, 0.0271, "deg", "-3.142 ± 0.027 deg (0.86 %)"),
+        (1e-10, 0.2, "", "0.00 ± 0.20"),  # reads as zero: no relative std
+        (0.0, 0.2, "", "0.00 ± 0.20"),
+        (0.004, 0.2, "", "0.00 ± 0.20"),
+        (0.006, 0.2, "", "0.01 ± 0.20 (3300 %)"),
     ],
 )
 def test_value_rounded_to_two_digits_of_its_std(value, std, unit, expected):
