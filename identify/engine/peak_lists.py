@@ -61,6 +61,12 @@ MODULI = ("E1", "E2", "G12", "G13", "G23")
 MATCHED_SHARE = 0.5
 
 
+def too_few_matched(matched: int, listed: int) -> bool:
+    """Whether ``matched`` of ``listed`` peaks are too few for a fit of the list to be
+    tested by them (``MATCHED_SHARE``)."""
+    return matched < MATCHED_SHARE * listed
+
+
 def _by_rank(peaks: Measurements) -> Measurements:
     """The peaks as if each configuration's were its modes 1, 2, ... (before any matching)."""
     table = peaks.table.assign(mode=peaks.table.groupby("configuration").cumcount() + 1)
@@ -298,7 +304,7 @@ def _without_redundancy(result: FitResult, n_peaks: int) -> FitResult:
     st = result.statistics
     if result.status is not FitStatus.CONVERGED:
         return result
-    if st.dof > 0 and st.n >= MATCHED_SHARE * n_peaks:
+    if st.dof > 0 and not too_few_matched(st.n, n_peaks):
         return result
     if st.dof > 0:
         return replace(

@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..engine.objective import solving_model
-from ..engine.peak_lists import MATCHED_SHARE
+from ..engine.peak_lists import too_few_matched
 from ..engine.result import FitResult, FitStatus
 from ..engine.statistics import weighted_residuals
 from .patterns import PATTERN_SHARE, residual_patterns
@@ -153,13 +153,13 @@ def _pairing(result: FitResult) -> Cause | None:
 
 
 def _few_matched(result: FitResult) -> Cause | None:
-    """A peak-list fit that matched fewer than ``MATCHED_SHARE`` of its peaks: its misfit
+    """A peak-list fit that matched too few of its peaks (``too_few_matched``): its misfit
     on the peaks it kept says nothing of the others, so this cause comes first whatever
     their residuals show."""
     if result.peaks is None:
         return None
     matched, listed = int(result.peaks.matched.sum()), len(result.peaks.matched)
-    if matched >= MATCHED_SHARE * listed:
+    if not too_few_matched(matched, listed):
         return None
     return Cause(
         "pairing",

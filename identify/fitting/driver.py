@@ -1126,7 +1126,7 @@ def _restarted(
     is not, the lowest misfit kept.  The fit it contains is ``state``, or where higher the
     state with rotary inertia (``with_rotary_inertia``, for an effect that brings it) or the
     effect's own model at the thin-plate limit its bounds allow, the other parameters
-    refitted (``_at_limit``): the shear moduli's upper bound leaves some shear (a steel
+    refitted (``_at_fixed_shear``): the shear moduli's upper bound leaves some shear (a steel
     plate's limit is 14 G12), and the shear theory's element and mesh differ from the thin
     plate's.  A refit that ends between the state and the higher of these has not failed.
     On a real-like spruce plate's peak list (scatter 1e-4 of each frequency) the Mindlin
@@ -1154,7 +1154,7 @@ def _restarted(
     # whose thin-plate limit is not the fit the refit contains.
     at_state = ready.model.with_values(dict(zip(state.parameters, state.values, strict=True)))
     limit_model, factor = vanishing_shear_start(refit, at_state, shear, parameters)
-    limit = _at_limit(refit, limit_model, shear, parameters)
+    limit = _at_fixed_shear(refit, limit_model, shear, parameters)
     contained = max(
         (
             f
@@ -1235,10 +1235,10 @@ def vanishing_shear_start(
     return model.with_values(_shear_values(specimen, shear, (factor, factor))), factor
 
 
-def _at_limit(refit: Refit, model: SpecimenModel, shear, parameters) -> FitResult:
-    """The thin-plate limit ``model`` (its ``shear`` moduli at the factor
-    ``vanishing_shear_start`` chose) with the other ``parameters`` refitted (at most
-    ``CONTINUATION_ITERATIONS``): the first point of ``shear_continuation``."""
+def _at_fixed_shear(refit: Refit, model: SpecimenModel, shear, parameters) -> FitResult:
+    """``model`` with its ``shear`` moduli as they are and the other ``parameters``
+    refitted (at most ``CONTINUATION_ITERATIONS``): each point of ``shear_continuation``,
+    the first at the thin-plate limit ``vanishing_shear_start`` chose."""
     others = [p for p in parameters if p not in shear]
     unsettled = refit.follow(refit.state.pairings, Settle.NONE)
     return fit_layers(model, refit.measurements, others, _continuation_options(refit), unsettled)
@@ -1247,25 +1247,17 @@ def _at_limit(refit: Refit, model: SpecimenModel, shear, parameters) -> FitResul
 def shear_continuation(
     refit: Refit, limit: FitResult, shear, factor: float, parameters
 ) -> tuple[SpecimenModel, float]:
-    """From the thin-plate limit (``limit``: ``_at_limit``, its ``shear`` moduli at
-    ``factor`` x G12), the shear moduli lowered by ``CONTINUATION_STEP`` at a time, the
+    """From the thin-plate limit (``limit``: ``_at_fixed_shear`` there, its ``shear`` moduli
+    at ``factor`` x G12), the shear moduli lowered by ``CONTINUATION_STEP`` at a time, the
     other parameters refitted at each, as long as the misfit falls: the model where a
     refit with the shear moduli free starts (at the limit their derivatives vanish, so the
     refit itself would stop there with them undetermined).  Every step kept lowers the
     misfit.  Returns (the model, its factor)."""
-    others = [p for p in parameters if p not in shear]
-    steps = _continuation_options(refit)
-    unsettled = refit.follow(refit.state.pairings, Settle.NONE)
-
-    def fitted(start: SpecimenModel) -> FitResult:
-        return fit_layers(start, refit.measurements, others, steps, unsettled)
-
     current = limit
     while factor > 1.0:
         lower = max(1.0, factor / CONTINUATION_STEP)
-        trial = fitted(
-            current.model.with_values(_shear_values(current.model.specimen, shear, (lower, lower)))
-        )
+        lowered = current.model.with_values(_shear_values(current.model.specimen, shear, (lower, lower)))
+        trial = _at_fixed_shear(refit, lowered, shear, parameters)
         if not trial.statistics.sum_squares < current.statistics.sum_squares:
             break
         current, factor = trial, lower

@@ -20,7 +20,7 @@ def continuation_steps(context, model, shear, factor: float, parameters):
         return result
 
     with mock.patch.object(driver, "fit_layers", recording):
-        limit = driver._at_limit(context, model, shear, parameters)
+        limit = driver._at_fixed_shear(context, model, shear, parameters)
         model, reached = driver.shear_continuation(context, limit, shear, factor, parameters)
     kept = misfits[:-1] if len(misfits) > 1 and misfits[-1] >= misfits[-2] else misfits
     return model, reached, kept

@@ -146,7 +146,7 @@ def test_a_parameter_free_or_contained_refit_is_not_reported_above_its_state(thi
 def test_a_shear_refit_contains_its_own_bounded_thin_plate_limit(heavy_sensor_baseline, monkeypatch):
     """A transverse-shear model within its bounds (G13, G23 at most 2000 GPa, 14 x the
     steel's G12) cannot reach the thin plate: with the layers refitted at that limit
-    (``_at_limit``) it leaves a chi^2 20 % above the thin plate's (measured: 32,700 against
+    (``_at_fixed_shear``) it leaves a chi^2 20 % above the thin plate's (measured: 32,700 against
     26,400), and a refit that ends between the two has not failed.  Before, it was
     restarted from the continuation and from every shear start, all of which ended above
     the thin plate too, and reported as a fault of the refit ("please report it").  The
