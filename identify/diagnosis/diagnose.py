@@ -47,6 +47,7 @@ from fem.solver.threads import one_blas_thread
 from fem.specimen import Parameter
 
 from ..engine.parameters import display, json_key
+from ..engine.peak_lists import matching_cost, model_error
 from ..engine.result import FitResult, FitStatus
 from ..engine.statistics import CHI2_TEST_LEVEL
 from ..engine.ties import Tied
@@ -58,8 +59,11 @@ from ..fitting.driver import (
     Refit,
     RefitPolicy,
     Refitting,
+    add_effect,
+    afresh_from_spec,
     worker_pool,
 )
+from ..fitting.plausibility import implausible
 from ..measurements import Measurements
 from ..reporting.diagnosis_report import diagnosis_text, diagnosis_view
 from .compare import Comparison, compare
@@ -132,6 +136,8 @@ class Candidate:
     gain: float
     scaled_gain: float
     error: str = ""
+    # implausible alone, plausible with this effect refitted on top of it (``_afresh_from_spec``)
+    plausible_with: str = ""
 
     @property
     def fit(self) -> FitResult | None:
@@ -342,7 +348,8 @@ class Diagnosis:
             f"missing: {chain} (RMS error {100 * self.baseline.rms_rel_error:.3g} % -> "
             f"{100 * final.rms_rel_error:.3g} %, refit {final.status.value})"
         )
-        odd = [c.kind for c in self.selected if not c.plausible]
+        chosen = {c.kind for c in self.selected}
+        odd = [c.kind for c in self.selected if not c.plausible and c.plausible_with not in chosen]
         if odd:
             text += (
                 f"; implausible estimate of {', '.join(odd)}: "
@@ -565,6 +572,110 @@ def _candidate(state: FitResult, added: AddedEffect) -> Candidate:
     gain = state.statistics.bic - fit.statistics.bic
     note = "; ".join(added.notes) if fit.finished else fit.message
     return Candidate(added.kind, note, added, gain, _scaled_gain(state, fit))
+
+
+def _rematch_from_spec(
+    peak_list: Measurements, state: FitResult, baseline: FitResult, at_noise_level: bool
+) -> bool:
+    """Whether the shear effects are refitted from the spec's values to the whole peak list
+    (``afresh_from_spec``) when no candidate pays: on a peak list, far from the noise, in
+    the first round (the candidates were judged on the thin-plate fit's peak matching)."""
+    return not peak_list.ranked and not at_noise_level and state is baseline
+
+
+def _afresh_from_spec(
+    refitting: Refitting, trying: list[str], ordered: list[Candidate], pool, policy: SelectionPolicy, say
+) -> tuple[Candidate | None, str]:
+    """The best of the shear effects among ``trying`` refitted from the spec's values with
+    the peaks matched afresh (``afresh_from_spec``), when it pays over the state by its
+    matching cost on every peak (``_rematched_candidate``) and is selectable, or becomes
+    plausible with the round's best other candidate refitted on top of it (a look-ahead of
+    one round: another missing effect distorts it alone); otherwise None and, when one pays
+    but stays implausible or singular, a lead for the stop's reason."""
+    kinds = [k for k in trying if effect(k).restarts_from_spec]
+    if not kinds:
+        return None, ""
+    say(
+        f"  no candidate pays on the thin-plate fit's peak matching: {', '.join(kinds)} from the spec's "
+        "values, the peaks matched afresh"
+    )
+    jobs = [dict(refitting=refitting, kind=k, options=policy.candidate_options) for k in kinds]
+    added = (
+        list(pool.map(afresh_from_spec, jobs)) if pool is not None else [afresh_from_spec(j) for j in jobs]
+    )
+    baseline, peaks = refitting.baseline, refitting.measurements
+    candidates = [_rematched_candidate(baseline, peaks, a) for a in added]
+    for c in candidates:
+        say(f"  {c.kind} afresh: " + (c.note if c.fit is not None and c.fit.finished else c.error))
+    paying = sorted((c for c in candidates if c.scaled_gain > policy.min_gain), key=lambda c: -c.scaled_gain)
+    best = next((c for c in paying if c.selectable), None)
+    if best is not None or not paying:
+        return best, ""
+    lead = paying[0]
+    why = "; ".join(lead.added.implausible) or "singular at its solution"
+    other = next(
+        (
+            c
+            for c in sorted(ordered, key=lambda c: -c.scaled_gain)
+            if c.selectable and not effect(c.kind).restarts_from_spec and not effect(c.kind).refines
+        ),
+        None,
+    )
+    if other is not None and lead.plausible:
+        other = None  # singular alone: a second effect does not make it identifiable
+    if other is not None:
+        say(f"  {lead.kind} afresh is implausible ({why}): {other.kind} refitted on top of it")
+        on_top = add_effect(
+            refitting.refit(lead.fit, policy.candidate_options, pool=pool),
+            other.kind,
+            refitting.hints(lead.fit),
+        )
+        pair = on_top.result
+        if pair is not None and pair.finished:
+            first_hz = float(peaks.table["frequency_hz"].min())
+            reasons = on_top.implausible + implausible(
+                lead.added.added, pair.specimen, refitting.nominal, first_hz, refitting.model.input_std
+            )
+            both = _rematched_candidate(
+                baseline, peaks, replace(on_top, added=lead.added.added + on_top.added)
+            )
+            say(
+                f"  {lead.kind} + {other.kind} afresh: {both.note}"
+                + (f"; implausible: {'; '.join(reasons)}" if reasons else "")
+            )
+            if not reasons and both.scaled_gain > policy.min_gain and not both.singular:
+                note = (
+                    f"{lead.note}; implausible alone ({why}), plausible with {other.kind} refitted on top "
+                    f"of it, which the next round tries (the two {both.note})"
+                )
+                return replace(lead, note=note, plausible_with=other.kind), ""
+    return None, (
+        f"; from the spec's values with the peaks matched afresh, {lead.kind} {lead.note}, but its "
+        f"estimate is {'implausible' if not lead.plausible else 'not determined'} ({why})"
+        + (f", also with {other.kind} on top of it" if other is not None else "")
+        + ": the thin-plate fit's peak matching is likely wrong, and another effect missing beside it"
+    )
+
+
+def _rematched_candidate(state: FitResult, peaks: Measurements, added: AddedEffect) -> Candidate:
+    """A refit of the whole peak list (``afresh_from_spec``) as a candidate over ``state``:
+    its gain is the fall of the matching cost over every peak at one tolerance (the smaller
+    model error of the two; ``matching_cost``: a matched peak its squared error over the
+    scatter widened by that tolerance, a left-out one ``GATE``^2) less ln n per parameter
+    more, BIC's penalty.  With the residuals' own scale in each peak's sigma, the cost is
+    chi^2 / c, so the gain stands where ``_scaled_gain`` does."""
+    fit = added.result
+    if fit is None or not fit.finished:
+        return Candidate(added.kind, "", added, float("-inf"), float("-inf"), added.error or fit.message)
+    tolerance = min(model_error(state), model_error(fit))
+    before, after = matching_cost(state, peaks, tolerance), matching_cost(fit, peaks, tolerance)
+    gain = before - after - (fit.statistics.k - state.statistics.k) * math.log(len(peaks))
+    note = (
+        f"matches {len(fit.measurements)} of {len(peaks)} peaks at RMS {100 * fit.rms_rel_error:.3g} % "
+        f"(the thin-plate fit {len(state.measurements)} at {100 * state.rms_rel_error:.3g} %): matching cost "
+        f"{after:.4g} against {before:.4g} at {100 * tolerance:.2g} %, a gain of {gain:.1f}"
+    )
+    return Candidate(added.kind, note, added, gain, gain)
 
 
 def _scaled_gain(state: FitResult, fit: FitResult) -> float:
@@ -902,6 +1013,14 @@ def diagnose(
                     + f" ({c.added.seconds:.1f} s)"
                 )
             before = tuple(c.kind for c in selected)
+            afresh, rematched_lead = None, ""
+            if (best is None or not best.scaled_gain > policy.min_gain) and _rematch_from_spec(
+                peak_list, state, baseline, at_noise_level
+            ):
+                afresh, rematched_lead = _afresh_from_spec(refitting, trying, ordered, pool, policy, say)
+                if afresh is not None:
+                    best = afresh
+                    ordered = [afresh] + [c for c in ordered if c.kind != afresh.kind]
             if best is None or not best.scaled_gain > policy.min_gain:
                 if best is not None:
                     reason = (
@@ -915,7 +1034,7 @@ def diagnose(
                 reason = (
                     "stop: the misfit is at the noise level, and " if at_noise_level else "stop: "
                 ) + reason
-                reason += _signs(ordered, best, policy) + "".join(held.values())
+                reason += _signs(ordered, best, policy) + rematched_lead + "".join(held.values())
                 steps.append(
                     Step(
                         number,
@@ -932,7 +1051,12 @@ def diagnose(
                 break
             reason = f"add {best.kind} (gain / c = {best.scaled_gain:.1f})"
             lowest = min((c for c in ordered if c.eligible), key=lambda c: c.bic)
-            if best is not plausible_best:
+            if best is afresh:
+                reason = (
+                    f"add {best.kind}, refitted from the spec's values with the peaks matched afresh: "
+                    f"{best.note}"
+                )
+            elif best is not plausible_best:
                 reason += (
                     f"; preferred to {plausible_best.kind}: the same free parameters and physics a real "
                     "plate "

@@ -340,6 +340,13 @@ def matching_cost(result: FitResult, peaks: Measurements, tolerance: float) -> f
     return sum(m.cost for m in _match_all(solver, peaks, tolerance).values())
 
 
+def start_matching_cost(model: SpecimenModel, peaks: Measurements) -> float:
+    """The cost of matching every peak of ``peaks`` to ``model`` as it stands, laid over by
+    the best scale (``matching.match`` at the start's tolerance, as a first fit matches):
+    starts of one peak list compared before any is fitted."""
+    return sum(m.cost for m in _match_all(_solver(model, peaks, FitOptions()), peaks, None).values())
+
+
 def model_error(result: FitResult) -> float:
     """How far the model may be off at a solution (relative): a robust scale of the
     residuals (1.48 x their median absolute value), at least ``SOLUTION_TOLERANCE_FLOOR``."""

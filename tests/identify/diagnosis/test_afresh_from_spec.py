@@ -1,0 +1,192 @@
+"""A peak list whose thin-plate fit matched its peaks wrongly: the shear models refitted
+from the spec's values with the peaks matched afresh (``afresh_from_spec``), judged on
+every peak by the matching cost (``_rematched_candidate``), and the rule that selects one,
+looks one round ahead, or names the lead (``_afresh_from_spec``).
+
+The real-like spruce plate (``studies.long_plates.simulate(3, real_like=True)``: rolling
+shear G23 = G12 / 21, rotary inertia and a 4 g sensor in the recordings, five hits with
+hum, rattle and bounce, the peak list from ``extract_peaks``; a handbook spec with none of
+it) is where the diagnosis ended "unexplained" before: the thin plate matched 19-26 of
+its 34 peaks with nu12 on its bound of 0, and every candidate was refitted on that
+matching."""
+
+import importlib
+from types import SimpleNamespace
+
+import pytest
+
+from fem.specimen import Parameter
+from identify.engine.peak_lists import matching_cost, model_error
+from identify.fitting.driver import AddedEffect, Refitting, afresh_from_spec, fit
+from identify.measurements import parse_measurements
+from identify.recordings.peaks import extract_peaks
+from studies import long_plates
+
+diagnosis = importlib.import_module("identify.diagnosis.diagnose")
+POLICY = diagnosis.SELECTION_POLICY
+
+
+@pytest.fixture(scope="module")
+def spruce(tmp_path_factory):
+    """Seed 3's peak list, its handbook model, thin-plate fit and true values."""
+    folder = tmp_path_factory.mktemp("spruce3")
+    plate = long_plates.simulate(3, folder, real_like=True)
+    table = extract_peaks(list(plate.recordings), "original").to_frame()
+    model = long_plates.handbook_model()
+    peaks = parse_measurements(table[["configuration", "frequency_hz", "std_hz"]], model)
+    return SimpleNamespace(model=model, peaks=peaks, baseline=fit(model, peaks), truth=plate.truth)
+
+
+def test_the_shear_model_from_the_spec_matches_more_peaks_at_less_cost(spruce):
+    """From the spec's values, at the shear start whose spectrum matches the peaks best
+    (G23 = G12 / 16 of ``SHEAR_STARTS``: wood's rolling shear), the transverse-shear model
+    matches more peaks than the thin-plate fit and its matching cost over all of them, at
+    one tolerance, falls by more than the selection's ``min_gain`` (measured: 31 of 34
+    peaks, cost 75 against 168, gain 86).  Its rolling shear modulus is the truth's within
+    10 % (measured 1.7 %: the sensor still missing), where the refit on the thin plate's
+    matching ran G13 to the bound (1900 GPa)."""
+    baseline, peaks = spruce.baseline, spruce.peaks
+    refitting = Refitting.from_baseline(spruce.model, peaks, baseline)
+    job = dict(refitting=refitting, kind="transverse_shear", options=POLICY.candidate_options)
+    added = afresh_from_spec(job)
+    fit_ = added.result
+    assert fit_ is not None and fit_.finished
+    assert any("G23 = 0.0625 G12" in n and "matched afresh" in n for n in added.notes), added.notes
+    assert len(fit_.measurements) > len(baseline.measurements)
+    candidate = diagnosis._rematched_candidate(baseline, peaks, added)
+    tolerance = min(model_error(baseline), model_error(fit_))
+    penalty = (fit_.statistics.k - baseline.statistics.k) * __import__("math").log(len(peaks))
+    assert candidate.gain == pytest.approx(
+        matching_cost(baseline, peaks, tolerance) - matching_cost(fit_, peaks, tolerance) - penalty
+    )
+    assert candidate.scaled_gain > POLICY.min_gain
+    assert candidate.plausible
+    g23 = fit_.value(Parameter("G23", "spruce"))
+    assert g23 == pytest.approx(spruce.truth["G23"], rel=0.1)
+
+
+# ---- the rule, on stand-ins: which afresh refit is selected, looked ahead or named -------------
+
+
+def _candidate(kind, gain, implausible=(), fit=None):
+    added = SimpleNamespace(
+        kind=kind,
+        result=fit or SimpleNamespace(finished=True),
+        implausible=tuple(implausible),
+        added=(kind,),
+        precheck=None,
+    )
+    return diagnosis.Candidate(kind, f"{kind} note", added, gain, gain)
+
+
+@pytest.fixture
+def rule(monkeypatch):
+    """``_afresh_from_spec`` with its refits replaced: ``afresh`` maps a shear kind to its
+    afresh candidate, ``on_top`` is the look-ahead's pair (None: no look-ahead expected)."""
+    state = SimpleNamespace(afresh={}, on_top=None, looked_ahead=[])
+    monkeypatch.setattr(diagnosis, "afresh_from_spec", lambda job: job["kind"])
+    monkeypatch.setattr(
+        diagnosis,
+        "_rematched_candidate",
+        lambda base, peaks, a: state.afresh[a] if isinstance(a, str) else state.on_top,
+    )
+
+    def add_effect(refit, kind, hints):
+        state.looked_ahead.append(kind)
+        return AddedEffect(
+            kind, SimpleNamespace(finished=True, specimen=None), added=(Parameter("mass", kind),)
+        )
+
+    monkeypatch.setattr(diagnosis, "add_effect", add_effect)
+    monkeypatch.setattr(diagnosis, "implausible", lambda *a: tuple(state.on_top_reasons))
+    refitting = SimpleNamespace(
+        baseline=None,
+        measurements=SimpleNamespace(table={"frequency_hz": SimpleNamespace(min=lambda: 50.0)}),
+        refit=lambda *a, **k: None,
+        hints=lambda fit: (),
+        nominal=None,
+        model=SimpleNamespace(input_std=()),
+    )
+    state.on_top_reasons = []
+
+    def run(ordered):
+        return diagnosis._afresh_from_spec(
+            refitting,
+            ["transverse_shear", "thick_plate", "point_mass"],
+            ordered,
+            None,
+            POLICY,
+            lambda t: None,
+        )
+
+    state.run = run
+    return state
+
+
+def test_a_plausible_afresh_refit_that_pays_is_selected(rule):
+    rule.afresh = {
+        "transverse_shear": _candidate("transverse_shear", 85.7),
+        "thick_plate": _candidate("thick_plate", 85.4),
+    }
+    chosen, lead = rule.run([_candidate("point_mass", -4.1)])
+    assert chosen.kind == "transverse_shear" and lead == "" and not rule.looked_ahead
+
+
+def test_one_that_pays_short_of_min_gain_is_neither_selected_nor_named(rule):
+    rule.afresh = {k: _candidate(k, POLICY.min_gain) for k in ("transverse_shear", "thick_plate")}
+    assert rule.run([_candidate("point_mass", 9.4)]) == (None, "")
+
+
+def test_an_implausible_one_is_selected_when_the_next_effect_makes_it_plausible(rule):
+    """The real-like seed 0: transverse shear from the spec matched 27 of 35 peaks (gain
+    61) with G13 = 3.0 G12, implausible; with the point mass refitted on top, plausible and
+    a gain of 223.  It is selected, marked plausible with point_mass (which the next round
+    tries from it), and the verdict does not call it implausible once that is chosen."""
+    odd = ("spruce G13 = 1.88 GPa is 3.02 x its G12 (outside 1/100-2.5 x)",)
+    rule.afresh = {
+        "transverse_shear": _candidate("transverse_shear", 61.3, odd),
+        "thick_plate": _candidate("thick_plate", 61.1, odd),
+    }
+    rule.on_top = _candidate("transverse_shear", 222.6)
+    chosen, lead = rule.run([_candidate("suspension", -3.1), _candidate("point_mass", 0.9)])
+    assert rule.looked_ahead == ["point_mass"]
+    assert chosen.kind == "transverse_shear" and chosen.plausible_with == "point_mass" and lead == ""
+    assert not chosen.plausible  # alone it is not: the verdict reads ``plausible_with``
+
+
+def test_an_implausible_one_that_stays_implausible_is_named_not_selected(rule):
+    odd = ("spruce G13 = 1.88 GPa is 3.02 x its G12 (outside 1/100-2.5 x)",)
+    rule.afresh = {k: _candidate(k, 61.0, odd) for k in ("transverse_shear", "thick_plate")}
+    rule.on_top = _candidate("transverse_shear", 222.6)
+    rule.on_top_reasons = ["spruce G13 still 3 x its G12"]
+    chosen, lead = rule.run([_candidate("point_mass", 0.9)])
+    assert chosen is None
+    assert "peak matching is likely wrong" in lead and "also with point_mass on top of it" in lead
+    assert odd[0] in lead
+
+
+def test_the_verdict_calls_a_look_ahead_selection_plausible_only_with_its_partner():
+    """``Diagnosis.verdict``: a selected candidate plausible only with another effect is
+    flagged implausible unless that effect was selected too."""
+    odd = ("G13 3 x G12",)
+    shear = diagnosis.Candidate(
+        "transverse_shear", "", SimpleNamespace(implausible=odd), 60.0, 60.0, plausible_with="point_mass"
+    )
+    mass = diagnosis.Candidate("point_mass", "", SimpleNamespace(implausible=()), 200.0, 200.0)
+    final = SimpleNamespace(rms_rel_error=3e-4, status=SimpleNamespace(value="converged"), converged=True)
+    baseline = SimpleNamespace(rms_rel_error=4e-3)
+
+    def verdict(chosen):
+        steps = tuple(SimpleNamespace(chosen=c) for c in chosen)
+        d = SimpleNamespace(
+            at_noise_level=False,
+            selected=tuple(chosen),
+            final=final,
+            baseline=baseline,
+            dropped=(),
+            steps=steps,
+        )
+        return diagnosis.Diagnosis.verdict.fget(d)
+
+    assert "implausible" not in verdict([shear, mass])
+    assert "implausible estimate of transverse_shear" in verdict([shear])
