@@ -138,6 +138,9 @@ class Candidate:
     error: str = ""
     # implausible alone, plausible with this effect refitted on top of it (``_afresh_from_spec``)
     plausible_with: str = ""
+    # refitted from the spec's values to the whole peak list, its gain the matching cost's
+    # fall over every peak (``_rematched_candidate``)
+    matched_afresh: bool = False
 
     @property
     def fit(self) -> FitResult | None:
@@ -222,6 +225,8 @@ class Candidate:
             "condition_number": finite_or_none(check.condition_number) if check else None,
             "seconds": finite_or_none(self.added.seconds),
             "note": " ".join(x for x in (self.note, self.error) if x),
+            "matched_afresh": self.matched_afresh,
+            "plausible_with": self.plausible_with or None,
         }
 
 
@@ -586,12 +591,12 @@ def _rematch_from_spec(
 def _afresh_from_spec(
     refitting: Refitting, trying: list[str], ordered: list[Candidate], pool, policy: SelectionPolicy, say
 ) -> tuple[Candidate | None, str]:
-    """The best of the shear effects among ``trying`` refitted from the spec's values with
-    the peaks matched afresh (``afresh_from_spec``), when it pays over the state by its
-    matching cost on every peak (``_rematched_candidate``) and is selectable, or becomes
-    plausible with the round's best other candidate refitted on top of it (a look-ahead of
-    one round: another missing effect distorts it alone); otherwise None and, when one pays
-    but stays implausible or singular, a lead for the stop's reason."""
+    """Of the shear effects among ``trying`` refitted from the spec's values with the peaks
+    matched afresh (``afresh_from_spec``), those that pay over the state by their matching
+    cost on every peak (``_rematched_candidate``), the best-paying first: the first one
+    selectable, or implausible alone but plausible with the round's best other candidate
+    refitted on top of it (``_plausible_with``: another missing effect distorts it alone).
+    Otherwise None and, when one pays, a lead for the stop's reason."""
     kinds = [k for k in trying if effect(k).restarts_from_spec]
     if not kinds:
         return None, ""
@@ -606,13 +611,12 @@ def _afresh_from_spec(
     baseline, peaks = refitting.baseline, refitting.measurements
     candidates = [_rematched_candidate(baseline, peaks, a) for a in added]
     for c in candidates:
-        say(f"  {c.kind} afresh: " + (c.note if c.fit is not None and c.fit.finished else c.error))
+        finished = c.fit is not None and c.fit.finished
+        odd = "" if c.plausible else "; implausible: " + "; ".join(c.added.implausible)
+        say(f"  {c.kind} afresh: " + (c.note + odd if finished else c.error))
     paying = sorted((c for c in candidates if c.scaled_gain > policy.min_gain), key=lambda c: -c.scaled_gain)
-    best = next((c for c in paying if c.selectable), None)
-    if best is not None or not paying:
-        return best, ""
-    lead = paying[0]
-    why = "; ".join(lead.added.implausible) or "singular at its solution"
+    if not paying:
+        return None, ""
     other = next(
         (
             c
@@ -621,40 +625,61 @@ def _afresh_from_spec(
         ),
         None,
     )
-    if other is not None and lead.plausible:
-        other = None  # singular alone: a second effect does not make it identifiable
-    if other is not None:
-        say(f"  {lead.kind} afresh is implausible ({why}): {other.kind} refitted on top of it")
-        on_top = add_effect(
-            refitting.refit(lead.fit, policy.candidate_options, pool=pool),
-            other.kind,
-            refitting.hints(lead.fit),
-        )
-        pair = on_top.result
-        if pair is not None and pair.finished:
-            first_hz = float(peaks.table["frequency_hz"].min())
-            reasons = on_top.implausible + implausible(
-                lead.added.added, pair.specimen, refitting.nominal, first_hz, refitting.model.input_std
-            )
-            both = _rematched_candidate(
-                baseline, peaks, replace(on_top, added=lead.added.added + on_top.added)
-            )
-            say(
-                f"  {lead.kind} + {other.kind} afresh: {both.note}"
-                + (f"; implausible: {'; '.join(reasons)}" if reasons else "")
-            )
-            if not reasons and both.scaled_gain > policy.min_gain and not both.singular:
-                note = (
-                    f"{lead.note}; implausible alone ({why}), plausible with {other.kind} refitted on top "
-                    f"of it, which the next round tries (the two {both.note})"
-                )
-                return replace(lead, note=note, plausible_with=other.kind), ""
+    for lead in paying:  # the best-paying first; an implausible one, with the next effect on top
+        if lead.selectable:
+            return lead, ""
+        if lead.plausible or other is None:
+            continue  # singular at its solution: a second effect does not make it identifiable
+        partnered = _plausible_with(refitting, lead, other, pool, policy, say)
+        if partnered is not None:
+            return partnered, ""
+    lead = paying[0]
+    why = "; ".join(lead.added.implausible) or "singular at its solution"
     return None, (
         f"; from the spec's values with the peaks matched afresh, {lead.kind} {lead.note}, but its "
         f"estimate is {'implausible' if not lead.plausible else 'not determined'} ({why})"
-        + (f", also with {other.kind} on top of it" if other is not None else "")
+        + (f", also with {other.kind} on top of it" if other is not None and not lead.plausible else "")
         + ": the thin-plate fit's peak matching is likely wrong, and another effect missing beside it"
     )
+
+
+def _plausible_with(
+    refitting: Refitting, lead: Candidate, other: Candidate, pool, policy: SelectionPolicy, say
+) -> Candidate | None:
+    """``lead`` (an afresh refit, implausible alone) marked plausible with ``other``'s effect
+    when that effect refitted on top of it makes every estimate plausible and the two pay
+    together over the thin-plate fit (``_rematched_candidate``); None otherwise."""
+    why = "; ".join(lead.added.implausible)
+    say(f"  {lead.kind} afresh is implausible ({why}): {other.kind} refitted on top of it")
+    on_top = add_effect(
+        refitting.refit(lead.fit, policy.candidate_options, pool=pool), other.kind, refitting.hints(lead.fit)
+    )
+    pair = on_top.result
+    if pair is None or not pair.finished:
+        return None
+    peaks = refitting.measurements
+    first_hz = float(peaks.table["frequency_hz"].min())
+    reasons = on_top.implausible + implausible(
+        lead.added.added, pair.specimen, refitting.nominal, first_hz, refitting.model.input_std
+    )
+    both = _rematched_candidate(
+        refitting.baseline, peaks, replace(on_top, added=lead.added.added + on_top.added)
+    )
+    say(
+        f"  {lead.kind} + {other.kind} afresh: {both.note}"
+        + (f"; implausible: {'; '.join(reasons)}" if reasons else "")
+    )
+    if reasons or not both.scaled_gain > policy.min_gain or both.singular:
+        return None
+    note = (
+        f"{lead.note}; implausible alone ({why}), plausible with {other.kind} refitted on top "
+        f"of it, which the next round tries (the two {both.note})"
+    )
+    alone = f"{lead.kind}: implausible estimate"
+    notes = tuple(n for n in lead.added.notes if not n.startswith(alone)) + (
+        f"{alone} alone ({why}), plausible with {other.kind} refitted on top of it",
+    )
+    return replace(lead, added=replace(lead.added, notes=notes), note=note, plausible_with=other.kind)
 
 
 def _rematched_candidate(state: FitResult, peaks: Measurements, added: AddedEffect) -> Candidate:
@@ -675,7 +700,7 @@ def _rematched_candidate(state: FitResult, peaks: Measurements, added: AddedEffe
         f"(the thin-plate fit {len(state.measurements)} at {100 * state.rms_rel_error:.3g} %): matching cost "
         f"{after:.4g} against {before:.4g} at {100 * tolerance:.2g} %, a gain of {gain:.1f}"
     )
-    return Candidate(added.kind, note, added, gain, gain)
+    return Candidate(added.kind, note, added, gain, gain, matched_afresh=True)
 
 
 def _scaled_gain(state: FitResult, fit: FitResult) -> float:
@@ -1075,7 +1100,13 @@ def diagnose(
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = refitting.polished(best.fit, state, policy.final_options, pool)
+            # One matched afresh from the spec goes on with its own matching: the state's is
+            # the one it left, and matching afresh again is what its refit did.
+            polished = (
+                refitting.continued(best.fit, policy.final_options, Settle.FULL)
+                if best is afresh
+                else refitting.polished(best.fit, state, policy.final_options, pool)
+            )
             polished, notes = refitting.with_determined_shear(polished, policy.final_options)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit

@@ -83,6 +83,12 @@ def diagnosis_text(diagnosis) -> str:
             gain = f"{c.gain:9.1f} {c.scaled_gain:9.1f}" if math.isfinite(c.gain) else f"{'-':>9s} {'-':>9s}"
             status = c.status if c.fit else c.status.replace("_", " ")
             mark = "" if c.plausible else "  IMPLAUSIBLE: " + "; ".join(c.added.implausible)
+            if c.plausible_with:
+                mark += f" (plausible with {c.plausible_with} on top)"
+            if c.matched_afresh:
+                mark += (
+                    "  [from the spec's values, the peaks matched afresh: the gains are the matching cost's]"
+                )
             lines.append(
                 f"  {c.kind:17s} {100 * c.rms_rel_error:11.4f} {gain} {c.added.seconds:7.0f}  {status}  "
                 f"{values}{mark}".rstrip()

@@ -69,12 +69,12 @@ def test_the_shear_model_from_the_spec_matches_more_peaks_at_less_cost(spruce):
 
 
 def _candidate(kind, gain, implausible=(), fit=None):
-    added = SimpleNamespace(
-        kind=kind,
-        result=fit or SimpleNamespace(finished=True),
+    added = AddedEffect(
+        kind,
+        fit or SimpleNamespace(finished=True),
+        (Parameter("G13", "spruce"),),
         implausible=tuple(implausible),
-        added=(kind,),
-        precheck=None,
+        notes=tuple(f"{kind}: implausible estimate: {r}" for r in implausible),
     )
     return diagnosis.Candidate(kind, f"{kind} note", added, gain, gain)
 
@@ -152,6 +152,30 @@ def test_an_implausible_one_is_selected_when_the_next_effect_makes_it_plausible(
     assert rule.looked_ahead == ["point_mass"]
     assert chosen.kind == "transverse_shear" and chosen.plausible_with == "point_mass" and lead == ""
     assert not chosen.plausible  # alone it is not: the verdict reads ``plausible_with``
+    assert chosen.added.notes == (
+        f"transverse_shear: implausible estimate alone ({odd[0]}), plausible with point_mass refitted on "
+        "top of it",
+    )
+
+
+def test_the_best_paying_is_looked_ahead_before_a_plausible_one_that_pays_less(rule):
+    """The real-like seed 7: thick_plate afresh paid 59 with G23 = 3.3 G12, transverse_shear
+    16 and plausible.  The better-paying is tried with the next effect on top first; only
+    when that stays implausible is the plausible one selected."""
+    odd = ("spruce G23 = 2.38 GPa is 3.32 x its G12 (outside 1/100-2.5 x)",)
+    rule.afresh = {
+        "transverse_shear": _candidate("transverse_shear", 16.5),
+        "thick_plate": _candidate("thick_plate", 59.3, odd),
+    }
+    rule.on_top = _candidate("thick_plate", 120.0)
+    chosen, _ = rule.run([_candidate("point_mass", 2.5)])
+    assert rule.looked_ahead == ["point_mass"]
+    assert chosen.kind == "thick_plate" and chosen.plausible_with == "point_mass"
+    rule.looked_ahead.clear()
+    rule.on_top_reasons = ["spruce G23 still 3 x its G12"]
+    chosen, _ = rule.run([_candidate("point_mass", 2.5)])
+    assert rule.looked_ahead == ["point_mass"]
+    assert chosen.kind == "transverse_shear" and chosen.plausible_with == ""
 
 
 def test_an_implausible_one_that_stays_implausible_is_named_not_selected(rule):
