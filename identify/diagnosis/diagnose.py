@@ -1100,13 +1100,7 @@ def diagnose(
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            # One matched afresh from the spec goes on with its own matching: the state's is
-            # the one it left, and matching afresh again is what its refit did.
-            polished = (
-                refitting.continued(best.fit, policy.final_options, Settle.FULL)
-                if best is afresh
-                else refitting.polished(best.fit, state, policy.final_options, pool)
-            )
+            polished = refitting.polished(best.fit, state, policy.final_options, pool)
             polished, notes = refitting.with_determined_shear(polished, policy.final_options)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
