@@ -691,7 +691,8 @@ def _rematched_candidate(state: FitResult, peaks: Measurements, added: AddedEffe
     chi^2 / c, so the gain stands where ``_scaled_gain`` does."""
     fit = added.result
     if fit is None or not fit.finished:
-        return Candidate(added.kind, "", added, float("-inf"), float("-inf"), added.error or fit.message)
+        why = added.error or (fit.message if fit is not None else "")
+        return Candidate(added.kind, "", added, float("-inf"), float("-inf"), why)
     tolerance = min(model_error(state), model_error(fit))
     before, after = matching_cost(state, peaks, tolerance), matching_cost(fit, peaks, tolerance)
     gain = before - after - (fit.statistics.k - state.statistics.k) * math.log(len(peaks))

@@ -214,3 +214,10 @@ def test_the_verdict_calls_a_look_ahead_selection_plausible_only_with_its_partne
 
     assert "implausible" not in verdict([shear, mass])
     assert "implausible estimate of transverse_shear" in verdict([shear])
+
+
+def test_a_failed_afresh_refit_is_a_candidate_with_its_error():
+    """An afresh refit that did not run (not applicable, failed) ranks last with its reason."""
+    failed = AddedEffect("thick_plate", None, error="failed: the eigen-solver did not converge")
+    c = diagnosis._rematched_candidate(None, None, failed)
+    assert c.gain == float("-inf") and c.error == failed.error and not c.eligible
