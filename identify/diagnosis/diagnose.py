@@ -1101,7 +1101,11 @@ def diagnose(
             # On a peak list the peaks are matched again here, from the state's matching: the
             # next round's candidates are judged on the new state's matched peaks.
             rematch = not peak_list.ranked
-            polished = refitting.polished(best.fit, state, policy.final_options, pool)
+            polished = (
+                refitting.polished_afresh(best.fit, policy.final_options)
+                if best is afresh
+                else refitting.polished(best.fit, state, policy.final_options, pool)
+            )
             polished, notes = refitting.with_determined_shear(polished, policy.final_options)
             # The layer properties the thin-plate fit held are freed where the effect now
             # determines them, before the next round: held, their handbook error is misfit
