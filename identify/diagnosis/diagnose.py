@@ -63,7 +63,6 @@ from ..fitting.driver import (
     afresh_from_spec,
     worker_pool,
 )
-from ..fitting.plausibility import implausible
 from ..measurements import Measurements
 from ..reporting.diagnosis_report import diagnosis_text, diagnosis_view
 from .compare import Comparison, compare
@@ -657,13 +656,9 @@ def _plausible_with(
     pair = on_top.result
     if pair is None or not pair.finished:
         return None
-    peaks = refitting.measurements
-    first_hz = float(peaks.table["frequency_hz"].min())
-    reasons = on_top.implausible + implausible(
-        lead.added.added, pair.specimen, refitting.nominal, first_hz, refitting.model.input_std
-    )
+    reasons = on_top.implausible + refitting.judged_implausible(lead.added.added, pair.specimen)
     both = _rematched_candidate(
-        refitting.baseline, peaks, replace(on_top, added=lead.added.added + on_top.added)
+        refitting.baseline, refitting.measurements, replace(on_top, added=lead.added.added + on_top.added)
     )
     say(
         f"  {lead.kind} + {other.kind} afresh: {both.note}"

@@ -552,8 +552,7 @@ def afresh_from_spec(job: dict) -> AddedEffect:
         result = fit_layers(model, peaks, base + new, options, Follow(effect_of, settle=Settle.QUICK))
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), error=f"failed: {exc}")
-    first_hz = float(peaks.table["frequency_hz"].min())
-    reasons = implausible(new, result.specimen, refitting.nominal, first_hz, refitting.model.input_std)
+    reasons = refitting.judged_implausible(new, result.specimen)
     notes = [
         f"{kind} refitted from the spec's values"
         + (f" ({_describe_start(start)})" if start is not None else "")
@@ -956,6 +955,13 @@ class Refitting:
     def nominal(self) -> Specimen:
         """The spec's specimen, against which estimates are judged."""
         return self.model.specimen
+
+    def judged_implausible(self, parameters, specimen: Specimen) -> tuple[str, ...]:
+        """Why the estimates of ``parameters`` in ``specimen`` are physically unlikely
+        (``plausibility.implausible``): against the spec, with the lowest frequency of the
+        data as given."""
+        first_hz = float(self.measurements.table["frequency_hz"].min())
+        return implausible(parameters, specimen, self.nominal, first_hz, self.model.input_std)
 
     def data(self, state: FitResult) -> Measurements:
         """What an effect's refit on top of ``state`` fits (``matched_peaks``)."""

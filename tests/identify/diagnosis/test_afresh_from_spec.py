@@ -119,14 +119,12 @@ def rule(monkeypatch):
         )
 
     monkeypatch.setattr(diagnosis, "add_effect", add_effect)
-    monkeypatch.setattr(diagnosis, "implausible", lambda *a: tuple(state.on_top_reasons))
     refitting = SimpleNamespace(
         baseline=None,
-        measurements=SimpleNamespace(table={"frequency_hz": SimpleNamespace(min=lambda: 50.0)}),
+        measurements=None,
         refit=lambda *a, **k: None,
         hints=lambda fit: (),
-        nominal=None,
-        model=SimpleNamespace(input_std=()),
+        judged_implausible=lambda parameters, specimen: tuple(state.on_top_reasons),
     )
     state.on_top_reasons = []
 
