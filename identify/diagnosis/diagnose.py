@@ -33,7 +33,7 @@ import math
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor
+from concurrent.futures import FIRST_COMPLETED, Executor, wait
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -811,12 +811,10 @@ def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again
     """The candidates ``kinds`` on top of ``state``: each pre-checked with one evaluation
     (side by side in the pool when there is one), then refitted most promising first (by
     the linearised bound), each only when it could come near what the best so far
-    explained (``RefitPolicy.prune_factor``); with a pool, ``n_workers`` at a time.
-    ``starts``: kind -> a fit its refit starts from; ``free_again``: shear moduli
-    ``state`` holds, freed again with effects that free none themselves
-    (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
+    explained (``_refitted``).  ``starts``: kind -> a fit its refit starts from;
+    ``free_again``: shear moduli ``state`` holds, freed again with effects that free none
+    themselves (``fitting.held_shear_moduli``, ``_leader_freed_again``)."""
     state, pool = round_.state, round_.pool
-    at_once = round_.n_workers if pool else 1
     out, ready = [], []
     jobs = [
         dict(
@@ -836,35 +834,100 @@ def _try(round_: Round, kinds: list[str], starts: dict | None = None, free_again
         else:
             ready.append(prepared)
     ready.sort(key=lambda r: -r.bound)
-    for i in range(0, len(ready), at_once):
-        # Only an answer may prune: an implausible estimate that explains much must not
-        # keep the right physics from being refitted, nor may one that does not pay for
-        # itself (blind02, held-out: a thickness refit at gain / c 2.2 pruned the
-        # orientation, whose linearised bound is second order in the angles).
-        explained = [
-            state.statistics.sum_squares - c.fit.statistics.sum_squares
-            for c in out
-            if c.selectable and c.scaled_gain > round_.policy.min_gain
-        ]
-        below = max(explained) if explained else None
-        jobs = [round_.job(r, below) for r in ready[i : i + at_once]]
-        out += [_candidate(state, a) for a in _added(jobs, pool)]
-    return out
+    return out + _refitted(round_, ready, out)
 
 
-def _added(jobs: list[dict], pool) -> list:
-    """The refits of ``jobs`` (``_add``), in the pool when there is one.  An effect with
+def _explained_best(round_: Round, candidates) -> float | None:
+    """The most chi^2 one of ``candidates`` explained of those that may prune the others
+    (None: none).  Only an answer may: an implausible estimate that explains much must not
+    keep the right physics from being refitted, nor may one that does not pay for itself
+    (blind02, held-out: a thickness refit at gain / c 2.2 pruned the orientation, whose
+    linearised bound is second order in the angles)."""
+    explained = [
+        round_.state.statistics.sum_squares - c.fit.statistics.sum_squares
+        for c in candidates
+        if c.selectable and c.scaled_gain > round_.policy.min_gain
+    ]
+    return max(explained) if explained else None
+
+
+def _refitted(round_: Round, ready: list, before: list[Candidate]) -> list[Candidate]:
+    """The refits of the pre-checked candidates ``ready`` (most promising first), in
+    batches of ``n_workers``: a refit is pruned (``RefitPolicy.prune_factor``) by what
+    ``before`` and the earlier batches explained (``_explained_best``), never by its own
+    batch, so the answer does not depend on which refit ends first.
+
+    With a pool a refit starts as soon as a process is free, before the earlier batches
+    have ended: a batch used to wait for its slowest (a long spruce plate's first round
+    took 92 s, the shear refits 35-39 s beside others of 2-15 s).  Once the earlier
+    batches have ended, a refit their answers prune gets the result it would have had,
+    "not refitted" (its refit, if it is running, ends unread).  An effect with
     ``independent_starts`` (a point mass) is refitted here, its starts' refits in the pool
-    beside the other jobs: as one job it kept one process busy while the other waited (a
-    long spruce plate's second round: 128 s beside a 15 s candidate)."""
+    beside one other refit: as one job it kept one process busy while the other waited
+    (a long spruce plate's second round: 128 s beside a 15 s candidate)."""
+    state, pool = round_.state, round_.pool
+    factor = round_.refit.policy.prune_factor
+    at_once = round_.n_workers if pool is not None else 1
+    done: dict[int, Candidate] = {}
+
+    def job(i: int) -> dict:
+        """Refit ``i``'s job, pruned by what the earlier batches' ended refits explained."""
+        earlier = [done[j] for j in range(i - i % at_once) if j in done]
+        return round_.job(ready[i], _explained_best(round_, before + earlier))
+
+    def pruned(job: dict) -> bool:
+        return job["prune_below"] is not None and job["prune_below"].prunes(job["prepared"].bound, factor)
+
     if pool is None:
-        return [_add(job) for job in jobs]
-    apart = [effect(job["kind"]).independent_starts for job in jobs]
-    pending = {i: pool.submit(_add, job) for i, job in enumerate(jobs) if not apart[i]}
-    here = {
-        i: _add({**job, "refit": replace(job["refit"], pool=pool)}) for i, job in enumerate(jobs) if apart[i]
-    }
-    return [here[i] if i in here else pending[i].result() for i in range(len(jobs))]
+        for i in range(len(ready)):
+            done[i] = _candidate(state, _add(job(i)))
+        return [done[i] for i in range(len(ready))]
+    apart = [effect(r.kind).independent_starts for r in ready]
+    waiting = list(range(len(ready)))  # not started yet, in order
+    running: dict = {}  # future -> refit index
+    ended: dict[int, AddedEffect] = {}  # refits whose earlier batches have not all ended
+
+    def settle() -> None:
+        """Each refit whose earlier batches have all ended: pruned, or its ended result."""
+        for i in range(len(ready)):
+            if i in done or any(j not in done for j in range(i - i % at_once)):
+                continue
+            final = job(i)
+            if pruned(final):
+                done[i] = _candidate(state, _add(final))  # returns at once: not refitted
+                for future in [f for f, j in running.items() if j == i]:
+                    future.cancel()
+                    del running[future]
+            elif i in ended:
+                done[i] = _candidate(state, ended.pop(i))
+
+    def start() -> None:
+        """Refits started while a process is free, skipping those pruned already."""
+        while waiting and len(running) < at_once:
+            i = waiting.pop(0)
+            if i in done or pruned(job(i)):
+                continue  # a pruned one is settled once its earlier batches have ended
+            if not apart[i]:
+                running[pool.submit(_add, job(i))] = i
+                continue
+            while len(running) < at_once - 1:
+                beside = next((j for j in waiting if not apart[j] and not pruned(job(j))), None)
+                if beside is None:
+                    break
+                waiting.remove(beside)
+                running[pool.submit(_add, job(beside))] = beside
+            ended[i] = _add({**job(i), "refit": replace(round_.refit, pool=pool)})
+            return
+
+    while len(done) < len(ready):
+        settled = len(done)
+        settle()
+        start()
+        if len(done) == settled and running:
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                ended[running.pop(future)] = future.result()
+    return [done[i] for i in range(len(ready))]
 
 
 @one_blas_thread

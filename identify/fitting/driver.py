@@ -1051,6 +1051,11 @@ class PruneBelow:
     chi2: float
     of: str = "another effect explained in this round"
 
+    def prunes(self, bound: float, factor: float) -> bool:
+        """Whether a candidate of linearised ``bound`` is not refitted (``factor``:
+        ``RefitPolicy.prune_factor``)."""
+        return factor * bound < self.chi2
+
 
 def add_effect(
     refit: Refit,
@@ -1092,7 +1097,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
         )
     factor = refit.policy.prune_factor
-    if prune_below is not None and factor * ready.bound < prune_below.chi2:
+    if prune_below is not None and prune_below.prunes(ready.bound, factor):
         return AddedEffect(
             kind,
             None,

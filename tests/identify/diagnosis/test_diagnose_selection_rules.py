@@ -3,6 +3,9 @@ implausible or singular estimate is never selected, whatever its criterion (it i
 reported as a sign), and only an answer (one that pays for itself) may keep another
 candidate from being refitted."""
 
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from types import SimpleNamespace
 
@@ -241,6 +244,52 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
     )
     assert refitted == (["thickness"] if pruned else ["thickness", "orientation"])
     assert [c.kind for c in out] == ["thickness", "orientation"]
+
+
+@pytest.mark.parametrize("slow", ["thickness", "orientation"])
+def test_refits_in_processes_are_pruned_by_earlier_batches_only(monkeypatch, slow):
+    """Two processes: the refits go in batches of two by bound, [thickness, orientation],
+    [suspension, rotary_inertia].  The thickness refit pays and explains a chi^2 of 77:
+    it prunes the second batch (2 x bound < 77) but never its own batch's orientation
+    (bound 30, which one process would prune), whichever of the two ends first.  When the
+    thickness refit is the slow one, the second batch starts before it ends and is given
+    the pruned result afterwards: the answer is the same, only the waiting differs."""
+    state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0))
+    bounds = {"thickness": 100.0, "orientation": 30.0, "suspension": 25.0, "rotary_inertia": 10.0}
+    second_batch = threading.Event()
+    ran = []
+
+    def prepare(state, kind, hints=(), start=None, free_again=()):
+        return SimpleNamespace(kind=kind, bound=bounds[kind])
+
+    def refit(job):
+        kind, below = job["kind"], job["prune_below"]
+        if below is not None and below.prunes(bounds[kind], 2.0):
+            return AddedEffect(kind, None, pruned=True, error=f"pruned below {below.chi2:g}")
+        ran.append(kind)
+        if kind == "thickness" == slow:
+            second_batch.wait(timeout=5.0)  # ends after the second batch has started
+        elif kind == "orientation" == slow:
+            time.sleep(0.3)  # the thickness refit's answer is in before this ends
+        elif kind in ("suspension", "rotary_inertia"):
+            second_batch.set()
+        explained = 77.0 if kind == "thickness" else 3.0
+        statistics = SimpleNamespace(
+            sum_squares=1000.0 - explained, bic=1000.0 - explained + 5.0, scatter_known=False
+        )
+        return AddedEffect(kind, SimpleNamespace(statistics=statistics, finished=True))
+
+    monkeypatch.setattr(driver, "prepare_effect", prepare)
+    monkeypatch.setattr(diagnose_module, "_add", refit)
+    with ThreadPoolExecutor(2) as pool:
+        out = diagnose_module._try(
+            diagnose_module.Round(Refit(state, None, None), (), pool=pool, n_workers=2), list(bounds)
+        )
+    assert [c.kind for c in out] == ["thickness", "orientation", "suspension", "rotary_inertia"]
+    assert [c.fit is not None for c in out] == [True, True, False, False]
+    assert [c.error for c in out[2:]] == ["pruned below 77", "pruned below 77"]
+    # started while the thickness refit ran, their answers thrown away
+    assert ("suspension" in ran) == (slow == "thickness")
 
 
 #: A final refit's parameters as ``_determined_final`` reads them: a layer property and
