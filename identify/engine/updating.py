@@ -210,13 +210,7 @@ def iterate(
         if reducible <= STALLED * objective.cost(current) and _within_std(objective, current, step):
             return current, Stop.WITHIN_STD, warnings
         accepted, screen = None, None
-        reduced = _reduced_minimum(
-            objective,
-            current,
-            options,
-            float(np.max(np.abs(gauss_newton))),
-            stiffening=_stiffening_shear(space, -gauss_newton, held, limit),
-        )
+        reduced = _reduced_minimum(objective, current, options, -step, limit)
         if reduced is not None:
             trial = objective.evaluate(reduced, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
@@ -324,31 +318,25 @@ def _within_std(objective: Objective, e: Evaluation, dz: np.ndarray) -> bool:
     return bool(np.all(np.abs(dz) < STEP_PER_STD * objective.std_z(e)))
 
 
-def _stiffening_shear(space: ParameterSpace, step: np.ndarray, held: np.ndarray, limit: np.ndarray) -> bool:
-    """Whether the Gauss-Newton ``step`` (in z, of the parameters not ``held``) exceeds the
-    step limit (``limit``) in some parameter, and every such parameter is a transverse
-    shear modulus that it raises: the shear theory walking towards its thin-plate limit."""
-    full = np.zeros(len(held))
-    full[~held] = step
-    beyond = np.abs(full) > limit
+def _stiffening_shear(space: ParameterSpace, step: np.ndarray, limit: np.ndarray) -> bool:
+    """Whether the Gauss-Newton ``step`` (in z) exceeds the step limit (``limit``) in some
+    parameter, and every such parameter is a transverse shear modulus that it raises: the
+    shear theory walking towards its thin-plate limit."""
+    beyond = np.abs(step) > limit
     shear = np.array([p.kind in SHEAR_MODULI for p in space.parameters])
-    return bool(beyond.any() and np.all(shear[beyond] & (full[beyond] > 0)))
+    return bool(beyond.any() and np.all(shear[beyond] & (step[beyond] > 0)))
 
 
 def _reduced_minimum(
-    objective: Objective,
-    current: Evaluation,
-    options: FitOptions,
-    gauss_newton: float,
-    stiffening: bool = False,
+    objective: Objective, current: Evaluation, options: FitOptions, step: np.ndarray, limit: np.ndarray
 ) -> np.ndarray | None:
     """The parameter values where the iteration on the Ritz models of ``current`` (its
     full solves' modes as the basis, ``RitzObjective``: exact at ``current``, values and
     derivatives) stops: a trial step for the full solve to accept or reject.  None where
     the Ritz models do not apply, the point does not move, or it lies further than
-    ``REDUCED_REACH_PER_STEP`` times ``gauss_newton`` (the largest z change of the full
-    Gauss-Newton step) or, unless that step is ``stiffening`` transverse shear beyond the
-    step limit (``_stiffening_shear``), ``REDUCED_REACH`` in z."""
+    ``REDUCED_REACH_PER_STEP`` times the largest z change of the full Gauss-Newton ``step``
+    (zero where a parameter is held) or, unless that step raises transverse shear beyond
+    the step limit ``limit`` (``_stiffening_shear``), ``REDUCED_REACH`` in z."""
     if not (options.reanalysis and objective.reduced_steps):
         return None
     try:
@@ -360,8 +348,10 @@ def _reduced_minimum(
         return None
     space = objective.space
     reach = float(np.max(np.abs(space.to_z(end.values) - space.to_z(current.values))))
-    furthest = REDUCED_REACH_PER_STEP * gauss_newton
-    return end.values if 0.0 < reach <= (furthest if stiffening else min(REDUCED_REACH, furthest)) else None
+    furthest = REDUCED_REACH_PER_STEP * float(np.max(np.abs(step)))
+    if not _stiffening_shear(space, step, limit):
+        furthest = min(REDUCED_REACH, furthest)
+    return end.values if 0.0 < reach <= furthest else None
 
 
 def update(

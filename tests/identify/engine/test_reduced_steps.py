@@ -108,5 +108,4 @@ def test_only_shear_moduli_raised_beyond_the_step_limit_free_the_trial(step, sti
     space = ParameterSpace.of(PARAMETERS, parse_spec(SANDWICH).specimen)
     options = FitOptions()
     limit = np.where(space.is_log, options.max_log_step, options.max_linear_step)
-    held = np.zeros(len(PARAMETERS), dtype=bool)
-    assert updating._stiffening_shear(space, np.array(step), held, limit) is stiffening
+    assert updating._stiffening_shear(space, np.array(step), limit) is stiffening
