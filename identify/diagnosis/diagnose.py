@@ -905,10 +905,11 @@ def _refitted(round_: Round, ready: list, before: list[Candidate]) -> list[Candi
         """Refits started while a process is free, skipping those pruned already."""
         while waiting and len(running) < at_once:
             i = waiting.pop(0)
-            if i in done or pruned(job(i)):
+            this = job(i)
+            if i in done or pruned(this):
                 continue  # a pruned one is settled once its earlier batches have ended
             if not apart[i]:
-                running[pool.submit(_add, job(i))] = i
+                running[pool.submit(_add, this)] = i
                 continue
             while len(running) < at_once - 1:
                 beside = next((j for j in waiting if not apart[j] and not pruned(job(j))), None)
@@ -916,7 +917,7 @@ def _refitted(round_: Round, ready: list, before: list[Candidate]) -> list[Candi
                     break
                 waiting.remove(beside)
                 running[pool.submit(_add, job(beside))] = beside
-            ended[i] = _add({**job(i), "refit": replace(round_.refit, pool=pool)})
+            ended[i] = _add({**this, "refit": replace(round_.refit, pool=pool)})
             return
 
     while len(done) < len(ready):
