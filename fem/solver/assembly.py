@@ -209,10 +209,16 @@ class UnitMatrices:
         farthest = int(np.max(self._node_rank[columns] - self._node_rank[rows]))
         return (farthest + 1) * self.dofs_per_node - 1
 
-    def banded(self, data: np.ndarray) -> np.ndarray:
+    def banded(self, data: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
-        of a symmetric matrix given by CSR data, its DOFs in ``band_order``."""
-        return self._pattern[2].banded(data, self._node_rank, self.bandwidth)
+        of a symmetric matrix given by CSR data, its DOFs in ``band_order``.  ``out``: a
+        flat array of ``band_size`` entries to write it into (the solve's work array)."""
+        return self._pattern[2].banded(data, self._node_rank, self.bandwidth, out)
+
+    @property
+    def band_size(self) -> int:
+        """Entries of the band storage (``banded``)."""
+        return (self.bandwidth + 1) * self.n_dofs
 
     def quadratic_forms(self, modes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """phi_i^T K_c phi_i and phi_i^T M_j phi_i for every unit stiffness matrix c, unit
@@ -332,14 +338,21 @@ class PairBlocks:
         span = data[first * pn * pn : (first + nodes * neighbours) * pn * pn]
         return span.reshape(nodes, pn, neighbours, pn, *data.shape[1:])
 
-    def banded(self, data: np.ndarray, node_rank: np.ndarray, bandwidth: int) -> np.ndarray:
+    def banded(
+        self, data: np.ndarray, node_rank: np.ndarray, bandwidth: int, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """Upper banded storage (bandwidth + 1, n_dofs), Fortran-ordered as LAPACK takes it,
         of a symmetric matrix given by CSR ``data``, its nodes in the order ``node_rank``:
         entry (row, column) at column (bandwidth + 1) + bandwidth + row - column.  Each
         pair of a run whose column node comes later is copied whole, one on the diagonal
-        its upper triangle; the band positions are worked out per run and neighbour."""
+        its upper triangle; the band positions are worked out per run and neighbour.
+        ``out``: a flat array of (bandwidth + 1) x n_dofs entries to write it into."""
         pn, b = self.per_node, bandwidth
-        out = np.zeros((b + 1) * len(node_rank) * pn)
+        size = (b + 1) * len(node_rank) * pn
+        if out is None:
+            out = np.zeros(size)
+        else:
+            out[:] = 0.0
         field = np.arange(pn)
         within = field[:, None] + b * field[None, :]  # of entry (i, j) from its block's (0, 0)
         upper = field[:, None] <= field[None, :]

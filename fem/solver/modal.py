@@ -12,6 +12,7 @@ from numpy.lib.stride_tricks import as_strided
 
 from ..errors import ModelError
 from .assembly import UnitMatrices, nonzeros
+from .work_arrays import work_array
 
 #: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
 RIGID_LEAK = 1e-9
@@ -52,7 +53,7 @@ def _solve(factor: np.ndarray, x: np.ndarray) -> np.ndarray:
     return sla.blas.dtbsv(factor.shape[0] - 1, factor, x, lower=0, trans=0)
 
 
-def _reversed(factor: np.ndarray) -> np.ndarray:
+def _reversed(factor: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """The band factor U (upper storage, Fortran-ordered) with its DOFs in reverse order:
     J U J is lower triangular, and its lower band storage is U's flat storage read
     backwards, so the copy is one pass over memory (10 ms for 71 MB).
@@ -64,8 +65,12 @@ def _reversed(factor: np.ndarray) -> np.ndarray:
     DOFs, 48 MB of factor, 1.8 against 3.4 ms; 11,880 DOFs, 71 MB, 2.6 against 5.4 ms;
     5,400 DOFs, 15 MB, 0.29 against 0.30 ms), so a layerwise solve's 40 Lanczos steps
     save 60-110 ms for a copy of 3-10 ms, at the price of the factor's memory again
-    while the solve runs."""
-    return factor.ravel(order="F")[::-1].copy().reshape(factor.shape, order="F")
+    while the solve runs.  ``out``: a flat array of the factor's size to copy it into (the
+    solve's work array)."""
+    flat = factor.ravel(order="F")
+    out = np.empty_like(flat) if out is None else out
+    np.copyto(out, flat[::-1])
+    return out.reshape(factor.shape, order="F")
 
 
 def _solve_reversed(reversed_factor: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -206,7 +211,9 @@ def solve_modes(
     sigma = -0.1 * shift_scale
     shifted = mass_data * -sigma  # K - sigma M, one array of temporaries fewer
     shifted += stiffness_data
-    band = units.banded(shifted)
+    # The band (factored in place) and its reversed copy are written into the thread's
+    # kept work arrays (``work_arrays``): nothing this function returns holds them.
+    band = units.banded(shifted, out=work_array("band", units.band_size))
     # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
     order, rank = units.band_order, units.rank
     rigid_fields = (units.matrix(shifted) @ rigid)[order]
@@ -223,7 +230,8 @@ def solve_modes(
     # is an eigenvector of C (M r = -(K - sigma M) r / sigma), so projecting out the
     # orthonormal basis of U r = U^-T (K - sigma M) r deflates the rigid-body modes.
     blocks = BandBlocks(factor) if factor.nbytes > BLOCK_SOLVE_BYTES else None
-    backwards = _reversed(factor) if blocks else None  # ``_reversed``: the large factors
+    # ``_reversed``: the large factors
+    backwards = _reversed(factor, work_array("reversed factor", factor.size)) if blocks else None
 
     def inverse(x: np.ndarray) -> np.ndarray:
         """U^-1 x, forwards in memory."""
