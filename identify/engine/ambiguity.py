@@ -121,10 +121,16 @@ def describe_pairs(objective: Objective, pairs) -> str:
     )
 
 
+def _within(objective: Objective, rows) -> tuple[str, list[int]]:
+    """The configuration of measured ``rows`` (all of one configuration) and their positions
+    among its rows (its pairing's order)."""
+    configuration = objective.measurements.table["configuration"].iloc[rows[0]]
+    return configuration, [int(np.flatnonzero(objective.rows[configuration] == r)[0]) for r in rows]
+
+
 def swapped(objective: Objective, e: Evaluation, rows: tuple[int, int]) -> Evaluation:
     """The same state with the model partners of two measured rows exchanged."""
-    configuration = objective.measurements.table["configuration"].iloc[rows[0]]
-    local = [int(np.flatnonzero(objective.rows[configuration] == r)[0]) for r in rows]
+    configuration, local = _within(objective, rows)
     pairing = e.pairings[configuration]
     indices = pairing.indices.copy()
     indices[local] = indices[local[::-1]]
@@ -239,8 +245,7 @@ def lone_close_modes(objective: Objective, e: Evaluation) -> list[LoneMode]:
 
 def moved(objective: Objective, e: Evaluation, row: int, index: int) -> Evaluation:
     """The state with measured ``row`` paired with model mode ``index`` instead."""
-    configuration = objective.measurements.table["configuration"].iloc[row]
-    local = int(np.flatnonzero(objective.rows[configuration] == row)[0])
+    configuration, (local,) = _within(objective, [row])
     pairings = dict(e.pairings)
     indices = pairings[configuration].indices.copy()
     indices[local] = index
@@ -346,10 +351,9 @@ def _same_two_modes(objective: Objective, current: Evaluation, pairs) -> list[li
     table = objective.measurements.table
     groups: dict[frozenset, list] = {}
     for rows in pairs:
-        configuration = table["configuration"].iloc[rows[0]]
+        configuration, local = _within(objective, rows)
         labels = objective.solution(current.model.specimen, configuration).labels
         partners = current.pairings[configuration].indices
-        local = [int(np.flatnonzero(objective.rows[configuration] == r)[0]) for r in rows]
         modes = frozenset(labels[partners[i]] for i in local)
         if len(modes) == 2 and not modes & {"", "in-plane"}:
             groups.setdefault(modes, []).append(rows)
