@@ -55,7 +55,7 @@ def work_array(role: str, size: int) -> np.ndarray:
         return array[:size]
     kept.pop(role, None)
     array = np.empty(size)
-    if nbytes + sum(a.nbytes for a in kept.values()) <= WORK_ARRAY_BYTES:
+    if nbytes + kept_bytes() <= WORK_ARRAY_BYTES:
         kept[role] = array
     return array
 
