@@ -322,7 +322,7 @@ def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) ->
     out += [
         (swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])}") for rows in near
     ]
-    for group in _same_two_modes(objective, current, near):
+    for group in same_two_modes(objective, current, near):
         state = current
         for rows in group:
             state = swapped(objective, state, rows)
@@ -338,7 +338,7 @@ def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) ->
     return out
 
 
-def _same_two_modes(objective: Objective, current: Evaluation, pairs) -> list[list[tuple[int, int]]]:
+def same_two_modes(objective: Objective, current: Evaluation, pairs) -> list[list[tuple[int, int]]]:
     """The ``pairs`` (rows of adjacent measured modes) whose model partners at ``current``
     are the same two modes (nodal patterns) in two or more configurations, grouped by
     those two.  Their order is set by the specimen's stiffness along and across, so a start
@@ -401,7 +401,7 @@ def settle_pairings(
       of these, one at a time;
     - each pair of adjacent unlabelled modes up to ``NEAR_MODES`` apart, swapped, and
       those that are the same two modes in several configurations swapped together
-      (``_same_two_modes``);
+      (``same_two_modes``);
     - the pairing made afresh at the solution (by rank and label), when the one followed
       by mode shapes from the start differs (the start may have had two modes in the
       other order than the solution);
