@@ -70,7 +70,10 @@ def test_the_index_holds_the_halves():
 
 def _stored(case: dict) -> bool:
     """The first two series are all stored; the later ones where they have been solved."""
-    return case["seed"] not in (blind.SEED_3, blind.SEED_4, blind.SEED_5) or (blind.OUT / f"{case['name']}.json").exists()
+    return (
+        case["seed"] not in (blind.SEED_3, blind.SEED_4, blind.SEED_5)
+        or (blind.OUT / f"{case['name']}.json").exists()
+    )
 
 
 @pytest.mark.parametrize("case", [c for c in CASES if _stored(c)], ids=lambda c: c["name"])
