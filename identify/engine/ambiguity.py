@@ -144,6 +144,13 @@ def swapped(objective: Objective, e: Evaluation, rows: tuple[int, int]) -> Evalu
     return Evaluation(e.values, model_hz, derivatives, pairings, e.model)
 
 
+def swapped_together(objective: Objective, e: Evaluation, group) -> Evaluation:
+    """The same state with each pair of measured rows in ``group`` swapped (``swapped``)."""
+    for rows in group:
+        e = swapped(objective, e, rows)
+    return e
+
+
 def mirror_symmetric(objective: Objective) -> bool:
     """True when a 90-degree turn maps every configuration onto itself with only the
     identified materials' axes exchanged: a square plate, layer angles 0 or 90 deg,
@@ -322,11 +329,13 @@ def _alternatives(objective: Objective, current: Evaluation, symmetric: bool) ->
     out += [
         (swapped(objective, current, rows), f"modes {describe_pairs(objective, [rows])}") for rows in near
     ]
-    for group in same_two_modes(objective, current, near):
-        state = current
-        for rows in group:
-            state = swapped(objective, state, rows)
-        out.append((state, f"modes {describe_pairs(objective, group)} together (the same two modes)"))
+    out += [
+        (
+            swapped_together(objective, current, group),
+            f"modes {describe_pairs(objective, group)} together (the same two modes)",
+        )
+        for group in same_two_modes(objective, current, near)
+    ]
     out += [
         (
             swapped(objective, current, rows),
@@ -344,10 +353,8 @@ def same_two_modes(objective: Objective, current: Evaluation, pairs) -> list[lis
     those two.  Their order is set by the specimen's stiffness along and across, so a start
     off by a few per cent in E1 / E2 can have them the wrong way round in every
     configuration at once; swapped one configuration at a time, each swap fights the
-    others and none lowers the misfit (blind117, a balsa sandwich: the (3,0) and (0,3)
-    1.4-1.6 % apart in both configurations with an aluminium sheet, followed the wrong
-    way round from the thin-plate fit, left its layerwise + orientation refit at 0.25 %
-    RMS, 4.5 x the 0.056 % its model reaches; swapped together, 0.054 %)."""
+    others and none lowers the misfit (a balsa sandwich of the blind study:
+    ``docs/identify.md``)."""
     table = objective.measurements.table
     groups: dict[frozenset, list] = {}
     for rows in pairs:
@@ -515,5 +522,6 @@ __all__ = [
     "settle_pairings",
     "mirror_symmetric",
     "swapped",
+    "swapped_together",
     "beneficial_swaps",
 ]

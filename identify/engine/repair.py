@@ -14,9 +14,9 @@ raises the misfit at the solution, which moved to fit the wrong order, and pays 
 after a refit.  They are refitted from when one linearised step from the swapped state is
 predicted below the current misfit (``predicted_chi2``: the swapped state carries its
 sensitivities, so no solve); a refit that does not end below the current misfit is
-dropped, as any other.  Only then: tried first, a joint swap re-paired a candidate that
-lacks the specimen's sensor to suit that lack, and the point mass then no longer paid
-(blind121, ``docs/identify.md``).
+dropped, as any other.  Only then: a candidate may lack some of the specimen's physics
+(a sensor), and a joint swap taken before the re-pairing that pays at once can pair the
+modes to suit that lack, which the later rounds inherit (``docs/identify.md``).
 """
 
 from __future__ import annotations
@@ -25,7 +25,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .ambiguity import beneficial_swaps, describe_pairs, near_pairs, predicted_chi2, same_two_modes, swapped
+from .ambiguity import (
+    beneficial_swaps,
+    describe_pairs,
+    near_pairs,
+    predicted_chi2,
+    same_two_modes,
+    swapped,
+    swapped_together,
+)
 from .objective import Evaluation, Objective
 
 #: Re-pair-and-refit rounds at most.
@@ -90,11 +98,9 @@ def _joint_swaps(
     """(predicted cost, state, what) of the same two modes swapped together in several
     configurations, where one linearised step from the swapped state is predicted below
     ``threshold`` (a cost)."""
-    out = []
+    current, out = objective.differentiated(current), []
     for group in same_two_modes(objective, current, near_pairs(objective)):
-        state = objective.differentiated(current)
-        for rows in group:
-            state = swapped(objective, state, rows)
+        state = swapped_together(objective, current, group)
         predicted = 0.5 * predicted_chi2(objective, state)
         if predicted < threshold:
             out.append((predicted, state, f"modes {describe_pairs(objective, group)} together (predicted)"))

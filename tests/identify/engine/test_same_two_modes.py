@@ -69,8 +69,7 @@ def objective_at_start():
 
 def _partner(objective, state, row: int) -> str:
     """The label of the model mode measured ``row`` is paired with at ``state``."""
-    configuration = objective.measurements.table["configuration"].iloc[row]
-    local = int(np.flatnonzero(objective.rows[configuration] == row)[0])
+    configuration, (local,) = ambiguity._within(objective, [row])
     labels = objective.solution(state.model.specimen, configuration).labels
     return labels[state.pairings[configuration].indices[local]]
 
