@@ -226,9 +226,10 @@ def _without_shear(material):
 
 def measurements(case: dict, model, noise: float, rng: np.random.Generator) -> Measurements:
     """The 3-D frequencies with ``noise`` relative Gaussian scatter (std_hz stated),
-    numbered in their measured order; the nodal-line label given where a lab needs it to
-    pair: a neighbour within 1 %, or a mode whose shape paired with a plate mode of another
-    rank (labels that are not unique in the configuration are left out)."""
+    numbered in their measured order (the scatter may swap two modes closer than it:
+    blind140's 0.04 % apart); the nodal-line label given where a lab needs it to pair: a
+    neighbour within 1 %, or a mode whose shape paired with a plate mode of another rank
+    (labels that are not unique in the configuration are left out)."""
     rows = []
     for conf in case["configurations"]:
         f = np.array([m["frequency_hz"] for m in conf["modes"]])
@@ -238,17 +239,19 @@ def measurements(case: dict, model, noise: float, rng: np.random.Generator) -> M
         close[1:] |= gaps
         labels = [m["label"] for m in conf["modes"]]
         noisy = f * (1 + noise * rng.standard_normal(len(f)))
+        modes = conf["modes"]
         rows += [
             {
                 "configuration": conf["name"],
-                "mode": k + 1,
+                "mode": position + 1,
                 "frequency_hz": noisy[k],
                 "std_hz": noise * f[k],
-                "label": m["label"]
-                if (close[k] or m["plate_mode"] != k + 1) and labels.count(m["label"]) == 1
+                "label": modes[k]["label"]
+                if (close[k] or modes[k]["plate_mode"] != position + 1)
+                and labels.count(modes[k]["label"]) == 1
                 else "",
             }
-            for k, m in enumerate(conf["modes"])
+            for position, k in enumerate(np.argsort(noisy, kind="stable"))
         ]
     frame = pd.DataFrame(rows)
     return parse_measurements(frame, model, f"<blind 3-D case {case['case']}, {100 * noise:.3g} % noise>")
