@@ -182,6 +182,12 @@ class LaminateSolution:
         )
 
     @cached_property
+    def in_plane_modes(self) -> int:
+        """How many of the modes move mostly in the plate's plane (``labels`` 'in-plane'):
+        a test that measures the deflection does not see them."""
+        return sum(in_plane(self.units, s) for s in self.modes.shapes.T)
+
+    @cached_property
     def nodal_lines(self) -> np.ndarray:
         """The nodal lines each mode crosses along x and along y, as a lab counts them on
         the plate (``fem.solver.mode_shapes.nodal_line_counts``): (modes, 2), -1 for an
