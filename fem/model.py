@@ -173,19 +173,19 @@ class LaminateSolution:
         return beam_coefficients(self.units, self.modes.shapes)
 
     @cached_property
+    def moves_in_plane(self) -> np.ndarray:
+        """Per mode, whether it moves mostly in the plate's plane (bool, (modes,)): a test
+        that measures the deflection does not see such a mode; its label is 'in-plane'."""
+        return np.array([in_plane(self.units, s) for s in self.modes.shapes.T], dtype=bool)
+
+    @cached_property
     def labels(self) -> tuple[str, ...]:
         """Nodal-pattern labels, e.g. '(1,2)' or '(0,2)+(2,0)' (``fem.solver.mode_shapes``);
         computed when first asked for, not on every solve."""
         return tuple(
-            "in-plane" if in_plane(self.units, s) else label_of(c)
-            for s, c in zip(self.modes.shapes.T, self.shape_coefficients)
+            "in-plane" if moving else label_of(c)
+            for moving, c in zip(self.moves_in_plane, self.shape_coefficients)
         )
-
-    @cached_property
-    def in_plane_modes(self) -> int:
-        """How many of the modes move mostly in the plate's plane (``labels`` 'in-plane'):
-        a test that measures the deflection does not see them."""
-        return sum(in_plane(self.units, s) for s in self.modes.shapes.T)
 
     @cached_property
     def nodal_lines(self) -> np.ndarray:
@@ -193,7 +193,7 @@ class LaminateSolution:
         the plate (``fem.solver.mode_shapes.nodal_line_counts``): (modes, 2), -1 for an
         in-plane mode."""
         counts = nodal_line_counts(self.units, self.modes.shapes)
-        return np.where((np.asarray(self.labels) == "in-plane")[:, None], -1, counts)
+        return np.where(self.moves_in_plane[:, None], -1, counts)
 
     def coefficient_derivatives(self, kinds) -> tuple[np.ndarray, np.ndarray]:
         """dX/dp and dI/dp of the laminate parameters ``kinds`` ((kind, target) pairs): the

@@ -82,7 +82,7 @@ def test_the_updating_solves_every_mode_up_to_the_last_measured_bending_one(trut
     truth, data, bending = truth_and_data
     solver = solving_model(truth, data)
     solution = solver.solve("original")
-    assert solver.options.modes - solution.in_plane_modes >= MEASURED + 3
+    assert solver.options.modes - solution.moves_in_plane.sum() >= MEASURED + 3
     objective = Objective(truth, data, truth.specimen.material_parameters())
     e = objective.evaluate(np.array([truth.value(p) for p in objective.parameters]), None)
     assert e.pairings["original"].indices.tolist() == bending
