@@ -2,7 +2,7 @@
 
 The cases are ``tests/data/solid3d/blind/*.json`` (made by ``tests/data/solid3d/blind.py``:
 CalculiX C3D20R full-plate models with misaligned plies, a sensor on half of them, soft
-bond lines; 10 flexural modes per configuration) in five series and six halves
+bond lines; 10 flexural modes per configuration) in six series and seven halves
 (``HALVES``, ``blind/index.json``):
 
 - 'dev': the first series (blind01-24: thick hybrid laminates, cross-plies, foam-core
@@ -14,6 +14,8 @@ bond lines; 10 flexural modes per configuration) in five series and six halves
 - 'heldout4': the fourth series (blind97-126), the third's families drawn again, 6 a
   family, held out whole (drawn after heldout3 had been run);
 - 'heldout5': the fifth series (blind127-156), drawn the same way after heldout4 had been
+  run once and its misses worked on, held out whole;
+- 'heldout6': the sixth series (blind157-186), drawn the same way after heldout5 had been
   run once and its misses worked on, held out whole.
 
 ``--half`` takes a half or a union of them (``SELECTIONS``: 'both' = dev + heldout,
@@ -50,7 +52,8 @@ the summary's figures per family (``summary``: ``families`` in the JSON).
 13 x 11 grid, ``tests/data/solid3d/blind_shapes/``) as a SHAPES.csv table whose
 frequencies are those of the case's measurement rows.
 
-    python -m studies.blind_diagnosis [--half dev|heldout|both|dev3|heldout3|heldout4|heldout5|both3|all]
+    python -m studies.blind_diagnosis [--half dev|heldout|both|dev3|heldout3|heldout4|heldout5|heldout6|
+                                              both3|all]
                                       [--case NAME] [--out DIR] [--jobs N]
 """
 
@@ -115,8 +118,8 @@ PHYSICS = {
 }
 IN_PLANE = ("E1", "E2", "G12", "nu12")
 #: The halves of ``index.json``: the first two series' development and held-out halves,
-#: the third series', and the fourth and fifth series (each held out whole).
-HALVES = ("dev", "heldout", "dev3", "heldout3", "heldout4", "heldout5")
+#: the third series', and the fourth, fifth and sixth series (each held out whole).
+HALVES = ("dev", "heldout", "dev3", "heldout3", "heldout4", "heldout5", "heldout6")
 #: ``--half`` names for unions of halves (any single half is a name too).
 SELECTIONS = {"both": ("dev", "heldout"), "both3": ("dev3", "heldout3"), "all": HALVES}
 
@@ -699,7 +702,8 @@ def main(argv=None) -> int:
         choices=(*HALVES, *SELECTIONS),
         default="dev",
         help="dev, heldout (blind01-36), dev3, heldout3 (the third series, blind37-96), "
-        "heldout4 (the fourth, blind97-126), heldout5 (the fifth, blind127-156), or a "
+        "heldout4 (the fourth, blind97-126), heldout5 (the fifth, blind127-156), "
+        "heldout6 (the sixth, blind157-186), or a "
         "union: both (dev + heldout), both3 (dev3 + heldout3), all",
     )
     parser.add_argument("--case", action="append", help="run only these cases")

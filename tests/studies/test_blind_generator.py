@@ -50,8 +50,8 @@ THIRD = [c for c in CASES if c["seed"] == blind.SEED_3]
 def test_the_index_holds_the_halves():
     """The stored index is the generator's: the first series all development since run 8,
     the second series (blind25-36) the held-out half, the third split per family into 6
-    'dev3' and 6 'heldout3' cases, the fourth all 'heldout4' and the fifth all 'heldout5',
-    6 a family; the index keeps the seeds."""
+    'dev3' and 6 'heldout3' cases, the fourth, fifth and sixth all 'heldout4', 'heldout5'
+    and 'heldout6', 6 a family; the index keeps the seeds."""
     index = json.loads((blind.OUT / "index.json").read_text())
     assert index["cases"] == HALVES
     assert sum(h == "heldout" for h in HALVES.values()) == blind.N_CASES_2
@@ -59,19 +59,19 @@ def test_the_index_holds_the_halves():
     for family in blind.FAMILIES_3:
         names = [c["name"] for c in THIRD if c["family"] == family]
         assert sorted(HALVES[n] for n in names) == 6 * ["dev3"] + 6 * ["heldout3"], family
-    for seed, half in ((blind.SEED_4, "heldout4"), (blind.SEED_5, "heldout5")):
+    for seed, half in ((blind.SEED_4, "heldout4"), (blind.SEED_5, "heldout5"), (blind.SEED_6, "heldout6")):
         assert index[f"seed_{half[-1]}"] == seed
         series = [c for c in CASES if c["seed"] == seed]
         for family in blind.FAMILIES_3:
             assert [HALVES[c["name"]] for c in series if c["family"] == family] == 6 * [half], family
-    fifth = sorted(int(c["name"].split("_")[0][5:]) for c in CASES if c["seed"] == blind.SEED_5)
-    assert fifth == list(range(127, 157))
+    for seed, numbers in ((blind.SEED_5, range(127, 157)), (blind.SEED_6, range(157, 187))):
+        assert sorted(int(c["name"].split("_")[0][5:]) for c in CASES if c["seed"] == seed) == list(numbers)
 
 
 def _stored(case: dict) -> bool:
     """The first two series are all stored; the later ones where they have been solved."""
     return (
-        case["seed"] not in (blind.SEED_3, blind.SEED_4, blind.SEED_5)
+        case["seed"] not in (blind.SEED_3, blind.SEED_4, blind.SEED_5, blind.SEED_6)
         or (blind.OUT / f"{case['name']}.json").exists()
     )
 

@@ -73,7 +73,7 @@ A fourth series (``SEED_4``, blind97-blind126) draws the third's families again,
 each, all held out ('heldout4'): after the third series' held-out half had been run (and
 failed on sensors), a half that no rule has seen.  A fifth (``SEED_5``, blind127-blind156,
 'heldout5') draws them once more, after the fourth had been run once and its misses
-worked on.
+worked on, and a sixth (``SEED_6``, blind157-blind186, 'heldout6') after the fifth had.
 
     python tests/data/solid3d/blind.py [--only NAME ...] [--check]
     python tests/data/solid3d/blind.py --regression [--only NAME ...]
@@ -140,6 +140,10 @@ PER_FAMILY_4 = 6
 #: ('heldout5'), drawn after the fourth had been run and its misses worked on.
 SEED_5 = 20_2032
 PER_FAMILY_5 = 6
+#: The sixth series: the same families once more (blind157-blind186), all held out
+#: ('heldout6'), drawn after the fifth had been run once and its misses worked on.
+SEED_6 = 20_2033
+PER_FAMILY_6 = 6
 #: A sensor's square base on a sandwich: this side [mm] plus 1 mm per gram of its mass.
 SENSOR_BASE_MM = 5.0
 #: Elements across each side of a sensor's base in the solid model, per thickness factor of
@@ -650,15 +654,18 @@ def draw_cases_3(
 
 
 def all_cases() -> list[dict]:
-    """The five series: the first (all development now), the second (held-out), the third
-    (split per family), the fourth (held out, run once) and the fifth (held out)."""
+    """The six series: the first (all development now), the second (held-out), the third
+    (split per family), the fourth and fifth (held out, each run once) and the sixth (held
+    out)."""
     fourth = N_CASES + N_CASES_2 + N_CASES_3
+    fifth = fourth + PER_FAMILY_4 * len(FAMILIES_3)
     return (
         draw_cases()
         + draw_cases(N_CASES_2, SEED_2, first=N_CASES)
         + draw_cases_3()
         + draw_cases_3(SEED_4, fourth, PER_FAMILY_4)
-        + draw_cases_3(SEED_5, fourth + PER_FAMILY_4 * len(FAMILIES_3), PER_FAMILY_5)
+        + draw_cases_3(SEED_5, fifth, PER_FAMILY_5)
+        + draw_cases_3(SEED_6, fifth + PER_FAMILY_5 * len(FAMILIES_3), PER_FAMILY_6)
     )
 
 
@@ -666,7 +673,7 @@ def halves(cases: list[dict]) -> dict[str, str]:
     """Every case's half: the first series all development (its held-out half, drawn by
     ``split``, was run once in run 8 and then worked on), the second series held-out, the
     third 'dev3' or 'heldout3' (``split_by_family``), the fourth 'heldout4', the fifth
-    'heldout5'."""
+    'heldout5', the sixth 'heldout6'."""
     first = [c["name"] for c in cases if c["seed"] == SEED]
     return {
         **{name: "dev" for name in split(first)},
@@ -674,6 +681,7 @@ def halves(cases: list[dict]) -> dict[str, str]:
         **split_by_family([c for c in cases if c["seed"] == SEED_3]),
         **{c["name"]: "heldout4" for c in cases if c["seed"] == SEED_4},
         **{c["name"]: "heldout5" for c in cases if c["seed"] == SEED_5},
+        **{c["name"]: "heldout6" for c in cases if c["seed"] == SEED_6},
     }
 
 
@@ -899,7 +907,9 @@ def run_case(case: dict, level: g.Level, half: str) -> dict:
         family=case["family"],
         half=half,
         seed=case.get("seed"),
-        split_seed={SEED_3: SPLIT_SEED_3, SEED_4: None, SEED_5: None}.get(case.get("seed"), SPLIT_SEED),
+        split_seed={SEED_3: SPLIT_SEED_3, SEED_4: None, SEED_5: None, SEED_6: None}.get(
+            case.get("seed"), SPLIT_SEED
+        ),
         choices=dict(
             length_mm=case["length_mm"],
             width_mm=case["width_mm"],
@@ -1095,6 +1105,7 @@ def index_record(half: dict[str, str]) -> dict:
         split_seed_3=SPLIT_SEED_3,
         seed_4=SEED_4,
         seed_5=SEED_5,
+        seed_6=SEED_6,
         cases=half,
         script="tests/data/solid3d/blind.py",
     )
