@@ -1670,9 +1670,11 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
     # A mass at its start can reorder the modes, and the measured numbers are the real
     # plate's ranks: a start whose modes, followed by shape from the state, pair otherwise
     # than afresh by those numbers is refitted both ways.
-    reordering = [
-        on for on in chosen if measurements.ranked and _reorders(on, base, state.pairings, measurements)
-    ]
+    reordering = (
+        [on for on in chosen if _reorders(on, base, state.pairings, measurements)]
+        if measurements.ranked
+        else []
+    )
     if progress:
         progress(
             f"{kind}: {len(ranked)} starts ranked and {len(screened)} screened on a reduced model, "
@@ -1693,14 +1695,23 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
         )
         trials.append((_fitted(refit.job(gone.model, base + list(gone.free), state.pairings)), gone))
         result, on = min(trials, key=lambda t: t[0].statistics.sum_squares)
-    rivals = [
+    # Distinct finished solutions within the rival margin in units of the misfit's own
+    # over-dispersion go to the final refit (``diagnose._final``): while physics is
+    # missing, a misfit that much higher cannot rank two solutions (blind145's x-mirror of
+    # its sensor 38 chi^2 below its true mirror image, at a reduced chi^2 of 26).  Those
+    # within the margin itself are the rivals the report names.
+    unit = result.statistics.chi2_unit
+    others = [
         t
         for t, o in trials
         if t is not result
         and t.finished
         and t.statistics.sum_squares - result.statistics.sum_squares
-        < RIVAL_CHI2 * result.statistics.chi2_unit
+        < RIVAL_CHI2 * unit * max(1.0, result.statistics.reduced_chi2)
         and _differs(t, result, o.free)
+    ]
+    rivals = [
+        t for t in others if t.statistics.sum_squares - result.statistics.sum_squares < RIVAL_CHI2 * unit
     ]
     notes = []
     if rivals:
@@ -1711,19 +1722,6 @@ def _from_starts(refit: Refit, kind: str, hints, base, progress) -> tuple[FitRes
             f"{kind}: {len(rivals)} other solution(s) fit about as well ({described}): the effect's "
             "parameters are not unique with these modes; measure more modes to separate them"
         )
-    # For the final refit (``diagnose._final``) the solutions within the rival margin in
-    # units of the misfit's own over-dispersion: while physics is missing, a misfit that
-    # much higher cannot rank two solutions (blind145's x-mirror of its sensor 38 chi^2
-    # below its true mirror image, at a reduced chi^2 of 26).
-    spread = RIVAL_CHI2 * result.statistics.chi2_unit * max(1.0, result.statistics.reduced_chi2)
-    others = [
-        t
-        for t, o in trials
-        if t is not result
-        and t.finished
-        and t.statistics.sum_squares - result.statistics.sum_squares < spread
-        and _differs(t, result, o.free)
-    ]
     return result, notes, tuple({p: t.value(p) for p in on.free} for t in others)
 
 

@@ -91,6 +91,6 @@ def test_the_screen_starts_at_the_hidden_sensor(sensor_baseline):
 def test_the_screen_starts_at_the_hidden_sensor_on_a_layerwise_fit(layerwise_sensor_baseline):
     """The layerwise theory's reanalysis carries the screen as well: without it a point
     mass added to a layerwise fit started from the residual scan alone, and on a thick
-    balsa sandwich (blind152, a 6.6 g sensor) refitted to 0 g."""
+    sandwich (blind156, a 9.7 g sensor) refitted to an implausible 10.8 g at 0.42 %."""
     assert layerwise_sensor_baseline.model.options.theory == "layerwise"
     _starts_at_the_sensor(layerwise_sensor_baseline)
