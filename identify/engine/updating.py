@@ -25,7 +25,7 @@ from fem.solver.sensitivity import Verdict
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
-from .ambiguity import lone_close_modes, settle_pairings
+from .ambiguity import as_stated, lone_close_modes, settle_pairings
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, RitzObjective, ShapeObjective, TrialScreen
 from .pairing import CLOSE_MODES
 from .parameters import UNITS, ParameterSpace, display
@@ -422,6 +422,9 @@ def update(
         warnings += notes
         if progress and notes:
             progress(history[-1])
+    current, stated, image = as_stated(objective, current)
+    warnings += stated
+    twins = [(image(values), chi2) for values, chi2 in twins]
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
     if settle is not Settle.NONE:
