@@ -319,7 +319,8 @@ def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str
             maps.append(lambda v: mirror_image(objective, v))
             notes.append(
                 "the plate's mirror image (every free angle negated) has the same frequencies; the one "
-                "nearer the spec's lay-up is given: only a measured mode shape could tell them apart"
+                "nearer the lay-up the fit started from is given: only a measured mode shape could tell "
+                "them apart"
             )
             e = image
 
