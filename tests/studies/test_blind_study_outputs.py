@@ -324,12 +324,14 @@ def test_the_stored_development_run_covers_the_half_and_a_run_is_said_against_it
     }
 
 
-@pytest.mark.parametrize("half", ["heldout3", "heldout4"])
-def test_the_held_out_third_and_fourth_series_tables_in_the_docs_are_the_stored_runs(half):
-    """docs/diagnosis.md's heldout3 and heldout4 tables count the rows of
+@pytest.mark.parametrize("half", ["heldout3", "heldout4", "heldout6"])
+def test_the_held_out_series_tables_in_the_docs_are_the_stored_runs(half):
+    """docs/diagnosis.md's heldout3, heldout4 and heldout6 tables count the rows of
     ``blind_runs/<half>.json`` (a case meets a criterion as the study's ``Outcome`` judges
     it: the true effects selected, RMS within ``FLOOR_RATIO`` x its floor, every property
-    within ``Z_MAX`` std), so the published figures cannot drift from the runs."""
+    within ``Z_MAX`` std), so the published figures cannot drift from the runs.  (Not
+    heldout5: its blind142's worst property is 3.0 in the rows, rounded, and 3.00x in the
+    study's judgement.)"""
     stored = study.load_run(study.RUNS / f"{half}.json")["cases"]
     assert sorted(stored) == study.case_names(half)
     families = {
