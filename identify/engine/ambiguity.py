@@ -180,17 +180,34 @@ def mirror_symmetric(objective: Objective) -> bool:
     )
 
 
-def mirrored(objective: Objective, values: np.ndarray) -> np.ndarray:
-    """Values with E1 and E2 exchanged and nu12 -> nu21 for every identified material."""
+#: A material whose start values name a stiff direction (E1/E2 or E2/E1 of the spec at least
+#: this) has its fitted axes given that way round; below it (a balanced fabric, a coating, a
+#: metal) the spec carries no direction and the fit's is kept.
+NAMED_ANISOTROPY = 1.2
+#: A symmetry image is kept when its misfit equals the state's to this (relative): it is the
+#: same laminate, so only the solver's round-off (1e-9 measured) may separate the two; a model
+#: for which the image is not exact (a tied G13/G23, a known layer off 0/90 deg, a sensor off
+#: the mirror line) differs by far more.
+SAME_MISFIT = 1e-6
+
+
+def _exchanged(objective: Objective, values: np.ndarray, materials) -> np.ndarray:
+    """Values with the material axes 1 and 2 exchanged for each of ``materials`` (their E1,
+    E2 and nu12 free): E1 <-> E2, nu12 -> nu21 = nu12 E2/E1, G13 <-> G23 when both are free."""
     index = {p: i for i, p in enumerate(objective.parameters)}
     out = values.copy()
-    for p, i in index.items():
-        if p.kind == "E1":
-            j = index[Parameter("E2", p.target)]
-            out[i], out[j] = values[j], values[i]
-            n = index[Parameter("nu12", p.target)]
-            out[n] = values[n] * values[j] / values[i]
+    for material in materials:
+        e1, e2, nu = (index[Parameter(k, material)] for k in ("E1", "E2", "nu12"))
+        out[e1], out[e2], out[nu] = values[e2], values[e1], values[nu] * values[e2] / values[e1]
+        g13, g23 = index.get(Parameter("G13", material)), index.get(Parameter("G23", material))
+        if g13 is not None and g23 is not None:
+            out[g13], out[g23] = values[g23], values[g13]
     return out
+
+
+def mirrored(objective: Objective, values: np.ndarray) -> np.ndarray:
+    """Values with E1 and E2 exchanged and nu12 -> nu21 for every identified material."""
+    return _exchanged(objective, values, [p.target for p in objective.parameters if p.kind == "E1"])
 
 
 def _anisotropy_sign(objective: Objective, values: np.ndarray) -> float:
@@ -207,18 +224,7 @@ def oriented_like_start(objective: Objective, e: Evaluation) -> Evaluation:
         return e
     mirror = objective.evaluate(mirrored(objective, e.values), None)
     # An exact mirror fits exactly as well; anything else is not the mirror: keep the state.
-    return mirror if objective.cost(mirror) <= objective.cost(e) * (1 + 1e-6) + 1e-12 else e
-
-
-#: A material whose start values name a stiff direction (E1/E2 or E2/E1 of the spec at least
-#: this) has its fitted axes given that way round; below it (a balanced fabric, a coating, a
-#: metal) the spec carries no direction and the fit's is kept.
-NAMED_ANISOTROPY = 1.2
-#: A symmetry image is kept when its misfit equals the state's to this (relative): it is the
-#: same laminate, so only the solver's round-off (1e-9 measured) may separate the two; a model
-#: for which the image is not exact (a tied G13/G23, a known layer off 0/90 deg, a sensor off
-#: the mirror line) differs by far more.
-SAME_MISFIT = 1e-6
+    return mirror if objective.cost(mirror) <= objective.cost(e) * (1 + SAME_MISFIT) + 1e-12 else e
 
 
 def _wrapped(angle: float) -> float:
@@ -249,12 +255,7 @@ def turned_axes(objective: Objective, values: np.ndarray, material: str) -> np.n
     G13 <-> G23 (when both are free) and every ply of it +90 deg.  The same laminate: every
     frequency is unchanged."""
     index = {p: i for i, p in enumerate(objective.parameters)}
-    out = values.copy()
-    e1, e2, nu = (index[Parameter(k, material)] for k in ("E1", "E2", "nu12"))
-    out[e1], out[e2], out[nu] = values[e2], values[e1], values[nu] * values[e2] / values[e1]
-    g13, g23 = index.get(Parameter("G13", material)), index.get(Parameter("G23", material))
-    if g13 is not None and g23 is not None:
-        out[g13], out[g23] = values[g23], values[g13]
+    out = _exchanged(objective, values, [material])
     for layer in objective.model.specimen.layers:
         if layer.material.name == material:
             i = index[Parameter("angle", layer.label)]
