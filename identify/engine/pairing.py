@@ -262,14 +262,19 @@ class ModePairing:
         partner 5 % higher); their ranks are what stays.  The others by rank (``mode``
         numbers): measured mode k with model mode k, so ranks with a gap skip the
         unmeasured mode; where labels took modes out of order, the rest keep their order
-        among the modes left free."""
+        among the modes left free.  Ranks count the bending modes only: a test that
+        measures the deflection does not see a mode that moves in the plate's plane
+        (blind175: a thick angle-ply's membrane mode between its ninth and tenth bending
+        modes), so no unlabelled measured mode is paired with one."""
         modes = solution.modes
         n_model = len(modes.eigenvalues)
+        bends = ~np.asarray(solution.moves_in_plane, dtype=bool)
+        seen_rank = np.cumsum(bends) - 1  # each model mode's rank among the bending modes
         ranks = np.asarray(measured_modes, dtype=int) - 1
-        if np.any(ranks >= n_model):
+        if np.any(ranks >= bends.sum()):
             raise MeasurementError(
                 f"configuration {configuration!r}: mode {ranks.max() + 1} is beyond the "
-                f"{n_model} model modes computed"
+                f"{bends.sum()} bending model modes computed"
             )
         shapes = [None] * len(ranks) if shapes is None else shapes
         allowed, affinity, notes = permits(solution, labels, shapes)
@@ -279,7 +284,7 @@ class ModePairing:
         ]
         unmatched = []
         if pinned:
-            nearness = np.abs(np.arange(n_model)[None, :] - ranks[pinned][:, None]) / n_model
+            nearness = np.abs(seen_rank[None, :] - ranks[pinned][:, None]) / n_model
             permitted = allowed[pinned]
             rows, cols = linear_sum_assignment(
                 np.where(permitted, nearness - LABEL_TIE * affinity[pinned], n_model)
@@ -292,8 +297,10 @@ class ModePairing:
                     unmatched.append(f"mode {measured_modes[k]} {labels[k] or 'with its shape'}")
         unpaired = [k for k in np.argsort(ranks, kind="stable") if indices[k] < 0]
         used = set(indices[indices >= 0].tolist())
-        free = [i for i in range(n_model) if i not in used]
-        indices[unpaired] = monotone_assignment(ranks[unpaired], np.array(free))
+        free = np.array([i for i in np.flatnonzero(bends) if i not in used], dtype=int)
+        indices[unpaired] = free[
+            np.searchsorted(seen_rank[free], monotone_assignment(ranks[unpaired], seen_rank[free]))
+        ]
         if unmatched:
             notes.append(
                 f"{configuration}: no start-model mode shows the pattern of {', '.join(unmatched)}; "

@@ -69,9 +69,12 @@ def synthetic_measurements(
     labels: str = "none",
     also: AlsoMeasured = AlsoMeasured(),
 ) -> Measurements:
-    """The first ``modes`` elastic frequencies of every configuration of ``truth`` (the
-    model that generates the data: its specimen, mesh and effects; for some configurations
-    only, ``truth.with_configurations(...)``), and what ``also`` says.
+    """The first ``modes`` elastic bending frequencies of every configuration of ``truth``
+    (the model that generates the data: its specimen, mesh and effects; for some
+    configurations only, ``truth.with_configurations(...)``), and what ``also`` says.  A
+    test that measures the deflection does not see a mode that moves in the plate's plane
+    (a thick sandwich's membrane modes): such modes are passed over, as the updating's
+    pairing passes them over (``ModePairing.initial``).
 
     noise_rel: relative std of Gaussian noise added (also written as ``std_hz`` when > 0).
     labels: "none", "close" (nodal-line labels of modes within 1 % of a neighbour, as a lab
@@ -85,8 +88,13 @@ def synthetic_measurements(
     rows, shapes = [], []
     xy = None if also.shape_grid is None else grid_points(specimen.length, specimen.width, also.shape_grid)
     for c in specimen.configurations:
-        solution = solver.solve(c.name)
-        f = solution.frequencies_hz[:modes]
+        solving = solver
+        solution = solving.solve(c.name)
+        while (~solution.moves_in_plane).sum() < modes:
+            solving = solving.with_options(modes=solving.options.modes + int(solution.moves_in_plane.sum()))
+            solution = solving.solve(c.name)
+        seen = np.flatnonzero(~solution.moves_in_plane)[:modes]
+        f = solution.frequencies_hz[seen]
         close = np.zeros(modes, dtype=bool)
         gaps = np.diff(f) / f[:-1] < 0.01
         close[:-1] |= gaps
@@ -97,7 +105,7 @@ def synthetic_measurements(
             if noise_rel > 0:
                 row["std_hz"] = noise_rel * f[i]
             if labels == "all" or (labels == "close" and close[i]):
-                row["label"] = solution.labels[i]
+                row["label"] = solution.labels[seen[i]]
             rows.append(row)
             if xy is not None:
                 shapes.append(
@@ -106,12 +114,12 @@ def synthetic_measurements(
                         float(noisy[i]),
                         xy,
                         _measured_shape(
-                            solution, i, xy, shape_rng, also.shape_noise_rel, 1e-3 * also.hammer_std_mm
+                            solution, seen[i], xy, shape_rng, also.shape_noise_rel, 1e-3 * also.hammer_std_mm
                         ),
                     )
                 )
         if also.damping_std_rel is not None:
-            zeta = ratio_from_loss(complex_loss_factors(solver, c.name)[:modes])
+            zeta = ratio_from_loss(complex_loss_factors(solving, c.name)[seen])
             noisy_zeta = zeta * (1 + also.damping_std_rel * rng.standard_normal(modes))
             for row, z, z_noisy in zip(rows[-modes:], zeta, noisy_zeta):
                 row["damping_ratio"] = z_noisy

@@ -105,3 +105,16 @@ def test_a_fit_from_a_handbook_start_reaches_the_truth(truth_and_data):
     assert result.rms_rel_error < 1e-8
     for p in result.parameters:
         assert result.model.value(p) == pytest.approx(truth.value(p), rel=1e-5), p
+
+
+def test_unlabelled_ranks_count_the_bending_modes_only(truth_and_data):
+    """Without a single label the lab's mode k is still the model's k-th bending mode: the
+    membrane modes at ranks 6, 7 and 11-15 are passed over, not paired with the sixth
+    and seventh measured modes (which they would miss by tens of per cent)."""
+    truth, data, bending = truth_and_data
+    rows = data.table[["configuration", "mode", "frequency_hz", "std_hz"]].assign(label="")
+    unlabelled = parse_measurements(rows.to_dict("records"), truth, "<no labels>")
+    objective = Objective(truth, unlabelled, truth.specimen.material_parameters())
+    e = objective.evaluate(np.array([truth.value(p) for p in objective.parameters]), None)
+    assert e.pairings["original"].indices.tolist() == bending
+    np.testing.assert_allclose(e.model_hz, unlabelled.table["frequency_hz"], rtol=1e-12)

@@ -27,7 +27,14 @@ def _solution(patterns: list[dict], in_plane=(), nodal_lines=None) -> SimpleName
     for k, lines in (nodal_lines or {}).items():
         counts[k] = lines
     counts[list(in_plane)] = -1
-    return SimpleNamespace(modes=modes, shape_coefficients=coefficients, labels=labels, nodal_lines=counts)
+    moves_in_plane = np.isin(np.arange(n), list(in_plane))
+    return SimpleNamespace(
+        modes=modes,
+        shape_coefficients=coefficients,
+        labels=labels,
+        nodal_lines=counts,
+        moves_in_plane=moves_in_plane,
+    )
 
 
 #: Ten modes of distinct pure patterns, then a sensor-mixed pair at ranks 10 and 12.

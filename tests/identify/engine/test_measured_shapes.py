@@ -216,15 +216,17 @@ def test_shapes_frame_round_trips(example_spec, bundled):
         np.testing.assert_allclose(a.amplitude, b.amplitude, rtol=1e-12)
 
 
-@pytest.mark.parametrize("case, labels, shapes", [("blind33_sandwich", 19, 29), ("blind27_sandwich", 21, 30)])
+@pytest.mark.parametrize("case, labels, shapes", [("blind33_sandwich", 19, 29), ("blind27_sandwich", 24, 30)])
 def test_3d_shapes_pair_the_start_model_better_than_labels(case, labels, shapes):
     """Held-out blind cases with their 3-D models' top-face shapes (CalculiX, not this
     project's model): at the user's start (handbook values, nominal angles, no sensor,
     thin plate) the pairing by shape (on a 5 x 4 subset of the 13 x 11 grid) gives the
     start model's mode that carries the truth's for 29 and 30 of the 30 modes, where the
-    study's labels give 19 and 21 and ranks alone 18 and 21; and it does no worse than the
-    labels in any configuration (studies.measured_shapes --blind: 357 of 360 on the whole
-    held-out half, labels 317, ranks 297).  (blind33's labels gave 20 while the start model
+    study's labels give 19 and 24 and ranks alone 18 and 24 (ranks counted among the
+    bending modes; 21 and 21 while they counted the start model's membrane modes too); and
+    it does no worse than the labels in any configuration (studies.measured_shapes
+    --blind: 357 of 360 on the whole held-out half, labels 322, ranks 307; 317 and 297
+    with the membrane modes counted).  (blind33's labels gave 20 while the start model
     solved 13 modes: its original's weakly resembled (3,2), best MAC 0.16, then counted as
     carried by the (3,2) the label pairs; with the two modes more its in-plane modes ask
     for, the (4,0) carries it at MAC 0.20.)"""

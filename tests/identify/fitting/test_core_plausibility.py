@@ -109,11 +109,14 @@ def test_a_balsa_core_s_shear_refit_descends_from_the_thin_plate():
 def test_the_continuation_starts_at_the_thin_plate_and_only_descends():
     """From the thin-plate limit (``vanishing_shear_start``: the core's G13 = G23 thousands
     of times its G12, the shear correction below a tenth of each measurement's scatter)
-    the continuation starts at the thin-plate fit's misfit (within 1 %: a tenth of the
-    scatter per mode on residuals of about 80 scatters), lowers the shear moduli while
-    each step lowers it (``shear_continuation``), and the refit with them free from there
-    descends further, to below a hundredth of it.  8 G12, the fixed start this replaces,
-    is not that limit for this core: there the model is still more than 1 % off."""
+    the continuation starts no higher than the thin-plate fit's misfit (within 1 %: a
+    tenth of the scatter per mode on residuals of about 120 scatters) and within 2 % of
+    it (the first-order shear element's thin limit lies up to 0.28 % in frequency from
+    the thin-plate element's on this mesh, measured: on residuals of 120 scatters that
+    lowers the misfit by 1.6 %), lowers the shear moduli while each step lowers it
+    (``shear_continuation``), and the refit with them free from there descends further,
+    to below a hundredth of it.  8 G12, the fixed start this replaces, is not that limit
+    for this core: there the model is still more than 1 % off."""
     truth = parse_spec(sandwich(TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR)).with_options(theory="layerwise")
     data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
     start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25)))
@@ -125,7 +128,8 @@ def test_the_continuation_starts_at_the_thin_plate_and_only_descends():
     model, factor = vanishing_shear_start(context, prepared.model, shear, parameters)
     assert factor > 100
     model, reached, kept = continuation_steps(context, model, shear, factor, parameters)
-    assert abs(kept[0] / baseline.statistics.sum_squares - 1) < 0.01 and reached < factor
+    assert kept[0] / baseline.statistics.sum_squares - 1 < 0.01 and reached < factor
+    assert abs(kept[0] / baseline.statistics.sum_squares - 1) < 0.02
     assert np.all(np.diff(kept) < 0)
     refit = driver.fit_layers(
         model,
@@ -176,11 +180,21 @@ def test_a_failed_shear_refit_is_continued_from_the_thin_plate_then_tries_every_
     assert added.result.statistics.sum_squares < baseline.statistics.sum_squares
 
 
-def test_a_hold_that_ends_above_the_thin_plate_is_undone():
+def test_a_hold_that_ends_above_the_thin_plate_is_undone(monkeypatch):
     """The same panel with no E3 in the spec: its core is judged as a ply, the Mindlin
-    refit's core G13 (3 x G12) counts as implausible and was held at G12, which ended at
-    6.9 %, above the thin plate's 4 %.  The hold is undone: the free estimate is kept, far
-    below the thin plate, and marked implausible (a sign, never selected)."""
+    refit's core G13 (3 x G12) counts as implausible and is held at the ply class's
+    relation.  Held, it ends at 0.34 %, below the thin plate's 6.0 %; forced here to
+    count as above it (it did end above, at 6.9 % against 4 %, while measured bending
+    modes could pair with the thin plate's membrane modes), the hold is undone: the free
+    estimate is kept, far below the thin plate, and marked implausible (a sign, never
+    selected)."""
+    ended_worse = driver.ended_worse
+
+    def held_ends_worse(result, state):
+        held = {"G13", "G23"}.isdisjoint(p.kind for p in result.parameters if p.target == "balsa")
+        return held or ended_worse(result, state)
+
+    monkeypatch.setattr(driver, "ended_worse", held_ends_worse)
     truth = parse_spec(sandwich(TRUE_SKIN, TRUE_CORE, TRUE_CORE_SHEAR)).with_options(theory="layerwise")
     data = synthetic_measurements(truth, modes=10, noise_rel=5e-4, seed=3)
     start = parse_spec(sandwich((19.0, 23.0, 3.4, 0.15), (0.17, 0.12, 0.07, 0.25), e3_gpa=None))
