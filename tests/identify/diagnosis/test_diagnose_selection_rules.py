@@ -82,16 +82,19 @@ def test_a_refinement_whose_margin_cannot_win_is_not_refitted_again():
 
     factor = SELECTION_POLICY.refits.prune_factor
 
-    def fitted(kind, sum_squares, selectable=True):
+    def fitted(kind, sum_squares, selectable=True, finished=True):
         return SimpleNamespace(
             kind=kind,
             selectable=selectable,
-            fit=SimpleNamespace(statistics=SimpleNamespace(sum_squares=sum_squares)),
+            fit=SimpleNamespace(statistics=SimpleNamespace(sum_squares=sum_squares), finished=finished),
         )
 
     round1 = [fitted("transverse_shear", 1000.0), fitted("thick_plate", 1100.0), fitted("layerwise", 644.0)]
     margins = _margins(["layerwise"], round1, 1)
     assert margins == {"layerwise": (1, 356.0, "transverse_shear")}
+    # Stopped at its iteration limit (blind171's, far above the shear fit): no margin.
+    stopped = [*round1[:2], fitted("layerwise", 1.4e5, finished=False)]
+    assert _margins(["layerwise"], stopped, 1) == {}
     state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0))
     point_mass = [fitted("point_mass", 1000.0 - 2062.0 / 2 - 1000.0 / 2)]  # explains 1531 > 2 x 356
     held = _held_back(["layerwise"], margins, state, point_mass, factor)
