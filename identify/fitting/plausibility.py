@@ -101,7 +101,8 @@ def implausible(
                         f"{100 * MAX_SUSPENSION_RATIO:.0f} %: stiffer than a free suspension)"
                     )
         elif p.kind == "angle":
-            turn = math.degrees(fitted.value(p) - nominal.value(p))
+            # A ply's axes are a line: a turn of 180 deg is no turn.
+            turn = (math.degrees(fitted.value(p) - nominal.value(p)) + 90.0) % 180.0 - 90.0
             limit = max(MAX_TURN_DEG, TURN_STDS * math.degrees(tolerance.get(p.target, 0.0)))
             if abs(turn) > limit:
                 reasons.append(

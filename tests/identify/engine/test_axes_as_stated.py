@@ -12,6 +12,7 @@ from fem.solver.attachments import PointMass
 from fem.specimen import Parameter
 from identify.engine.ambiguity import as_stated, mirror_image, turned_axes
 from identify.engine.objective import Objective
+from identify.fitting.plausibility import implausible
 from identify.recordings.synthetic import synthetic_measurements
 from studies.common import true_model
 
@@ -93,3 +94,24 @@ def test_a_mirror_that_changes_the_frequencies_is_not_taken():
     e = objective.evaluate(minus, None)
     stated, said, _ = as_stated(objective, e)
     assert stated is e and said == []
+
+
+def test_a_ply_at_90_deg_keeps_its_state_and_a_180_deg_turn_is_no_turn():
+    """blind35 (a cross-ply, every ply free to turn): its 90 deg ply fitted at 90.93 deg
+    and the mirror image's -90.93 deg (the ply at 89.07 deg) lie equally near the spec's
+    90 deg; on that tie the fit's own state stays (round-off had taken the mirror), and
+    the plausibility rule counts the turn modulo 180 deg: -90.93 deg is 0.93 deg from
+    90 deg, not 181 (which had refused a paying orientation as implausible)."""
+    at_90 = {**CORE, Parameter("angle", "layer2"): math.radians(90.0)}
+    truth = true_model().with_values(at_90)
+    objective = Objective(truth, synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=4), FREE)
+    state = _truth(objective)
+    state[4] = math.radians(90.93)
+    e = objective.evaluate(state, None)
+    stated, said, _ = as_stated(objective, e)
+    assert stated is e and said == []
+    nominal = truth.specimen
+    angle = [Parameter("angle", "layer2")]
+    for degrees, plausible in ((-90.93, True), (270.5, True), (-84.0, False), (96.0, False)):
+        fitted = nominal.with_values({angle[0]: math.radians(degrees)})
+        assert (implausible(angle, fitted, nominal) == ()) is plausible, degrees
