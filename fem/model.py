@@ -455,6 +455,22 @@ class SpecimenModel:
         return np.vstack(blocks)
 
 
+def with_bending_modes(model: SpecimenModel, configurations, bending: int) -> SpecimenModel:
+    """``model`` solving at least ``bending`` bending modes of each of ``configurations``
+    (names): one mode more for every mode among them that moves in the plate's plane (a
+    test that measures the deflection does not see those), at most ``MAX_SOLVED_MODES``,
+    on the mesh ``model`` has for its own number of modes (more modes do not refine it)."""
+    divisions = model.options.divisions_for(model.specimen)
+    modes = bending
+    while True:
+        solver = model.with_options(modes=modes, divisions=divisions)
+        in_plane = max(int(solver.solve(c).moves_in_plane.sum()) for c in configurations)
+        needed = min(bending + in_plane, MAX_SOLVED_MODES)
+        if needed <= modes:
+            return solver
+        modes = needed
+
+
 def plate_frequency_parameter(
     frequency_hz: np.ndarray, length: float, mass_per_area: float, D: float
 ) -> np.ndarray:

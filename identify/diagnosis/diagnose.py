@@ -466,11 +466,8 @@ def _failed_to_start(candidate: Candidate, state: FitResult) -> bool:
 def _margins(refined: list[str], candidates, number: int) -> dict[str, tuple[int, float, str]]:
     """For each refinement refitted this round whose refit finished (converged or a poor
     fit): (round, the chi^2 it explained beyond the best of what it refines, that effect).
-    A refit stopped at its iteration limit measured its start, not the refinement: it
-    holds nothing back later (blind171, a coating on aluminium with a sensor: the
-    layerwise refit from the thin plate, not converged after 514 s at 5.9 %, stood as
-    "explained -1.4e5 beyond transverse_shear" in every later round, and the diagnosis
-    ended at 10 x its floor with the layerwise model never tried from the shear fit)."""
+    A refit stopped at its iteration limit measured its start, not the refinement, so it
+    holds nothing back later (the case behind it: docs/diagnosis.md, blind171)."""
     out = {}
     for kind in refined:
         mine = next((c for c in candidates if c.kind == kind and c.fit is not None and c.fit.finished), None)

@@ -227,8 +227,9 @@ def oriented_like_start(objective: Objective, e: Evaluation) -> Evaluation:
     return mirror if objective.cost(mirror) <= objective.cost(e) * (1 + SAME_MISFIT) + 1e-12 else e
 
 
-def _wrapped(angle: float) -> float:
-    """An angle [rad] in -90..90 deg (a ply's axes are a line, not a direction)."""
+def axis_turn(angle):
+    """An angle [rad] (or an array of them) in -90..90 deg: a ply's axes are a line, not a
+    direction, so a turn of 180 deg is no turn."""
     return (angle + np.pi / 2) % np.pi - np.pi / 2
 
 
@@ -259,7 +260,7 @@ def turned_axes(objective: Objective, values: np.ndarray, material: str) -> np.n
     for layer in objective.model.specimen.layers:
         if layer.material.name == material:
             i = index[Parameter("angle", layer.label)]
-            out[i] = _wrapped(values[i] + np.pi / 2)
+            out[i] = axis_turn(values[i] + np.pi / 2)
     return out
 
 
@@ -294,7 +295,7 @@ def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str
     def near_start(values):
         """Every free angle within 90 deg of its start: a ply turned by 180 deg is the same ply."""
         out = values.copy()
-        out[angles] = start[angles] + np.array([_wrapped(values[i] - start[i]) for i in angles])
+        out[angles] = start[angles] + axis_turn(values[angles] - start[angles])
         return out
 
     def kept(values):
@@ -318,10 +319,10 @@ def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str
             e = image
 
     def distance(values):
-        return sum(_wrapped(values[i] - start[i]) ** 2 for i in angles)
+        return float(np.sum(axis_turn(values[angles] - start[angles]) ** 2))
 
-    # Strictly nearer (beyond round-off): a lay-up of 0 and 90 deg plies is as near the
-    # start mirrored as not (blind35's 90.93 deg ply mirrored is 89.07 deg), and a tie
+    # Strictly nearer (beyond round-off): a lay-up of 0 and 90 deg plies is exactly as
+    # near the start mirrored as not (a 90.93 deg ply mirrored is 89.07 deg), and a tie
     # keeps the fit's own state.
     if angles and distance(mirror_image(objective, e.values)) < (1 - SAME_MISFIT) * distance(e.values):
         image = kept(near_start(mirror_image(objective, e.values)))

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from fem.model import MAX_SOLVED_MODES, LaminateSolution, SpecimenModel
+from fem.model import LaminateSolution, SpecimenModel, with_bending_modes
 from fem.solver.mode_shapes import deflection_operator
 from fem.solver.reduced_basis import OutsideBasis, Reanalysis
 from fem.specimen import Parameter, Specimen
@@ -56,16 +56,9 @@ def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes:
     measured must be solved for a label or a shape to pair with, whatever in-plane modes
     lie between (a thick light sandwich's membrane modes: ``docs/diagnosis.md``, heldout5)."""
     highest = int(measurements.table["mode"].max())
-    divisions = replace(model.options, modes=highest).divisions_for(model.specimen)
-    wanted = highest + extra_modes
-    modes = wanted
-    while True:
-        solver = model.with_options(modes=modes, divisions=divisions)
-        in_plane = max(int(solver.solve(c).moves_in_plane.sum()) for c in measurements.configurations)
-        needed = min(wanted + in_plane, MAX_SOLVED_MODES)
-        if needed <= modes:
-            return solver
-        modes = needed
+    return with_bending_modes(
+        model.with_options(modes=highest), measurements.configurations, highest + extra_modes
+    )
 
 
 class Objective:

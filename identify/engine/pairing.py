@@ -263,9 +263,9 @@ class ModePairing:
         numbers): measured mode k with model mode k, so ranks with a gap skip the
         unmeasured mode; where labels took modes out of order, the rest keep their order
         among the modes left free.  Ranks count the bending modes only: a test that
-        measures the deflection does not see a mode that moves in the plate's plane
-        (blind175: a thick angle-ply's membrane mode between its ninth and tenth bending
-        modes), so no unlabelled measured mode is paired with one."""
+        measures the deflection does not see a mode that moves in the plate's plane (a
+        thick unsymmetric laminate's or a light sandwich's membrane modes), so no
+        unlabelled measured mode is paired with one."""
         modes = solution.modes
         n_model = len(modes.eigenvalues)
         bends = ~np.asarray(solution.moves_in_plane, dtype=bool)

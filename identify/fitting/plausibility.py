@@ -43,6 +43,8 @@ from fem.inputs import ANGLE
 from fem.solver.attachments import PointMass, Suspension
 from fem.specimen import Parameter, Specimen
 
+from ..engine.ambiguity import axis_turn
+
 MAX_MASS_SHARE = 0.05
 SENSOR_MASS_MAX = 0.010  # kg
 MAX_SUSPENSION_RATIO = 0.2
@@ -101,8 +103,7 @@ def implausible(
                         f"{100 * MAX_SUSPENSION_RATIO:.0f} %: stiffer than a free suspension)"
                     )
         elif p.kind == "angle":
-            # A ply's axes are a line: a turn of 180 deg is no turn.
-            turn = (math.degrees(fitted.value(p) - nominal.value(p)) + 90.0) % 180.0 - 90.0
+            turn = math.degrees(axis_turn(fitted.value(p) - nominal.value(p)))
             limit = max(MAX_TURN_DEG, TURN_STDS * math.degrees(tolerance.get(p.target, 0.0)))
             if abs(turn) > limit:
                 reasons.append(

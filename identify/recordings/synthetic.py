@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from fem.model import SpecimenModel
+from fem.model import SpecimenModel, with_bending_modes
 from fem.solver.complex_modes import complex_loss_factors
 from fem.solver.damping import ratio_from_loss
 from fem.solver.mode_shapes import deflection_operator
@@ -88,11 +88,8 @@ def synthetic_measurements(
     rows, shapes = [], []
     xy = None if also.shape_grid is None else grid_points(specimen.length, specimen.width, also.shape_grid)
     for c in specimen.configurations:
-        solving = solver
+        solving = with_bending_modes(solver, [c.name], solver.options.modes)
         solution = solving.solve(c.name)
-        while (~solution.moves_in_plane).sum() < modes:
-            solving = solving.with_options(modes=solving.options.modes + int(solution.moves_in_plane.sum()))
-            solution = solving.solve(c.name)
         seen = np.flatnonzero(~solution.moves_in_plane)[:modes]
         f = solution.frequencies_hz[seen]
         close = np.zeros(modes, dtype=bool)
