@@ -459,9 +459,10 @@ def with_bending_modes(model: SpecimenModel, configurations, bending: int) -> Sp
     """``model`` solving at least ``bending`` bending modes of each of ``configurations``
     (names): one mode more for every mode among them that moves in the plate's plane (a
     test that measures the deflection does not see those), at most ``MAX_SOLVED_MODES``,
-    on the mesh ``model`` has for its own number of modes (more modes do not refine it)."""
+    never fewer than ``model`` solves, on the mesh ``model`` has for its own number of
+    modes (more modes do not refine it)."""
     divisions = model.options.divisions_for(model.specimen)
-    modes = bending
+    modes = max(bending, model.options.modes)
     while True:
         solver = model.with_options(modes=modes, divisions=divisions)
         in_plane = max(int(solver.solve(c).moves_in_plane.sum()) for c in configurations)

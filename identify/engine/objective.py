@@ -57,8 +57,16 @@ def solving_model(model: SpecimenModel, measurements: Measurements, extra_modes:
     lie between (a thick light sandwich's membrane modes: ``docs/diagnosis.md``, heldout5)."""
     highest = int(measurements.table["mode"].max())
     return with_bending_modes(
-        model.with_options(modes=highest), measurements.configurations, highest + extra_modes
+        model.with_options(modes=highest),
+        measurements.configurations,
+        bending_needed(measurements, extra_modes),
     )
+
+
+def bending_needed(measurements: Measurements, extra_modes: int = 3) -> int:
+    """The bending modes the updating solves in each configuration: the highest measured
+    rank and ``extra_modes`` more (``solving_model``)."""
+    return int(measurements.table["mode"].max()) + extra_modes
 
 
 class Objective:
@@ -78,6 +86,8 @@ class Objective:
         table = measurements.table
         self.configurations = measurements.configurations
         self.solved = solving_model(model, measurements, extra_modes)
+        self.highest_rank = int(table["mode"].max())
+        self.bending = bending_needed(measurements, extra_modes)
         self.measured_hz = table["frequency_hz"].to_numpy()
         self.sigma = table["std_hz"].to_numpy() if measurements.has_std else self.measured_hz.copy()
         self.rows = {c: np.flatnonzero(table["configuration"].to_numpy() == c) for c in self.configurations}
@@ -104,22 +114,45 @@ class Objective:
         new_pairings = {}
         for name in self.configurations:
             solution, rows = self.solution(specimen, name), self.rows[name]
-            pairing = self._paired(name, solution, None if pairings is None else pairings[name], track)
+            previous = None if pairings is None else pairings[name]
+            if self._afresh(solution, previous, track):
+                solution = self.with_measured_bending(specimen, name, solution)
+            pairing = self._paired(name, solution, previous, track)
             new_pairings[name] = pairing
             model_hz[rows] = solution.frequencies_hz[pairing.indices]
             if differentiate:
                 derivatives[rows] = ties.derivatives(solution, self.space.parameters)[pairing.indices]
         return Evaluation(values, model_hz, derivatives, new_pairings, self.model.with_specimen(specimen))
 
-    def _paired(self, name: str, solution, previous: ModePairing | None, track: bool) -> ModePairing:
-        """The pairing of one configuration's modes in ``solution`` (``evaluate``): afresh
-        where there is no ``previous`` pairing to follow or it is of another model (another
-        plate theory), its model modes kept (``track`` False), else followed by shape."""
-        if (
+    @staticmethod
+    def _afresh(solution, previous: ModePairing | None, track: bool) -> bool:
+        """Whether ``_paired`` pairs afresh: there is no ``previous`` pairing to follow, or
+        it is of another model (another plate theory)."""
+        return (
             previous is None
             or previous.shapes is None
             or (track and previous.shapes.shape[0] != solution.modes.shapes.shape[0])
-        ):
+        )
+
+    def with_measured_bending(self, specimen: Specimen, configuration: str, solution) -> LaminateSolution:
+        """``solution`` (of ``configuration`` at ``specimen``), solved again with
+        ``solving_model``'s ``bending`` modes when fewer of its modes bend than the highest
+        measured rank: a fresh pairing needs every measured rank among the bending modes,
+        and the in-plane modes move with the parameters (a foam sandwich's thin-plate fit
+        that took its skins' G12 to its bound had nine membrane modes among the first
+        fifteen: blind33).  The solving model then keeps the larger number of modes; it
+        never shrinks.  Where the start's count suffices nothing changes."""
+        if int((~solution.moves_in_plane).sum()) >= self.highest_rank:
+            return solution
+        self.solved = with_bending_modes(
+            self.solved.with_specimen(specimen), self.configurations, self.bending
+        )
+        return self.solution(specimen, configuration)
+
+    def _paired(self, name: str, solution, previous: ModePairing | None, track: bool) -> ModePairing:
+        """The pairing of one configuration's modes in ``solution`` (``evaluate``): afresh
+        (``_afresh``), its model modes kept (``track`` False), else followed by shape."""
+        if self._afresh(solution, previous, track):
             group = self.measurements.table.iloc[self.rows[name]]
             return ModePairing.initial(
                 name,
@@ -346,6 +379,15 @@ class RitzObjective(Objective):
 
     def solution(self, specimen: Specimen, configuration: str) -> LaminateSolution:
         return self.reanalyses[configuration].solve(specimen)
+
+    def with_measured_bending(self, specimen: Specimen, configuration: str, solution) -> LaminateSolution:
+        """``solution`` where enough of its modes bend; a Ritz model cannot solve more
+        modes, so elsewhere the point is outside its basis (the full solve decides)."""
+        if int((~solution.moves_in_plane).sum()) >= self.highest_rank:
+            return solution
+        raise OutsideBasis(
+            f"configuration {configuration!r}: fewer than {self.highest_rank} bending modes in the basis"
+        )
 
     def _anchor(self, pairing: ModePairing) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For following modes from ``pairing``'s shapes a (n_dofs, m): a^T W V, a^T W a
