@@ -10,7 +10,9 @@ import tomllib
 import numpy as np
 import pytest
 
+import fem.model
 import identify
+from fem.model import MAX_SOLVED_MODES, SpecimenModel, with_bending_modes
 from fem.spec import parse_spec
 from fem.specimen import Parameter
 from identify.engine.objective import Objective, solving_model
@@ -144,3 +146,49 @@ def test_every_measured_bending_mode_is_solved_wherever_the_fit_goes(truth_and_d
     assert e.pairings["original"].indices.tolist() == bending.tolist()
     np.testing.assert_allclose(e.model_hz, reference.frequencies_hz[bending], rtol=1e-9)
     assert objective.solved.options.modes > at_start_count.modes.eigenvalues.size
+
+
+def _stepwise_count(model, configurations, bending: int) -> int:
+    """``with_bending_modes``'s count as first written: solve at m, count the in-plane
+    modes, step, with nothing remembered."""
+    divisions = model.options.divisions_for(model.specimen)
+    modes = max(bending, model.options.modes)
+    while True:
+        solver = model.with_options(modes=modes, divisions=divisions)
+        in_plane = max(int(solver.solve(c).moves_in_plane.sum()) for c in configurations)
+        needed = min(bending + in_plane, MAX_SOLVED_MODES)
+        if needed <= modes:
+            return modes
+        modes = needed
+
+
+def test_the_remembered_mode_count_saves_solves_and_changes_no_count(truth_and_data, monkeypatch):
+    """The search for enough bending modes starts at the count it ended at for the same
+    kind of model.  At the truth it steps 13 -> 18 -> 21 -> 22 -> 23 (five solves); at a
+    point near it, it solves once, at 23, where the stepwise search solves five times.  At a
+    hundredth of the skins' G12 (more membrane modes) it goes beyond the remembered count,
+    and back near the truth it reads the steps from that larger solve.  At every point the
+    count is the stepwise search's."""
+    truth, _, _ = truth_and_data
+    monkeypatch.setattr(fem.model, "_LAST_MODE_COUNTS", {})
+    requests = []
+    solve = SpecimenModel.solve
+
+    def counted(model, configuration):
+        requests.append(model.options.modes)
+        return solve(model, configuration)
+
+    g12 = Parameter("G12", "skin")
+    counts = {}
+    for factor in (1.0, 0.97, 0.01, 0.99):
+        model = truth.with_values({g12: factor * truth.value(g12)})
+        requests.clear()
+        monkeypatch.setattr(SpecimenModel, "solve", counted)
+        modes = with_bending_modes(model, ["original"], MEASURED + 3).options.modes
+        monkeypatch.setattr(SpecimenModel, "solve", solve)
+        counts[factor] = (modes, list(requests))
+        assert modes == _stepwise_count(model, ["original"], MEASURED + 3), factor
+    assert counts[1.0] == (23, [13, 18, 21, 22, 23])
+    assert counts[0.97] == (23, [23])
+    assert counts[0.01][0] > 23
+    assert counts[0.99][1] == [counts[0.01][0]]
