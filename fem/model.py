@@ -470,31 +470,29 @@ def with_bending_modes(model: SpecimenModel, configurations, bending: int) -> Sp
     modes (more modes do not refine it).
 
     The count is the first of the sequence m <- min(bending + in-plane modes among the
-    first m, ``MAX_SOLVED_MODES``), from m = ``bending``, that it does not raise.  Each
-    step needs the in-plane modes among more modes than the last, so the search starts
-    with one solve at the count it ended at for the same kind of model (the mass, the
-    moduli and the sensor move the membrane modes little within a fit), reads every step
-    that count covers from that solve and solves again only beyond it: where the count is
-    the same, each configuration is solved once, not once a step (a thick cross-ply's
-    candidate starts solved every configuration twice, about 150 discarded layerwise
-    solves in a 234 s diagnosis)."""
+    first m, ``MAX_SOLVED_MODES``), from the larger of ``bending`` and ``model``'s modes,
+    that it does not raise.  Each step needs the in-plane modes among more modes than the
+    last, so the search starts with one solve at the count it ended at for the same kind
+    of model (the mass, the moduli and the sensor move the membrane modes little within a
+    fit), reads every step that count covers from that solve and solves again only beyond
+    it: where the count is the same, each configuration is solved once, not once a step
+    (a thick cross-ply's candidate starts solved every configuration twice, about 150
+    discarded layerwise solves in a 234 s diagnosis)."""
     divisions = model.options.divisions_for(model.specimen)
     first = max(bending, model.options.modes)
     kind = (replace(model.options, modes=1, divisions=divisions), tuple(configurations), first)
-    solved = 0
-    in_plane_flags: dict[str, np.ndarray] = {}
 
-    def in_plane_among(modes: int) -> int:
-        nonlocal solved
-        if modes > solved:
-            solved = max(modes, _LAST_MODE_COUNTS.get(kind, modes)) if not solved else modes
-            solver = model.with_options(modes=solved, divisions=divisions)
-            in_plane_flags.update({c: solver.solve(c).moves_in_plane for c in configurations})
-        return max(int(in_plane_flags[c][:modes].sum()) for c in configurations)
+    def moving_in_plane(solved: int) -> list[np.ndarray]:
+        solver = model.with_options(modes=solved, divisions=divisions)
+        return [solver.solve(c).moves_in_plane for c in configurations]
 
+    solved = _LAST_MODE_COUNTS.get(kind, first)
+    flags = moving_in_plane(solved)
     modes = first
-    while (needed := min(bending + in_plane_among(modes), MAX_SOLVED_MODES)) > modes:
+    while (needed := min(bending + max(int(f[:modes].sum()) for f in flags), MAX_SOLVED_MODES)) > modes:
         modes = needed
+        if modes > solved:
+            solved, flags = modes, moving_in_plane(modes)
     if len(_LAST_MODE_COUNTS) >= _MAX_REMEMBERED_COUNTS:
         _LAST_MODE_COUNTS.clear()
     _LAST_MODE_COUNTS[kind] = modes

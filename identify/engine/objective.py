@@ -142,12 +142,16 @@ class Objective:
         that took its skins' G12 to its bound had nine membrane modes among the first
         fifteen: blind33).  The solving model then keeps the larger number of modes; it
         never shrinks.  Where the start's count suffices nothing changes."""
-        if int((~solution.moves_in_plane).sum()) >= self.highest_rank:
+        if self.bends_enough(solution):
             return solution
         self.solved = with_bending_modes(
             self.solved.with_specimen(specimen), self.configurations, self.bending
         )
         return self.solution(specimen, configuration)
+
+    def bends_enough(self, solution) -> bool:
+        """Whether every measured rank is among ``solution``'s bending modes."""
+        return int((~solution.moves_in_plane).sum()) >= self.highest_rank
 
     def _paired(self, name: str, solution, previous: ModePairing | None, track: bool) -> ModePairing:
         """The pairing of one configuration's modes in ``solution`` (``evaluate``): afresh
@@ -383,7 +387,7 @@ class RitzObjective(Objective):
     def with_measured_bending(self, specimen: Specimen, configuration: str, solution) -> LaminateSolution:
         """``solution`` where enough of its modes bend; a Ritz model cannot solve more
         modes, so elsewhere the point is outside its basis (the full solve decides)."""
-        if int((~solution.moves_in_plane).sum()) >= self.highest_rank:
+        if self.bends_enough(solution):
             return solution
         raise OutsideBasis(
             f"configuration {configuration!r}: fewer than {self.highest_rank} bending modes in the basis"
