@@ -214,10 +214,10 @@ def test_many_alternative_pairings_refit_at_most_the_cap(start, paper_model, mon
     screens = []
     real_iterate = updating.iterate
 
-    def counting(objective, current, history, options, progress=None):
+    def counting(objective, current, history, options, progress=None, box=None):
         if options.max_iterations == ambiguity.SCREEN_ITERATIONS:
             screens.append(len(history))
-        return real_iterate(objective, current, history, options, progress)
+        return real_iterate(objective, current, history, options, progress, box)
 
     monkeypatch.setattr(updating, "iterate", counting)
     monkeypatch.setattr(ambiguity, "MAX_REFITS", 1)
