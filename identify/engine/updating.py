@@ -203,7 +203,7 @@ def iterate(
     z_low, z_high = space.z_bounds()
     if box is not None:
         z_low, z_high = np.maximum(z_low, box[0]), np.minimum(z_high, box[1])
-    trusted = np.zeros(len(space.parameters))  # how far the Ritz models may take the next trial
+    trusted = np.zeros(len(space.parameters))  # how far the Ritz models may take the next trial (z)
     first = history[-1].number + 1
     for number in range(first, first + options.max_iterations):
         jacobian = objective.jacobian(current)
@@ -390,10 +390,13 @@ class RitzStep:
         ``TRUST_GOOD``), else zeros (the reach rule alone)."""
         before = objective.cost(self.at)
         fall = before - self.cost(accepted.values)
-        if not (on_edge and fall > ROUNDOFF_COST * before):
-            return np.zeros(len(steps))
-        good = (before - objective.cost(accepted)) / fall > TRUST_GOOD
-        return TRUST_GROW * np.abs(steps) if good else np.zeros(len(steps))
+        if (
+            on_edge
+            and fall > ROUNDOFF_COST * before
+            and (before - objective.cost(accepted)) / fall > TRUST_GOOD
+        ):
+            return TRUST_GROW * np.abs(steps)
+        return np.zeros(len(steps))
 
 
 def _reduced_minimum(
@@ -402,7 +405,7 @@ def _reduced_minimum(
     options: FitOptions,
     step: np.ndarray,
     limit: np.ndarray,
-    trusted: np.ndarray | float = 0.0,
+    trusted: np.ndarray,
 ) -> RitzStep | None:
     """The Ritz models of ``current`` (its full solves' modes as the basis,
     ``RitzObjective``: exact at ``current``, values and derivatives) and where their
@@ -412,8 +415,8 @@ def _reduced_minimum(
     transverse shear beyond the step limit ``limit`` (``_stiffening_shear``), within
     ``REDUCED_REACH``.  Where the last step ``trusted`` the Ritz models further in some
     parameter (z, each its own), their iteration is held within that box instead (a trust
-    region), and an end on its edge is the trial too: the walk goes on.  None where the Ritz models do not
-    apply."""
+    region), and an end on its edge is the trial too: the walk goes on.  None where the
+    Ritz models do not apply."""
     if not (options.reanalysis and objective.reduced_steps):
         return None
     space = objective.space
