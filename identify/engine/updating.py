@@ -96,6 +96,11 @@ REDUCED_REACH_PER_STEP = 2.0
 #: cause named (``test_honest_status.py``).  Without it a suspension walking to its
 #: vanishing stiffness moved 0.7 a step (17 full iterations on blind26's layerwise state,
 #: the layers lagging behind the scaled step, ending 2.4 x above the state; now 5).
+#: Without a trust region, a Ritz end beyond the reach rule is held at it instead of
+#: dropped where the full steps make little way (``_held_at_reach``): a point mass crawling
+#: along its valley of mass and position at 0.01-0.04 a step (blind26's layerwise state,
+#: 15 full iterations, now 6); a damped walk along it (``test_reduced_steps.py``, 17 full
+#: solves, now 7).
 TRUST_GOOD = 0.75
 TRUST_GROW = 2.0
 #: A step at least this share of its region's reach is on its edge.
@@ -235,7 +240,7 @@ def iterate(
             return current, Stop.WITHIN_STD, warnings
         # on_edge: the accepted step was held at its region's edge (``RitzStep.trusted``)
         accepted, screen, on_edge = None, None, False
-        reduced = _reduced_minimum(objective, current, options, -step, limit, trusted)
+        reduced = _reduced_minimum(objective, current, options, -step, limit, trusted, damping)
         if reduced is not None and reduced.trial is not None:
             trial = objective.evaluate(reduced.trial, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
@@ -359,6 +364,15 @@ def _stiffening_shear(space: ParameterSpace, step: np.ndarray, limit: np.ndarray
     return bool(beyond.any() and np.all(shear[beyond] & (step[beyond] > 0)))
 
 
+def _held_at_reach(moved: np.ndarray, furthest: float, damping: float) -> bool:
+    """Whether the Ritz iteration's end, beyond the reach rule's ``furthest`` (some
+    parameter ``moved`` further, z), is replaced by its end held within that reach: where
+    the reach is set by a short Gauss-Newton step (below ``REDUCED_REACH``: a flat valley,
+    along which full steps crawl) or the iteration is damped (``damping`` > 0: the
+    linearisation failed at the last step, and the damped step is short)."""
+    return float(np.max(moved)) > furthest and (furthest < REDUCED_REACH or damping > 0)
+
+
 @dataclass(frozen=True)
 class RitzStep:
     """The Ritz models of a point (``ritz``, exact at ``at``) and the trial step they
@@ -406,6 +420,7 @@ def _reduced_minimum(
     step: np.ndarray,
     limit: np.ndarray,
     trusted: np.ndarray,
+    damping: float,
 ) -> RitzStep | None:
     """The Ritz models of ``current`` (its full solves' modes as the basis,
     ``RitzObjective``: exact at ``current``, values and derivatives) and where their
@@ -415,8 +430,9 @@ def _reduced_minimum(
     transverse shear beyond the step limit ``limit`` (``_stiffening_shear``), within
     ``REDUCED_REACH``.  Where the last step ``trusted`` the Ritz models further in some
     parameter (z, each its own), their iteration is held within that box instead (a trust
-    region), and an end on its edge is the trial too: the walk goes on.  None where the
-    Ritz models do not apply."""
+    region), and its end anywhere in it is the trial: the walk goes on.  Otherwise an end
+    beyond the reach is held at it where full steps make little way (``_held_at_reach``,
+    with the iteration's ``damping``).  None where the Ritz models do not apply."""
     if not (options.reanalysis and objective.reduced_steps):
         return None
     space = objective.space
@@ -429,15 +445,25 @@ def _reduced_minimum(
     try:
         ritz = RitzObjective(objective, current, {}, assembled=False)
         start = ritz.evaluate(current.values, current.pairings)
-        branch = [Iteration(0, start.values, start.model_hz, ritz.rms(start), ritz.cost(start), 0.0, 0.0)]
         within = replace(options, max_iterations=REDUCED_ITERATIONS)
-        end, _, _ = iterate(ritz, start, branch, within, box=box)
+
+        def walked(box):
+            """Where the Ritz iteration from ``current`` stops, held in ``box``."""
+            branch = [Iteration(0, start.values, start.model_hz, ritz.rms(start), ritz.cost(start), 0.0, 0.0)]
+            return iterate(ritz, start, branch, within, box=box)[0]
+
+        end = walked(box)
+        moved = np.abs(space.to_z(end.values) - z)
+        if box is None and _held_at_reach(moved, furthest, damping):
+            half = np.full(len(z), furthest)
+            box = (z - half, z + half)
+            end = walked(box)
+            moved = np.abs(space.to_z(end.values) - z)
     except (OutsideBasis, np.linalg.LinAlgError):
         return None
-    moved = np.abs(space.to_z(end.values) - z)
     reach = float(np.max(moved))
     on_edge = box is not None and float(np.max(moved / half)) >= TRUST_EDGE
-    offered = 0.0 < reach and (reach <= furthest or on_edge)
+    offered = 0.0 < reach and (reach <= furthest or box is not None)
     return RitzStep(ritz, current, end.values if offered else None, ritz.cost(end), on_edge)
 
 
