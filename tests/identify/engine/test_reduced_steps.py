@@ -113,6 +113,25 @@ def test_only_shear_moduli_raised_beyond_the_step_limit_free_the_trial(step, sti
     assert updating._stiffening_shear(space, np.array(step), limit) is stiffening
 
 
+#: The sandwich with first-order shear and rotary inertia, 10 modes.
+THICK = parse_spec(SANDWICH).with_options(modes=10, transverse_shear=True, rotary_inertia=True)
+
+
+def _with_effect(kind: str, hz: np.ndarray):
+    """``THICK`` fitted to ``hz`` [Hz] with the skin's constants and ``kind``'s parameters
+    free from the effect's default start.  Returns the fit and its full solves."""
+    on = effect(kind).free(THICK)[0]
+    solve_laminate.cache_clear()
+    result = update(
+        on.model,
+        measured_modes(THICK, hz),
+        PARAMETERS[:4] + list(on.free),
+        FitOptions(),
+        follow=Follow(settle=Settle.NONE),
+    )
+    return result, solve_laminate.cache_info().misses
+
+
 def test_a_walk_the_ritz_models_predict_well_takes_them_further(monkeypatch):
     """The sandwich's first-order-shear frequencies (a 1e-4 ripple on them, so the misfit
     is not zero) fitted with suspension springs free from their default start, where the
@@ -125,22 +144,12 @@ def test_a_walk_the_ritz_models_predict_well_takes_them_further(monkeypatch):
     (chi^2 0.0648 against 0.0738: the untrusted one stops where its steps fall below
     0.01 std, the stiffness at 1e-3 N/m, the skins not yet back).  Asserted: at most half
     the full solves, and no higher misfit (1e-9 relative: round-off)."""
-    thick = parse_spec(SANDWICH).with_options(modes=10, transverse_shear=True, rotary_inertia=True)
-    hz = thick.solve("original").frequencies_hz * (1 + 1e-4 * np.sin(np.arange(10)))
-    on = effect("suspension").free(thick)[0]
-    parameters = PARAMETERS[:4] + list(on.free)
-
-    def fitted():
-        solve_laminate.cache_clear()
-        result = update(
-            on.model, measured_modes(thick, hz), parameters, FitOptions(), follow=Follow(settle=Settle.NONE)
-        )
-        return result, solve_laminate.cache_info().misses
-
-    trusted, trusted_solves = fitted()
+    hz = THICK.solve("original").frequencies_hz * (1 + 1e-4 * np.sin(np.arange(10)))
+    trusted, trusted_solves = _with_effect("suspension", hz)
     monkeypatch.setattr(updating, "TRUST_GOOD", np.inf)
-    ruled, ruled_solves = fitted()
+    ruled, ruled_solves = _with_effect("suspension", hz)
     assert trusted.stop.converged and ruled.stop.converged
+    on = effect("suspension").free(THICK)[0]
     stiffness = on.free[0]
     assert trusted.value(stiffness) < 1e-2 * on.model.value(stiffness)  # walked down
     assert trusted.statistics.sum_squares <= ruled.statistics.sum_squares * (1 + 1e-9)
@@ -157,24 +166,13 @@ def test_a_ritz_end_beyond_the_reach_is_held_at_it_where_full_steps_are_damped(m
     code before it), ending lower (chi^2 142.75727 against 142.75737: the other stops once
     its steps fall below 0.01 std).  Asserted: at most half the full solves, no higher
     misfit (1e-9 relative: round-off), the same mass within 0.02 std."""
-    thick = parse_spec(SANDWICH).with_options(modes=10, transverse_shear=True, rotary_inertia=True)
-    sensor = thick.with_attachments([PointMass(0.002, 0.08, 0.06, "sensor")])
+    sensor = THICK.with_attachments([PointMass(0.002, 0.08, 0.06, "sensor")])
     hz = sensor.solve("original").frequencies_hz * (1 + 2e-4 * np.sin(np.arange(10)))
-    on = effect("point_mass").free(thick)[0]
-    parameters = PARAMETERS[:4] + list(on.free)
-
-    def fitted():
-        solve_laminate.cache_clear()
-        result = update(
-            on.model, measured_modes(thick, hz), parameters, FitOptions(), follow=Follow(settle=Settle.NONE)
-        )
-        return result, solve_laminate.cache_info().misses
-
-    held, held_solves = fitted()
+    held, held_solves = _with_effect("point_mass", hz)
     monkeypatch.setattr(updating, "_held_at_reach", lambda *args: False)
-    dropped, dropped_solves = fitted()
+    dropped, dropped_solves = _with_effect("point_mass", hz)
     assert held.stop.converged and dropped.stop.converged
     assert held.statistics.sum_squares <= dropped.statistics.sum_squares * (1 + 1e-9)
-    mass = parameters.index(on.free[0])
+    mass = len(PARAMETERS[:4])  # the point mass's first parameter, its mass
     assert abs(held.values[mass] - dropped.values[mass]) <= 0.02 * dropped.uncertainty.std[mass]
     assert held_solves <= 0.5 * dropped_solves, (held_solves, dropped_solves)
