@@ -100,7 +100,8 @@ REDUCED_REACH_PER_STEP = 2.0
 #: dropped where the full steps make little way (``_held_at_reach``): a point mass crawling
 #: along its valley of mass and position at 0.01-0.04 a step (blind26's layerwise state,
 #: 15 full iterations, now 6); a damped walk along it (``test_reduced_steps.py``, 17 full
-#: solves, now 7).
+#: solves, now 7).  Once a held trial is rejected, the fit holds no more (blind27's adhesive
+#: candidate, every held trial rejected: 171 full solves, the code before 132, now 135).
 TRUST_GOOD = 0.75
 TRUST_GROW = 2.0
 #: A step at least this share of its region's reach is on its edge.
@@ -209,6 +210,7 @@ def iterate(
     if box is not None:
         z_low, z_high = np.maximum(z_low, box[0]), np.minimum(z_high, box[1])
     trusted = np.zeros(len(space.parameters))  # how far the Ritz models may take the next trial (z)
+    hold = True  # Ritz ends beyond the reach are held at it (``_held_at_reach``) until one fails
     first = history[-1].number + 1
     for number in range(first, first + options.max_iterations):
         jacobian = objective.jacobian(current)
@@ -240,12 +242,16 @@ def iterate(
             return current, Stop.WITHIN_STD, warnings
         # on_edge: the accepted step was held at its region's edge (``RitzStep.trusted``)
         accepted, screen, on_edge = None, None, False
-        reduced = _reduced_minimum(objective, current, options, -step, limit, trusted, damping)
+        reduced = _reduced_minimum(
+            objective, current, options, -step, limit, trusted, damping if hold else None
+        )
         if reduced is not None and reduced.trial is not None:
             trial = objective.evaluate(reduced.trial, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
                 accepted = (objective.differentiated(trial), space.to_z(reduced.trial) - z, 0.0)
                 on_edge = reduced.on_edge
+            elif reduced.held:
+                hold = False  # the Ritz models mispredict beyond the reach here
         for _ in range(0 if accepted else options.max_damping_tries):
             gain = np.where(keep, s / np.where(keep, s**2 + damping, 1.0), 0.0)
             dz = np.zeros_like(z)
@@ -364,13 +370,16 @@ def _stiffening_shear(space: ParameterSpace, step: np.ndarray, limit: np.ndarray
     return bool(beyond.any() and np.all(shear[beyond] & (step[beyond] > 0)))
 
 
-def _held_at_reach(moved: np.ndarray, furthest: float, damping: float) -> bool:
+def _held_at_reach(moved: np.ndarray, furthest: float, damping: float | None) -> bool:
     """Whether the Ritz iteration's end, beyond the reach rule's ``furthest`` (some
     parameter ``moved`` further, z), is replaced by its end held within that reach: where
     the reach is set by a short Gauss-Newton step (below ``REDUCED_REACH``: a flat valley,
     along which full steps crawl) or the iteration is damped (``damping`` > 0: the
-    linearisation failed at the last step, and the damped step is short)."""
-    return float(np.max(moved)) > furthest and (furthest < REDUCED_REACH or damping > 0)
+    linearisation failed at the last step, and the damped step is short).  Never once a
+    held trial of the fit was rejected (``damping`` None)."""
+    return (
+        damping is not None and float(np.max(moved)) > furthest and (furthest < REDUCED_REACH or damping > 0)
+    )
 
 
 @dataclass(frozen=True)
@@ -384,6 +393,7 @@ class RitzStep:
     trial: np.ndarray | None
     predicted: float
     on_edge: bool = False  # the trial was held within a box of the reach it may take
+    held: bool = False  # held at the reach rule's edge (``_held_at_reach``)
 
     def cost(self, values: np.ndarray) -> float:
         """The Ritz misfit at ``values`` (inf where the Ritz models do not apply)."""
@@ -420,7 +430,7 @@ def _reduced_minimum(
     step: np.ndarray,
     limit: np.ndarray,
     trusted: np.ndarray,
-    damping: float,
+    damping: float | None,
 ) -> RitzStep | None:
     """The Ritz models of ``current`` (its full solves' modes as the basis,
     ``RitzObjective``: exact at ``current``, values and derivatives) and where their
@@ -432,7 +442,8 @@ def _reduced_minimum(
     parameter (z, each its own), their iteration is held within that box instead (a trust
     region), and its end anywhere in it is the trial: the walk goes on.  Otherwise an end
     beyond the reach is held at it where full steps make little way (``_held_at_reach``,
-    with the iteration's ``damping``).  None where the Ritz models do not apply."""
+    with the iteration's ``damping``; None: not held).  None where the Ritz models do not
+    apply."""
     if not (options.reanalysis and objective.reduced_steps):
         return None
     space = objective.space
@@ -454,7 +465,8 @@ def _reduced_minimum(
 
         end = walked(box)
         moved = np.abs(space.to_z(end.values) - z)
-        if box is None and _held_at_reach(moved, furthest, damping):
+        held = box is None and _held_at_reach(moved, furthest, damping)
+        if held:
             half = np.full(len(z), furthest)
             box = (z - half, z + half)
             end = walked(box)
@@ -464,7 +476,7 @@ def _reduced_minimum(
     reach = float(np.max(moved))
     on_edge = box is not None and float(np.max(moved / half)) >= TRUST_EDGE
     offered = 0.0 < reach and (reach <= furthest or box is not None)
-    return RitzStep(ritz, current, end.values if offered else None, ritz.cost(end), on_edge)
+    return RitzStep(ritz, current, end.values if offered else None, ritz.cost(end), on_edge, held)
 
 
 def update(
