@@ -412,13 +412,11 @@ class RitzStep:
         ``steps``, z) where that step was held at the edge of its region (``on_edge``) and
         the Ritz models predicted its fall of the misfit well (actual / predicted above
         ``TRUST_GOOD``), else zeros (the reach rule alone)."""
+        if not on_edge:  # no Ritz evaluation for a step inside its region
+            return np.zeros(len(steps))
         before = objective.cost(self.at)
         fall = before - self.cost(accepted.values)
-        if (
-            on_edge
-            and fall > ROUNDOFF_COST * before
-            and (before - objective.cost(accepted)) / fall > TRUST_GOOD
-        ):
+        if fall > ROUNDOFF_COST * before and (before - objective.cost(accepted)) / fall > TRUST_GOOD:
             return TRUST_GROW * np.abs(steps)
         return np.zeros(len(steps))
 
