@@ -242,9 +242,7 @@ def iterate(
             return current, Stop.WITHIN_STD, warnings
         # on_edge: the accepted step was held at its region's edge (``RitzStep.trusted``)
         accepted, screen, on_edge = None, None, False
-        reduced = _reduced_minimum(
-            objective, current, options, -step, limit, trusted, damping if hold else None
-        )
+        reduced = _reduced_minimum(objective, current, options, -step, limit, trusted, hold, damping > 0)
         if reduced is not None and reduced.trial is not None:
             trial = objective.evaluate(reduced.trial, current.pairings, differentiate=False)
             if objective.cost(trial) <= objective.cost(current):
@@ -370,16 +368,13 @@ def _stiffening_shear(space: ParameterSpace, step: np.ndarray, limit: np.ndarray
     return bool(beyond.any() and np.all(shear[beyond] & (step[beyond] > 0)))
 
 
-def _held_at_reach(moved: np.ndarray, furthest: float, damping: float | None) -> bool:
+def _held_at_reach(moved: np.ndarray, furthest: float, damped: bool) -> bool:
     """Whether the Ritz iteration's end, beyond the reach rule's ``furthest`` (some
     parameter ``moved`` further, z), is replaced by its end held within that reach: where
     the reach is set by a short Gauss-Newton step (below ``REDUCED_REACH``: a flat valley,
-    along which full steps crawl) or the iteration is damped (``damping`` > 0: the
-    linearisation failed at the last step, and the damped step is short).  Never once a
-    held trial of the fit was rejected (``damping`` None)."""
-    return (
-        damping is not None and float(np.max(moved)) > furthest and (furthest < REDUCED_REACH or damping > 0)
-    )
+    along which full steps crawl) or the iteration is ``damped`` (the linearisation failed
+    at the last step, and the damped step is short)."""
+    return float(np.max(moved)) > furthest and (furthest < REDUCED_REACH or damped)
 
 
 @dataclass(frozen=True)
@@ -428,7 +423,8 @@ def _reduced_minimum(
     step: np.ndarray,
     limit: np.ndarray,
     trusted: np.ndarray,
-    damping: float | None,
+    hold: bool,
+    damped: bool,
 ) -> RitzStep | None:
     """The Ritz models of ``current`` (its full solves' modes as the basis,
     ``RitzObjective``: exact at ``current``, values and derivatives) and where their
@@ -440,8 +436,8 @@ def _reduced_minimum(
     parameter (z, each its own), their iteration is held within that box instead (a trust
     region), and its end anywhere in it is the trial: the walk goes on.  Otherwise an end
     beyond the reach is held at it where full steps make little way (``_held_at_reach``,
-    with the iteration's ``damping``; None: not held).  None where the Ritz models do not
-    apply."""
+    ``damped``: the iteration is), unless ``hold`` is False (a held trial of the fit was
+    rejected).  None where the Ritz models do not apply."""
     if not (options.reanalysis and objective.reduced_steps):
         return None
     space = objective.space
@@ -463,7 +459,7 @@ def _reduced_minimum(
 
         end = walked(box)
         moved = np.abs(space.to_z(end.values) - z)
-        held = box is None and _held_at_reach(moved, furthest, damping)
+        held = hold and box is None and _held_at_reach(moved, furthest, damped)
         if held:
             half = np.full(len(z), furthest)
             box = (z - half, z + half)
