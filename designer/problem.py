@@ -11,7 +11,7 @@ import numpy as np
 
 from fem.design_space import DesignSpace, parse_design
 from fem.errors import DesignError
-from fem.model import ModelOptions, SpecimenModel, one_blas_thread, solve_laminate
+from fem.model import THEORY_OPTIONS, ModelOptions, SpecimenModel, one_blas_thread, solve_laminate
 from fem.solver.mesh import PlateMesh
 from fem.solver.sensitivity import normalised
 from fem.specimen import Configuration, Parameter, Specimen
@@ -25,8 +25,6 @@ CACHE_SIZE = 8192
 _CACHE: OrderedDict = OrderedDict()
 #: Work split into at most this many tasks per pool (load balance against task overhead).
 MAX_TASKS = 64
-#: Model options that choose the plate theory, passed on to the solve when the model has them.
-THEORY_OPTIONS = ("theory", "layer_groups", "core_stretch")
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .errors import NotApplicableError, SpecError
-from .laminates.layerwise import LayerwiseLaminate, soft_layers, stretching_layers
+from .laminates.layerwise import soft_layers, stretching_layers
 from .model import SpecimenModel
 from .solver.attachments import PointMass, Suspension
 from .specimen import Parameter
@@ -231,10 +231,7 @@ class Layerwise(Effect):
         shear plate with rotary inertia, ``thick_plate``, to round-off
         (``tests/fem/test_layerwise.py``), and switching to it adds nothing."""
         options, specimen = model.options, model.specimen
-        stacks = [
-            LayerwiseLaminate.of(specimen.laminate(c), options.layer_groups, options.core_stretch)
-            for c in specimen.configurations
-        ]
+        stacks = [options.layerwise_stack(specimen.laminate(c)) for c in specimen.configurations]
         return all(stack.n_groups == 1 and not stack.stretch for stack in stacks)
 
     def adds_nothing(self, model: SpecimenModel) -> bool:

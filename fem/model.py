@@ -13,7 +13,7 @@ from .elements import HermitePlate, ShearDifferencePlate
 from .errors import ModelError, OptionsError
 from .inputs import InputStd
 from .laminates.laminate import Laminate
-from .laminates.layerwise import GROUPINGS, LayerwiseLaminate
+from .laminates.layerwise import GROUPINGS, LayerwiseLaminate, layout
 from .laminates.layerwise import unit_matrices as layerwise_units
 from .laminates.material import Material
 from .solver.assembly import UNIT_CACHE, UnitMatrices, unit_matrices
@@ -57,6 +57,8 @@ DIVISIONS_RANGE = (2, 64)
 #: Plate theories: "single_layer" (Kirchhoff, or FSDT with ``transverse_shear``) or
 #: "layerwise" (one shear strain per group of layers, ``fem.laminates.layerwise``).
 THEORIES = ("single_layer", "layerwise")
+#: Model options that choose the plate theory, passed on to the solve.
+THEORY_OPTIONS = ("theory", "layer_groups", "core_stretch")
 #: The shear-deformable theories' accuracy against 3-D elasticity, a relative std of each
 #: frequency: the RMS error of the layerwise theory at the true values (properties,
 #: angles, sensor) against the CalculiX references of the blind study's development
@@ -85,6 +87,11 @@ class ModelOptions:
     # the specimen (``edge_size_for``).  A SpecimenModel pins it when it is made, so the
     # mesh stays put while a fit or a derivative moves the layer thicknesses.
     edge_size: float | None = None
+    # The layerwise theory's shear groups and stretching layers of each stack, as
+    # (layout, groups, stretch) (``fem.laminates.layerwise``: "Pinned structure").  A
+    # SpecimenModel pins them when it is made, by the rules above at its values then, so a
+    # fit moving a modulus across a rule's threshold keeps one theory.
+    layerwise_structure: tuple = ()
 
     def __post_init__(self):
         whole(self.modes, "ModelOptions.modes", 1, MAX_SOLVED_MODES, "of elastic modes ", OptionsError)
@@ -114,6 +121,26 @@ class ModelOptions:
         ``SHEAR_THEORY_STD_REL`` for a shear-deformable theory; 0 for the thin plate, whose
         missing shear is what the diagnosis tests, below the scatter where it finds none."""
         return SHEAR_THEORY_STD_REL if self.shear_deformable else 0.0
+
+    def layerwise_stack(self, laminate: Laminate) -> LayerwiseLaminate:
+        """The layerwise stack of ``laminate``: its pinned structure, or the rules'."""
+        pinned = {entry[0]: entry[1:] for entry in self.layerwise_structure}.get(layout(laminate))
+        return LayerwiseLaminate.of(laminate, self.layer_groups, self.core_stretch, pinned)
+
+    def pinned(self, specimen: Specimen) -> ModelOptions:
+        """These options with the layerwise structure of every configuration's stack pinned
+        (those pinned already kept, stacks no configuration has any more dropped)."""
+        if self.theory != "layerwise":
+            return self if not self.layerwise_structure else replace(self, layerwise_structure=())
+        entries = []
+        for configuration in specimen.configurations:
+            laminate = specimen.laminate(configuration)
+            stack = self.layerwise_stack(laminate)
+            entry = (layout(laminate), stack.groups, stack.stretch)
+            if entry not in entries:
+                entries.append(entry)
+        structure = tuple(entries)
+        return self if structure == self.layerwise_structure else replace(self, layerwise_structure=structure)
 
     def divisions_for(self, specimen: Specimen) -> int:
         """Elements along the longer side: ``divisions``, or the default rule."""
@@ -327,6 +354,7 @@ def solve_laminate(
     theory: str = "single_layer",
     layer_groups: str = "auto",
     core_stretch: bool = True,
+    structure: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> LaminateSolution:
     """Solve (and cache by content, within ``SOLVE_CACHE_BYTES``) the free-free modes of a
     laminate on a mesh.
@@ -336,10 +364,13 @@ def solve_laminate(
     rotary_inertia: keep I1 and I2 in the kinetic energy;
     attachments: point masses and suspension springs (``fem.solver.attachments``);
     theory "layerwise": the layerwise element (``fem.laminates.layerwise``, shear groups by
-    ``layer_groups``, soft cores stretching unless ``core_stretch`` is off) with its full
-    inertia; the two flags are then implied.
+    ``layer_groups``, soft cores stretching unless ``core_stretch`` is off, or the pinned
+    ``structure``: (groups, stretching layers)) with its full inertia; the two flags are
+    then implied.
     """
-    stack = LayerwiseLaminate.of(laminate, layer_groups, core_stretch) if theory == "layerwise" else None
+    stack = None
+    if theory == "layerwise":
+        stack = LayerwiseLaminate.of(laminate, layer_groups, core_stretch, structure)
     transverse_shear, rotary_inertia = (
         (True, True) if stack is not None else (transverse_shear, rotary_inertia)
     )
@@ -391,6 +422,7 @@ class SpecimenModel:
     def __post_init__(self):
         if self.options.edge_size is None:
             object.__setattr__(self, "options", replace(self.options, edge_size=edge_size_for(self.specimen)))
+        object.__setattr__(self, "options", self.options.pinned(self.specimen))
 
     @cached_property
     def mesh(self) -> PlateMesh:
@@ -417,7 +449,10 @@ class SpecimenModel:
         return replace(self, specimen=self.specimen.with_values(values))
 
     def with_options(self, **changes) -> SpecimenModel:
-        """The same specimen with model options changed, e.g. ``with_options(modes=8)``."""
+        """The same specimen with model options changed, e.g. ``with_options(modes=8)``.
+        A change of theory, grouping or core stretch pins the layerwise structure afresh."""
+        if any(key in changes and changes[key] != getattr(self.options, key) for key in THEORY_OPTIONS):
+            changes.setdefault("layerwise_structure", ())
         return replace(self, options=replace(self.options, **changes))
 
     def with_configurations(self, configurations) -> SpecimenModel:
@@ -427,8 +462,13 @@ class SpecimenModel:
         return replace(self, specimen=self.specimen.with_attachments(attachments))
 
     def solve(self, configuration: str) -> LaminateSolution:
+        laminate = self.specimen.laminate(configuration)
+        structure = None
+        if self.options.theory == "layerwise":
+            stack = self.options.layerwise_stack(laminate)
+            structure = (stack.groups, stack.stretch)
         return solve_laminate(
-            self.specimen.laminate(configuration),
+            laminate,
             self.mesh,
             self.options.modes,
             transverse_shear=self.options.transverse_shear,
@@ -437,6 +477,7 @@ class SpecimenModel:
             theory=self.options.theory,
             layer_groups=self.options.layer_groups,
             core_stretch=self.options.core_stretch,
+            structure=structure,
         )
 
     def frequencies(self) -> dict[str, np.ndarray]:

@@ -45,6 +45,16 @@ Poisson coupling to the in-plane strains is neglected (the 3-D check: setting th
 nu13, nu23 to 0 moves the frequencies by at most 0.034 %), so the in-plane stiffness stays
 the plane-stress Qbar.
 
+Pinned structure.  The rules above are thresholds on the layers' moduli, which a fit
+moves: blind33's fabric skins (G13 = 3.98 GPa at the start) became "soft" against the
+bonded aluminium (26.3 GPa) once a fit took their G13 below 2.63 GPa, and its bonded
+configurations went from 3 shear groups to 5 in mid-fit; the misfit jumped there and no
+Ritz basis of the old structure could follow (every alternative of its final pairing
+check left the basis: 99 full layerwise solves, 42 with the structure pinned).  A model
+therefore fixes each stack's groups and stretching layers when it is made
+(``fem.model.ModelOptions.layerwise_structure``, keyed by ``layout``), as it fixes its
+mesh; a fit then moves one theory.
+
 Shear correction.  A constant shear strain per group over-stiffens a thick layer (a
 homogeneous plate would get k = 1).  Each group's shear stiffness is therefore made
 energy-equivalent to the equilibrium (Jourawski) shear stress of the whole stack in
@@ -154,6 +164,12 @@ def layer_groups(laminate: Laminate, grouping: str = "auto") -> tuple[int, ...]:
             groups = [min(rigid) if g in rigid else g for g in groups]
     order = {g: i for i, g in enumerate(dict.fromkeys(groups))}
     return tuple(order[g] for g in groups)
+
+
+def layout(laminate: Laminate) -> tuple[tuple[str, str], ...]:
+    """What a fit never moves in a stack: each layer's label and material name, bottom to
+    top.  A layerwise model's shear groups and stretching layers are pinned per layout."""
+    return tuple((layer.label, layer.material.name) for layer in laminate.layers)
 
 
 def _function_names(n: int, m: int) -> list[str]:
@@ -344,7 +360,17 @@ class LayerwiseLaminate:
     stretch: tuple[int, ...] = ()
 
     @classmethod
-    def of(cls, laminate: Laminate, grouping: str = "auto", core_stretch: bool = True) -> LayerwiseLaminate:
+    def of(
+        cls,
+        laminate: Laminate,
+        grouping: str = "auto",
+        core_stretch: bool = True,
+        structure: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
+    ) -> LayerwiseLaminate:
+        """The stack of ``laminate``: its shear groups and stretching layers by the rules
+        (``grouping``, ``core_stretch``), or ``structure`` (groups, stretch) as pinned."""
+        if structure is not None:
+            return cls(laminate, *structure)
         return cls(
             laminate, layer_groups(laminate, grouping), stretching_layers(laminate) if core_stretch else ()
         )

@@ -157,7 +157,7 @@ class Reanalysis:
         laminate = specimen.laminate(self.configuration)
         stack = None
         if base.layerwise is not None:
-            stack = LayerwiseLaminate.of(laminate, options.layer_groups, options.core_stretch)
+            stack = options.layerwise_stack(laminate)
             if (stack.groups, stack.stretch) != (base.layerwise.groups, base.layerwise.stretch):
                 raise OutsideBasis(f"configuration {self.configuration!r}: the layerwise groups changed")
         coefficients, inertia = _weights(base, laminate, stack)
