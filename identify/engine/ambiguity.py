@@ -21,12 +21,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from fem.solver.attachments import PointMass, Suspension
 from fem.solver.mode_shapes import pattern
 from fem.solver.reduced_basis import OutsideBasis
 from fem.specimen import Parameter
 
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, RitzObjective, ShapeObjective
 from .pairing import ModePairing
+from .parameters import UNITS, display
 
 #: Adjacent measured modes closer than this (relative) may be paired either way round:
 #: every assignment of such pairs is refitted.
@@ -276,6 +278,90 @@ def mirror_image(objective: Objective, values: np.ndarray) -> np.ndarray:
     return out
 
 
+#: The images of a free-free rectangular plate that keep its frequencies: (what the image
+#: is, x -> L - x, y -> W - y, every angle negated).  The turn by 180 deg about the normal
+#: maps every ply onto itself; a mirror about a mid-line negates every angle.
+PLATE_IMAGES = (
+    ("the plate turned by 180 deg", True, True, False),
+    ("its mirror image about y = W/2", False, True, True),
+    ("its mirror image about x = L/2", True, False, True),
+)
+
+
+def exact_images(objective: Objective, values: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The plate's images (``PLATE_IMAGES``) whose frequencies equal the state's by symmetry
+    alone, no solve needed, with the free parameters' values there, where those differ
+    from ``values``: every ply angle, sensor coordinate and suspension point that is not
+    free must map onto itself.  None with measured shapes (they tell the images apart)."""
+    if objective.measurements.shapes is not None:
+        return []
+    specimen = objective.model.specimen
+    length, width = specimen.length, specimen.width
+    free = set(objective.parameters)
+    tolerance = 1e-9 * max(length, width)
+    out = []
+    for name, flip_x, flip_y, negate in PLATE_IMAGES:
+
+        def moved(x, y, flip_x=flip_x, flip_y=flip_y):
+            return (length - x if flip_x else x, width - y if flip_y else y)
+
+        fixed_angles = [
+            layer.angle for layer in specimen.all_layers() if Parameter("angle", layer.label) not in free
+        ]
+        if negate and any(abs(np.sin(2 * angle)) > 1e-12 for angle in fixed_angles):
+            continue
+        onto_itself = True
+        for a in specimen.attachments:
+            if isinstance(a, PointMass):
+                for kind, flip, centre in (("x", flip_x, length / 2), ("y", flip_y, width / 2)):
+                    if (
+                        flip
+                        and Parameter(kind, a.label) not in free
+                        and abs(getattr(a, kind) - centre) > tolerance
+                    ):
+                        onto_itself = False
+            elif isinstance(a, Suspension):
+                points = np.array(a.points)
+                images = np.array([moved(x, y) for x, y in a.points])
+                distances = np.hypot(*(points[:, None, :] - images[None, :, :]).transpose(2, 0, 1))
+                onto_itself &= bool(np.all(distances.min(axis=1) <= tolerance))
+        if not onto_itself:
+            continue
+        image = values.copy()
+        for i, p in enumerate(objective.parameters):
+            if p.kind == "angle" and negate:  # -angle, given as the line nearest the state's
+                image[i] = values[i] + axis_turn(-2 * values[i])
+            elif p.kind in ("x", "y") and (flip_x if p.kind == "x" else flip_y):
+                image[i] = (length if p.kind == "x" else width) - values[i]
+        angles = np.array([p.kind == "angle" for p in objective.parameters], dtype=bool)
+        turned = np.abs(axis_turn(image[angles] - values[angles])) > 1e-6
+        shifted = np.abs(image[~angles] - values[~angles]) > 1e-6 * max(length, width)
+        if turned.any() or shifted.any():
+            out.append((name, image))
+    return out
+
+
+def _tie_note(objective: Objective, values: np.ndarray) -> str | None:
+    """A note naming the plate's images that fit exactly as well (``exact_images``)."""
+    images = exact_images(objective, values)
+    if not images:
+        return None
+
+    def described(image):
+        changed = [
+            f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]}".rstrip()
+            for p, v, w in zip(objective.parameters, image, values)
+            if p.kind in ("angle", "x", "y") and v != w
+        ]
+        return ", ".join(changed)
+
+    listed = "; ".join(f"{name} ({described(image)})" for name, image in images)
+    return (
+        f"the same frequencies, by the plate's symmetry, at {listed}: frequencies cannot tell these "
+        "from the state given, only a measured mode shape could (the std are those about the state given)"
+    )
+
+
 def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str], Callable]:
     """The state given the way the spec states its axes, among images with the same
     frequencies: a material's axes turned by 90 deg when the fit ended with its stiff
@@ -334,6 +420,10 @@ def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str
                 "them apart"
             )
             e = image
+
+    tie = _tie_note(objective, e.values)
+    if tie:
+        notes.append(tie)
 
     def applied(values):
         for f in maps:

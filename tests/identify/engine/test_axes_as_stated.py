@@ -59,7 +59,8 @@ def test_a_fit_ended_across_the_stated_axes_is_given_along_them(objective):
     """A state at the turned twin (E1 40 < E2 200 GPa where the spec says E1 > E2) comes
     back as the truth's values, to round-off, with its misfit unchanged and a note; the
     mirror image of the twin (the angle negated as well) comes back the same way, the angle
-    nearer the start's 23 deg, with a second note."""
+    nearer the start's 23 deg, with a second note; a last one names the mirror image of the
+    answer (-20 deg), which the frequencies cannot tell from it."""
     truth = _truth(objective)
     for state, notes in (
         (turned_axes(objective, truth, "steel"), 1),
@@ -70,7 +71,8 @@ def test_a_fit_ended_across_the_stated_axes_is_given_along_them(objective):
         assert np.allclose(stated.values, truth, rtol=1e-12, atol=1e-12)
         assert np.allclose(image(state), truth, rtol=1e-12, atol=1e-12)
         assert objective.cost(stated) == pytest.approx(objective.cost(e), rel=1e-6)
-        assert len(said) == notes and "axes turned by 90 deg" in said[0]
+        assert len(said) == notes + 1 and "axes turned by 90 deg" in said[0]
+        assert "mirror image about y = W/2 (layer2.angle = -20 deg)" in said[-1]  # the tie named
 
 
 def test_no_image_without_every_ply_free_to_turn():
@@ -99,9 +101,10 @@ def test_a_mirror_that_changes_the_frequencies_is_not_taken():
 def test_a_ply_at_90_deg_keeps_its_state_and_a_180_deg_turn_is_no_turn():
     """blind35 (a cross-ply, every ply free to turn): its 90 deg ply fitted at 90.93 deg
     and the mirror image's -90.93 deg (the ply at 89.07 deg) lie equally near the spec's
-    90 deg; on that tie the fit's own state stays (round-off had taken the mirror), and
-    the plausibility rule counts the turn modulo 180 deg: -90.93 deg is 0.93 deg from
-    90 deg, not 181 (which had refused a paying orientation as implausible)."""
+    90 deg; on that tie the fit's own state stays (round-off had taken the mirror), a
+    note naming the image the frequencies cannot tell from it, and the plausibility rule
+    counts the turn modulo 180 deg: -90.93 deg is 0.93 deg from 90 deg, not 181 (which had
+    refused a paying orientation as implausible)."""
     at_90 = {**CORE, Parameter("angle", "layer2"): math.radians(90.0)}
     truth = true_model().with_values(at_90)
     objective = Objective(truth, synthetic_measurements(truth, modes=8, noise_rel=5e-4, seed=4), FREE)
@@ -109,7 +112,7 @@ def test_a_ply_at_90_deg_keeps_its_state_and_a_180_deg_turn_is_no_turn():
     state[4] = math.radians(90.93)
     e = objective.evaluate(state, None)
     stated, said, _ = as_stated(objective, e)
-    assert stated is e and said == []
+    assert stated is e and len(said) == 1 and "about y = W/2 (layer2.angle = 89.07 deg)" in said[0]
     nominal = truth.specimen
     angle = [Parameter("angle", "layer2")]
     for degrees, plausible in ((-90.93, True), (270.5, True), (-84.0, False), (96.0, False)):
