@@ -266,16 +266,27 @@ def turned_axes(objective: Objective, values: np.ndarray, material: str) -> np.n
     return out
 
 
+def plate_image(
+    objective: Objective, values: np.ndarray, flip_x: bool, flip_y: bool, negate: bool
+) -> np.ndarray:
+    """Values of the plate's image: every free sensor's x -> L - x (``flip_x``), y -> W - y
+    (``flip_y``), every free angle negated (``negate``)."""
+    specimen = objective.model.specimen
+    out = values.copy()
+    for i, p in enumerate(objective.parameters):
+        if p.kind == "angle" and negate:
+            out[i] = -values[i]
+        elif p.kind == "x" and flip_x:
+            out[i] = specimen.length - values[i]
+        elif p.kind == "y" and flip_y:
+            out[i] = specimen.width - values[i]
+    return out
+
+
 def mirror_image(objective: Objective, values: np.ndarray) -> np.ndarray:
     """Values of the plate mirrored about its mid-line y = W/2: every free angle negated,
     every free sensor's y -> W - y."""
-    out = values.copy()
-    for i, p in enumerate(objective.parameters):
-        if p.kind == "angle":
-            out[i] = -values[i]
-        elif p.kind == "y":
-            out[i] = objective.model.specimen.width - values[i]
-    return out
+    return plate_image(objective, values, False, True, True)
 
 
 #: The images of a free-free rectangular plate that keep its frequencies: (what the image
@@ -290,51 +301,45 @@ PLATE_IMAGES = (
 
 def exact_images(objective: Objective, values: np.ndarray) -> list[tuple[str, np.ndarray]]:
     """The plate's images (``PLATE_IMAGES``) whose frequencies equal the state's by symmetry
-    alone, no solve needed, with the free parameters' values there, where those differ
-    from ``values``: every ply angle, sensor coordinate and suspension point that is not
-    free must map onto itself.  None with measured shapes (they tell the images apart)."""
+    alone, no solve needed, with the free parameters' values there (each angle given as
+    the line nearest the state's), where those differ from ``values``: every ply angle,
+    sensor coordinate and suspension point that is not free must map onto itself.  None
+    with measured shapes (they tell the images apart)."""
     if objective.measurements.shapes is not None:
         return []
     specimen = objective.model.specimen
     length, width = specimen.length, specimen.width
     free = set(objective.parameters)
     tolerance = 1e-9 * max(length, width)
+    angles = np.array([p.kind == "angle" for p in objective.parameters], dtype=bool)
+    fixed_off_axes = any(
+        abs(np.sin(2 * layer.angle)) > 1e-12
+        for layer in specimen.all_layers()
+        if Parameter("angle", layer.label) not in free
+    )
     out = []
     for name, flip_x, flip_y, negate in PLATE_IMAGES:
-
-        def moved(x, y, flip_x=flip_x, flip_y=flip_y):
-            return (length - x if flip_x else x, width - y if flip_y else y)
-
-        fixed_angles = [
-            layer.angle for layer in specimen.all_layers() if Parameter("angle", layer.label) not in free
-        ]
-        if negate and any(abs(np.sin(2 * angle)) > 1e-12 for angle in fixed_angles):
-            continue
-        onto_itself = True
+        onto_itself = not (negate and fixed_off_axes)
         for a in specimen.attachments:
             if isinstance(a, PointMass):
                 for kind, flip, centre in (("x", flip_x, length / 2), ("y", flip_y, width / 2)):
-                    if (
-                        flip
-                        and Parameter(kind, a.label) not in free
-                        and abs(getattr(a, kind) - centre) > tolerance
-                    ):
-                        onto_itself = False
+                    off_centre = abs(getattr(a, kind) - centre) > tolerance
+                    onto_itself &= not (flip and off_centre and Parameter(kind, a.label) not in free)
             elif isinstance(a, Suspension):
                 points = np.array(a.points)
-                images = np.array([moved(x, y) for x, y in a.points])
-                distances = np.hypot(*(points[:, None, :] - images[None, :, :]).transpose(2, 0, 1))
+                images = np.column_stack(
+                    [
+                        length - points[:, 0] if flip_x else points[:, 0],
+                        width - points[:, 1] if flip_y else points[:, 1],
+                    ]
+                )
+                distances = np.linalg.norm(points[:, None, :] - images[None, :, :], axis=2)
                 onto_itself &= bool(np.all(distances.min(axis=1) <= tolerance))
         if not onto_itself:
             continue
-        image = values.copy()
-        for i, p in enumerate(objective.parameters):
-            if p.kind == "angle" and negate:  # -angle, given as the line nearest the state's
-                image[i] = values[i] + axis_turn(-2 * values[i])
-            elif p.kind in ("x", "y") and (flip_x if p.kind == "x" else flip_y):
-                image[i] = (length if p.kind == "x" else width) - values[i]
-        angles = np.array([p.kind == "angle" for p in objective.parameters], dtype=bool)
-        turned = np.abs(axis_turn(image[angles] - values[angles])) > 1e-6
+        image = plate_image(objective, values, flip_x, flip_y, negate)
+        image[angles] = values[angles] + axis_turn(image[angles] - values[angles])
+        turned = np.abs(image[angles] - values[angles]) > 1e-6
         shifted = np.abs(image[~angles] - values[~angles]) > 1e-6 * max(length, width)
         if turned.any() or shifted.any():
             out.append((name, image))
