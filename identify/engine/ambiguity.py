@@ -346,16 +346,14 @@ def exact_images(objective: Objective, values: np.ndarray) -> list[tuple[str, np
     return out
 
 
-def _tie_note(objective: Objective, values: np.ndarray) -> str | None:
-    """A note naming the plate's images that fit exactly as well (``exact_images``)."""
-    images = exact_images(objective, values)
-    if not images:
-        return None
+def images_note(parameters, values: np.ndarray, images) -> str:
+    """A note naming the plate's images that fit exactly as well (``exact_images``: (what
+    the image is, the values there)), with the free angles and sensor coordinates there."""
 
     def described(image):
         changed = [
             f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]}".rstrip()
-            for p, v, w in zip(objective.parameters, image, values)
+            for p, v, w in zip(parameters, image, values)
             if p.kind in ("angle", "x", "y") and v != w
         ]
         return ", ".join(changed)
@@ -425,10 +423,6 @@ def as_stated(objective: Objective, e: Evaluation) -> tuple[Evaluation, list[str
                 "them apart"
             )
             e = image
-
-    tie = _tie_note(objective, e.values)
-    if tie:
-        notes.append(tie)
 
     def applied(values):
         for f in maps:

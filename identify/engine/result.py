@@ -126,6 +126,10 @@ class FitResult:
         them (``identify.fitting.damping``).
     stop : Stop or None
         Why the iterations stopped (``stopping.Stop``; ``"stop_reason"`` in the JSON).
+    images : tuple of (str, numpy.ndarray)
+        The plate's images with the same frequencies by symmetry, other states that the
+        frequencies cannot tell from this one (``ambiguity.exact_images``): what each
+        image is and the parameters' values there (SI, ``parameters``' order).
 
     Examples
     --------
@@ -159,6 +163,7 @@ class FitResult:
     budget: Budget | None = None
     damping: DampingResult | None = None
     stop: Stop | None = None
+    images: tuple[tuple[str, np.ndarray], ...] = ()
 
     @property
     def converged(self) -> bool:

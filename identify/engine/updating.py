@@ -26,7 +26,7 @@ from fem.solver.sensitivity import Verdict
 from fem.specimen import Parameter
 
 from ..measurements import Measurements
-from .ambiguity import as_stated, lone_close_modes, settle_pairings
+from .ambiguity import as_stated, exact_images, images_note, lone_close_modes, settle_pairings
 from .objective import NULL_SINGULAR_VALUE, Evaluation, Objective, RitzObjective, ShapeObjective, TrialScreen
 from .pairing import CLOSE_MODES
 from .parameters import UNITS, ParameterSpace, display
@@ -543,6 +543,9 @@ def update(
             progress(history[-1])
     current, stated, image = as_stated(objective, current)
     warnings += stated
+    images = tuple(exact_images(objective, current.values))
+    if images:
+        warnings.append(images_note(objective.parameters, current.values, images))
     twins = [(image(values), chi2) for values, chi2 in twins]
     statistics = objective.statistics(current)
     uncertainty = Uncertainty.at(objective, current, statistics).with_twins(current.values, twins, parameters)
@@ -595,6 +598,7 @@ def update(
         objective.frequency_jacobian(current),
         dict(effect_of or {}),
         stop=stop,
+        images=images,
     )
 
 

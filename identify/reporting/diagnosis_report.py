@@ -11,6 +11,7 @@ import pandas as pd
 from fem.effects import effect
 from fem.numbers import finite_or_none
 
+from ..engine.ambiguity import images_note
 from . import html_report as h
 from .report import parameter_lines
 from .rounding import percent, status_line
@@ -102,20 +103,8 @@ def diagnosis_text(diagnosis) -> str:
                 "which did not pay)"
             )
         lines.append(f"  -> {step.reason}")
-    final = diagnosis.final
-    if final is not None:
-        chain = " ".join(f"--effect {c.kind}" for c in diagnosis.selected)
-        lines += [
-            "",
-            f"refit with {' + '.join(c.kind for c in diagnosis.selected)}: the layers identified with the "
-            f"effects the data ask for (the model of `fit {chain}`, refitted from the diagnosis's end; "
-            "with --report its full report is refit.txt)",
-            f"  {status_line(final.status.value, final.message)}",
-            f"  RMS relative error {percent(final.rms_rel_error, 3)}",
-        ]
-        lines += parameter_lines(final, 40)
-        notes = [text for _, text in final.effect_notes]
-        lines += [f"  - {text}" for text in notes]
+    if diagnosis.final is not None:
+        lines += [""] + refit_lines(diagnosis.final, [c.kind for c in diagnosis.selected])
     if diagnosis.above_start:
         lines += [
             "",
@@ -128,4 +117,23 @@ def diagnosis_text(diagnosis) -> str:
     return "\n".join(lines) + "\n\n" + diagnosis.comparison.report()
 
 
-__all__ = ["diagnosis_text", "diagnosis_view"]
+def refit_lines(final, kinds: list[str]) -> list[str]:
+    """The summary of the refit with the selected effects ``kinds``: how it ended, its
+    parameters +- std, what was decided of each effect, and the plate's images it cannot
+    tell from its answer (``FitResult.images``)."""
+    chain = " ".join(f"--effect {kind}" for kind in kinds)
+    lines = [
+        f"refit with {' + '.join(kinds)}: the layers identified with the effects the data ask for (the "
+        f"model of `fit {chain}`, refitted from the diagnosis's end; with --report its full report is "
+        "refit.txt)",
+        f"  {status_line(final.status.value, final.message)}",
+        f"  RMS relative error {percent(final.rms_rel_error, 3)}",
+    ]
+    lines += parameter_lines(final, 40)
+    notes = [text for _, text in final.effect_notes]
+    if final.images:
+        notes.append(images_note(final.parameters, final.values, final.images))
+    return lines + [f"  - {text}" for text in notes]
+
+
+__all__ = ["diagnosis_text", "diagnosis_view", "refit_lines"]

@@ -132,6 +132,17 @@ def to_dict(result) -> dict:
                 "matrix": [[finite_or_none(x) for x in row] for row in u.correlation],
             },
             "warnings": list(result.warnings),
+            "images": [
+                {
+                    "image": name,
+                    "values": {
+                        p.name: display(p, v)
+                        for p, v in zip(result.parameters, image)
+                        if p.kind in ("angle", "x", "y")
+                    },
+                }
+                for name, image in result.images
+            ],
             "history": history_table(result).to_dict(orient="records"),
             "mac_matrix": shapes,
         },

@@ -10,9 +10,10 @@ import pytest
 from fem.solver.attachments import PointMass, Suspension
 from fem.spec import parse_spec
 from fem.specimen import Parameter
-from identify.engine.ambiguity import exact_images
+from identify.engine.ambiguity import PLATE_IMAGES, exact_images
 from identify.engine.objective import Objective
 from identify.engine.updating import FitOptions, Follow, Settle, update
+from identify.reporting.diagnosis_report import refit_lines
 from tests.fem.test_reduced_basis import SANDWICH
 from tests.identify.engine.test_trial_screen import measured_modes
 
@@ -69,6 +70,15 @@ def test_a_fit_names_the_images_of_its_sensor():
     (note,) = [w for w in result.warnings if "by the plate's symmetry" in w]
     assert "turned by 180 deg (sensor.x = 170 mm, sensor.y = 140 mm)" in note
     assert "about y = W/2 (sensor.y = 140 mm)" in note and "about x = L/2 (sensor.x = 170 mm)" in note
+    # The result carries them, and the diagnosis's summary and the JSON show them from there.
+    images = dict(result.images)
+    assert list(images) == [name for name, *_ in PLATE_IMAGES]
+    turned = images["the plate turned by 180 deg"]
+    assert turned[0] == result.values[0] and turned[1:] == pytest.approx([0.25 - 0.08, 0.2 - 0.06], abs=1e-4)
+    assert f"  - {note}" in refit_lines(result, ["point_mass"])
+    shown = {entry["image"]: entry["values"] for entry in result.to_dict()["images"]}
+    mirrored = {"sensor.x": pytest.approx(80.0, abs=0.1), "sensor.y": pytest.approx(140.0, abs=0.1)}  # mm
+    assert shown["its mirror image about y = W/2"] == mirrored  # where the sensor is there; not its mass
 
 
 @pytest.mark.parametrize(
