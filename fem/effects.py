@@ -106,9 +106,10 @@ class Effect:
             "; ".join(v.note for v in variants if v.note),
         )
 
-    def other_starts(self, switched: SwitchedOn) -> list[SpecimenModel]:
+    def other_starts(self, switched: SwitchedOn, shapes: bool = False) -> list[SpecimenModel]:
         """Other start models of the free parameters of ``switched`` worth one linearised
-        step each (the refit starts from the best); none by default."""
+        step each (the refit starts from the best); none by default.  ``shapes``: the data
+        include measured mode shapes (they tell a plate from its mirror image)."""
         return []
 
     @property
@@ -429,7 +430,7 @@ class SuspensionEffect(Effect):
             )
         ]
 
-    def other_starts(self, switched):
+    def other_starts(self, switched, shapes=False):
         """The springs all but gone (``VANISHING``): the fit the effect is added to, from
         where a refit can only descend (from the default start one stopped above it, its
         stiffness creeping towards zero in log space while the layers lagged)."""
@@ -468,14 +469,15 @@ class Orientation(Effect):
                 )
         return out
 
-    def other_starts(self, switched):
+    def other_starts(self, switched, shapes=False):
         """Every free angle at -``START_DEG`` instead: the frequencies are even in the
         angles of all layers together only while the plate is mirror-symmetric; a sensor
         off the mirror line breaks that, and the side matters (blind19: from +3 deg the
         linearised step promised nothing, the solution lies near -4.5 deg).
 
-        Where the plate is its own mirror image about y = W/2 (``_mirrors_onto_itself``),
-        every angle at -3 deg is the +3 deg start mirrored, the same frequencies: the
+        Where the plate is its own mirror image about y = W/2 (``_mirrors_onto_itself``)
+        and no mode shape is measured, every angle at -3 deg is the +3 deg start mirrored,
+        the same frequencies: the
         other starts are then each free ply turned the other way alone (for three plies,
         every way they can turn against each other).  At a 0/90 lay-up the first
         derivatives in the angles vanish, and a step reaches only the turns of its own
@@ -485,7 +487,7 @@ class Orientation(Effect):
         spurious sensor was added instead."""
         free = list(switched.free)
         turn = math.radians(self.START_DEG)
-        if not _mirrors_onto_itself(switched.model.specimen, {p.target for p in free}):
+        if shapes or not _mirrors_onto_itself(switched.model.specimen, {p.target for p in free}):
             return [switched.model.with_values({p: switched.model.value(p) - 2 * turn for p in free})]
         flips = free if len(free) > 2 else free[1:]  # two plies: either one turned back is one pattern
         return [switched.model.with_values({p: switched.model.value(p) - 2 * turn}) for p in flips]

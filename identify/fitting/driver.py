@@ -750,7 +750,8 @@ def _best_start(on, state: FitResult, parameters) -> tuple[SpecimenModel, Sensit
     one whose linearised refit leaves the least misfit kept, with a note when it is not
     the first, and the other start models, most promising first (tried when the refit
     fails, ``_other_starts``)."""
-    tried = [_shear_start(m, state, parameters) for m in [on.model] + effect(on.kind).other_starts(on)]
+    others = effect(on.kind).other_starts(on, shapes=state.measurements.shapes is not None)
+    tried = [_shear_start(m, state, parameters) for m in [on.model] + others]
     order = np.argsort([s.predicted_sum_squares(parameters) for _, s, _ in tried], kind="stable")
     model, sensitivities, note = tried[order[0]]
     if order[0]:

@@ -80,7 +80,7 @@ def test_a_refit_that_ends_above_its_state_is_reported(heavy_sensor_baseline, mo
     diagnosis lists it in ``above_start`` (its report and ``--json``) instead of letting
     it pass as a candidate that did not pay."""
     model, data, _ = heavy_sensor_baseline
-    monkeypatch.setattr(SuspensionEffect, "other_starts", lambda self, switched: [])
+    monkeypatch.setattr(SuspensionEffect, "other_starts", lambda self, switched, shapes=False: [])
     result = diagnose(model, data, ["suspension"])
     assert result.above_start == ("round 1: suspension",)
     assert result.to_dict()["above_start"] == ["round 1: suspension"]

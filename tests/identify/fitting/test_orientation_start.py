@@ -152,3 +152,21 @@ def test_a_plate_is_its_own_mirror_image_only_with_everything_fixed_mapped_onto_
         .specimen
     )
     assert _mirrors_onto_itself(specimen, {"layer1", "layer3"}) is mirrors
+
+
+def test_measured_shapes_keep_the_mirrored_start():
+    """Measured mode shapes tell the plate from its mirror image, so on a mirror-symmetric
+    plate every ply at -3 deg stays the other start (the frequencies alone: each ply
+    turned back alone)."""
+    from fem.effects import REGISTRY
+
+    orientation = REGISTRY["orientation"]
+    switched = orientation.free_all(true_model())
+    for shapes, expected in (
+        (False, [[-3.0, 3.0, 3.0], [3.0, -3.0, 3.0], [3.0, 3.0, -3.0]]),
+        (True, [[-3.0] * 3]),
+    ):
+        starts = orientation.other_starts(switched, shapes=shapes)
+        assert [[math.degrees(m.value(p)) for p in ANGLES] for m in starts] == [
+            pytest.approx(e) for e in expected
+        ]
