@@ -475,11 +475,11 @@ class Orientation(Effect):
         off the mirror line breaks that, and the side matters (blind19: from +3 deg the
         linearised step promised nothing, the solution lies near -4.5 deg).
 
-        Where the plate is its own mirror image about y = W/2 (``_mirrors_onto_itself``)
-        and no mode shape is measured, every angle at -3 deg is the +3 deg start mirrored,
-        the same frequencies: the
-        other starts are then each free ply turned the other way alone (for three plies,
-        every way they can turn against each other).  At a 0/90 lay-up the first
+        Where the plate is its own mirror image about y = W/2 but for the free angles
+        (``Specimen.maps_onto_itself``) and no mode shape is measured, every angle at -3
+        deg is the +3 deg start mirrored, the same frequencies: the other starts are then
+        each free ply turned the other way alone (for three plies, every way they can turn
+        against each other).  At a 0/90 lay-up the first
         derivatives in the angles vanish, and a step reaches only the turns of its own
         start's pattern: blind35 (a cross-ply, its outer plies turned +1.5 and -1.6 deg),
         from the layerwise fit, promised 72 from every ply at +3 deg and 393 from (+3, +3,
@@ -487,30 +487,10 @@ class Orientation(Effect):
         spurious sensor was added instead."""
         free = list(switched.free)
         turn = math.radians(self.START_DEG)
-        if shapes or not _mirrors_onto_itself(switched.model.specimen, {p.target for p in free}):
+        if shapes or not switched.model.specimen.maps_onto_itself(False, True, True, set(free)):
             return [switched.model.with_values({p: switched.model.value(p) - 2 * turn for p in free})]
         flips = free if len(free) > 2 else free[1:]  # two plies: either one turned back is one pattern
         return [switched.model.with_values({p: switched.model.value(p) - 2 * turn}) for p in flips]
-
-
-def _mirrors_onto_itself(specimen, turned: set[str]) -> bool:
-    """Whether the mirror about y = W/2 maps ``specimen`` onto itself but for the angles of
-    the layers ``turned``: every other layer at 0 or 90 deg, every sensor on the mid-line,
-    and the suspension points onto each other."""
-    if any(
-        abs(math.sin(2 * layer.angle)) > 1e-12 for layer in specimen.all_layers() if layer.label not in turned
-    ):
-        return False
-    width, tolerance = specimen.width, 1e-9 * max(specimen.length, specimen.width)
-    for a in specimen.attachments:
-        points = np.array(
-            [(a.x, a.y)] if isinstance(a, PointMass) else a.points if isinstance(a, Suspension) else []
-        )
-        if points.size:
-            images = np.column_stack([points[:, 0], width - points[:, 1]])
-            if np.linalg.norm(points[:, None, :] - images[None, :, :], axis=2).min(axis=1).max() > tolerance:
-                return False
-    return True
 
 
 class Adhesive(Effect):

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
+
+import numpy as np
 
 from .errors import SpecError
 from .laminates.laminate import Laminate, Layer
@@ -85,6 +88,39 @@ class Specimen:
     @property
     def identified_materials(self) -> list[Material]:
         return [m for m in self.materials.values() if m.identify]
+
+    def maps_onto_itself(self, flip_x: bool, flip_y: bool, negate: bool, free=frozenset()) -> bool:
+        """Whether the image x -> L - x (``flip_x``), y -> W - y (``flip_y``), every ply angle
+        negated (``negate``) maps the plate onto itself but for the ``free`` parameters
+        (which may move to their images): every other ply at 0 or 90 deg where the angles
+        are negated, every sensor coordinate that is not free on the mid-line it is
+        mirrored about, the suspension points onto each other (to 1e-9 of the plate's
+        size)."""
+        tolerance = 1e-9 * max(self.length, self.width)
+        if negate and any(
+            abs(math.sin(2 * layer.angle)) > 1e-12
+            for layer in self.all_layers()
+            if Parameter("angle", layer.label) not in free
+        ):
+            return False
+        for a in self.attachments:
+            if isinstance(a, PointMass):
+                for kind, flip, centre in (("x", flip_x, self.length / 2), ("y", flip_y, self.width / 2)):
+                    off_centre = abs(getattr(a, kind) - centre) > tolerance
+                    if flip and off_centre and Parameter(kind, a.label) not in free:
+                        return False
+            elif isinstance(a, Suspension):
+                points = np.array(a.points)
+                images = np.column_stack(
+                    [
+                        self.length - points[:, 0] if flip_x else points[:, 0],
+                        self.width - points[:, 1] if flip_y else points[:, 1],
+                    ]
+                )
+                distances = np.linalg.norm(points[:, None, :] - images[None, :, :], axis=2)
+                if not np.all(distances.min(axis=1) <= tolerance):
+                    return False
+        return True
 
     def all_layers(self):
         yield from self.layers

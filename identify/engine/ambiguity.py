@@ -21,7 +21,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fem.solver.attachments import PointMass, Suspension
 from fem.solver.mode_shapes import pattern
 from fem.solver.reduced_basis import OutsideBasis
 from fem.specimen import Parameter
@@ -308,42 +307,23 @@ def exact_images(objective: Objective, values: np.ndarray) -> list[tuple[str, np
     if objective.measurements.shapes is not None:
         return []
     specimen = objective.model.specimen
-    length, width = specimen.length, specimen.width
     free = set(objective.parameters)
-    tolerance = 1e-9 * max(length, width)
     angles = np.array([p.kind == "angle" for p in objective.parameters], dtype=bool)
-    fixed_off_axes = any(
-        abs(np.sin(2 * layer.angle)) > 1e-12
-        for layer in specimen.all_layers()
-        if Parameter("angle", layer.label) not in free
-    )
     out = []
     for name, flip_x, flip_y, negate in PLATE_IMAGES:
-        onto_itself = not (negate and fixed_off_axes)
-        for a in specimen.attachments:
-            if isinstance(a, PointMass):
-                for kind, flip, centre in (("x", flip_x, length / 2), ("y", flip_y, width / 2)):
-                    off_centre = abs(getattr(a, kind) - centre) > tolerance
-                    onto_itself &= not (flip and off_centre and Parameter(kind, a.label) not in free)
-            elif isinstance(a, Suspension):
-                points = np.array(a.points)
-                images = np.column_stack(
-                    [
-                        length - points[:, 0] if flip_x else points[:, 0],
-                        width - points[:, 1] if flip_y else points[:, 1],
-                    ]
-                )
-                distances = np.linalg.norm(points[:, None, :] - images[None, :, :], axis=2)
-                onto_itself &= bool(np.all(distances.min(axis=1) <= tolerance))
-        if not onto_itself:
+        if not specimen.maps_onto_itself(flip_x, flip_y, negate, free):
             continue
         image = plate_image(objective, values, flip_x, flip_y, negate)
         image[angles] = values[angles] + axis_turn(image[angles] - values[angles])
         turned = np.abs(image[angles] - values[angles]) > 1e-6
-        shifted = np.abs(image[~angles] - values[~angles]) > 1e-6 * max(length, width)
+        shifted = np.abs(image[~angles] - values[~angles]) > 1e-6 * max(specimen.length, specimen.width)
         if turned.any() or shifted.any():
             out.append((name, image))
     return out
+
+
+#: The kinds of the parameters an image moves: ply angles and a sensor's coordinates.
+IMAGE_KINDS = ("angle", "x", "y")
 
 
 def images_note(parameters, values: np.ndarray, images) -> str:
@@ -354,7 +334,7 @@ def images_note(parameters, values: np.ndarray, images) -> str:
         changed = [
             f"{p.name} = {display(p, v):.4g} {UNITS[p.kind][0]}".rstrip()
             for p, v, w in zip(parameters, image, values)
-            if p.kind in ("angle", "x", "y") and v != w
+            if p.kind in IMAGE_KINDS and v != w
         ]
         return ", ".join(changed)
 

@@ -16,6 +16,7 @@ import pandas as pd
 from fem.io import report_folder, to_json, write_text
 from fem.numbers import finite_or_none
 
+from ..engine.ambiguity import IMAGE_KINDS
 from ..engine.objective import solving_model
 from ..engine.parameters import UNITS, display, json_key
 from . import damping_report
@@ -138,7 +139,7 @@ def to_dict(result) -> dict:
                     "values": {
                         p.name: display(p, v)
                         for p, v in zip(result.parameters, image)
-                        if p.kind in ("angle", "x", "y")
+                        if p.kind in IMAGE_KINDS
                     },
                 }
                 for name, image in result.images

@@ -9,7 +9,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fem.effects import _mirrors_onto_itself
 from fem.solver.attachments import PointMass
 from fem.specimen import Parameter
 from identify import fit
@@ -151,7 +150,7 @@ def test_a_plate_is_its_own_mirror_image_only_with_everything_fixed_mapped_onto_
         .with_attachments([PointMass(20e-3, 0.120, sensor_y)])
         .specimen
     )
-    assert _mirrors_onto_itself(specimen, {"layer1", "layer3"}) is mirrors
+    assert specimen.maps_onto_itself(False, True, True, {ANGLES[0], ANGLES[2]}) is mirrors
 
 
 def test_measured_shapes_keep_the_mirrored_start():
