@@ -487,7 +487,9 @@ class Orientation(Effect):
         spurious sensor was added instead."""
         free = list(switched.free)
         turn = math.radians(self.START_DEG)
-        if shapes or not switched.model.specimen.maps_onto_itself(False, True, True, set(free)):
+        if shapes or not switched.model.specimen.maps_onto_itself(
+            flip_x=False, flip_y=True, negate=True, free=set(free)
+        ):
             return [switched.model.with_values({p: switched.model.value(p) - 2 * turn for p in free})]
         flips = free if len(free) > 2 else free[1:]  # two plies: either one turned back is one pattern
         return [switched.model.with_values({p: switched.model.value(p) - 2 * turn}) for p in flips]

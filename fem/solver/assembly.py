@@ -185,8 +185,7 @@ class UnitMatrices:
         last = self.__dict__.get("kept_mass")
         if last is None or not np.array_equal(kept, last[0]):
             indices, indptr, _ = self._pattern
-            counts = np.concatenate([[0], np.cumsum(kept, dtype=indptr.dtype)])
-            last = self.__dict__["kept_mass"] = (kept, indices[kept], counts[indptr])
+            last = self.__dict__["kept_mass"] = (kept, *_kept_pattern(kept, indices, indptr))
         return sp.csr_matrix((data[kept], last[1], last[2]), shape=(self.n_dofs, self.n_dofs))
 
     def stiffness(self, coefficients: np.ndarray) -> sp.csr_matrix:
@@ -402,8 +401,15 @@ def nonzeros(matrix: sp.csr_matrix) -> sp.csr_matrix:
     shared by every matrix of the mesh, are neither changed nor copied whole (a layerwise
     mesh's are tens of MB)."""
     kept = matrix.data != 0
-    counts = np.concatenate([[0], np.cumsum(kept, dtype=matrix.indptr.dtype)])
-    return sp.csr_matrix((matrix.data[kept], matrix.indices[kept], counts[matrix.indptr]), shape=matrix.shape)
+    return sp.csr_matrix(
+        (matrix.data[kept], *_kept_pattern(kept, matrix.indices, matrix.indptr)), shape=matrix.shape
+    )
+
+
+def _kept_pattern(kept: np.ndarray, indices: np.ndarray, indptr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The CSR (indices, indptr) of the entries ``kept`` (a mask over ``indices``) alone."""
+    counts = np.concatenate([[0], np.cumsum(kept, dtype=indptr.dtype)])
+    return indices[kept], counts[indptr]
 
 
 def _nbytes(part) -> int:
