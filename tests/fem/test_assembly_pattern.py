@@ -157,16 +157,26 @@ def test_a_matrix_without_stored_zeros_is_the_copy_without_them(n, density, zero
 def test_mass_matrix_reuses_its_kept_entries_only_while_the_zeros_stay():
     """``UnitMatrices.mass_matrix`` (the solve's mass matrix) is ``nonzeros`` of the
     matrix, bit for bit, on a symmetric lay-up's inertia (I1 = 0: the u-theta couplings are
-    stored zeros), then on an unsymmetric one's (I1 != 0: more entries kept) and back: the
-    remembered kept-entry arrays are rebuilt whenever the zeros move, never reused wrongly,
-    and counted in ``nbytes``."""
+    stored zeros), then on an unsymmetric one's (I1 != 0: more entries kept) and back, in
+    turn: the remembered kept-entry arrays are those of the zeros each call has, never
+    another's, at most ``MASS_PATTERNS`` of them, counted in ``nbytes``."""
     units = UnitMatrices(PlateMesh(0.12, 0.1, 3, 2), ShearDifferencePlate)
     symmetric, unsymmetric = np.array([2.0, 0.0, 1e-3]), np.array([2.0, 1e-4, 1e-3])
     before = units.nbytes
-    for inertia in (symmetric, symmetric * 3, unsymmetric, symmetric):
+    for inertia in (symmetric, symmetric * 3, unsymmetric, symmetric, unsymmetric * 2, symmetric):
         data = inertia @ units.mass_data
         kept, expected = units.mass_matrix(data), assembly.nonzeros(units.matrix(data))
         for name in ("data", "indices", "indptr"):
             np.testing.assert_array_equal(getattr(kept, name), getattr(expected, name))
     assert np.count_nonzero(unsymmetric @ units.mass_data) > np.count_nonzero(symmetric @ units.mass_data)
     assert units.nbytes > before
+    # Both patterns are remembered (the configurations a fit solves in turn), no more than
+    # MASS_PATTERNS however many the calls bring.
+    assert len(units.__dict__["kept_mass"]) == 2
+    for scale in range(1, 2 * assembly.MASS_PATTERNS):
+        data = np.array([2.0, 0.0, 1e-3]) @ units.mass_data
+        data[:scale] = 0.0  # another set of zeros each time
+        np.testing.assert_array_equal(
+            units.mass_matrix(data).indices, assembly.nonzeros(units.matrix(data)).indices
+        )
+    assert len(units.__dict__["kept_mass"]) == assembly.MASS_PATTERNS
