@@ -173,9 +173,9 @@ def test_mass_matrix_reuses_its_kept_entries_only_while_the_zeros_stay():
     # Both patterns are remembered (the configurations a fit solves in turn), no more than
     # MASS_PATTERNS however many the calls bring.
     assert len(units.__dict__["kept_mass"]) == 2
-    for scale in range(1, 2 * assembly.MASS_PATTERNS):
-        data = np.array([2.0, 0.0, 1e-3]) @ units.mass_data
-        data[:scale] = 0.0  # another set of zeros each time
+    for zeroed in range(1, 2 * assembly.MASS_PATTERNS):
+        data = symmetric @ units.mass_data
+        data[:zeroed] = 0.0  # another set of zeros each time
         np.testing.assert_array_equal(
             units.mass_matrix(data).indices, assembly.nonzeros(units.matrix(data)).indices
         )

@@ -156,6 +156,13 @@ def test_a_walk_the_ritz_models_predict_well_takes_them_further(monkeypatch):
     assert trusted_solves <= 0.5 * ruled_solves, (trusted_solves, ruled_solves)
 
 
+def _sensor_ripple() -> np.ndarray:
+    """The sandwich's first-order-shear frequencies with a 2 g sensor at (80, 60) mm and
+    a 2e-4 ripple [Hz]: fitted with a point mass, its damped iterations reject trials."""
+    sensor = THICK.with_attachments([PointMass(0.002, 0.08, 0.06, "sensor")])
+    return sensor.solve("original").frequencies_hz * (1 + 2e-4 * np.sin(np.arange(10)))
+
+
 def test_a_ritz_end_beyond_the_reach_is_held_at_it_where_full_steps_are_damped(monkeypatch):
     """The sandwich's first-order-shear frequencies with a 2 g sensor at (80, 60) mm (a
     2e-4 ripple on them) fitted with a point mass from its default start: along the
@@ -166,8 +173,7 @@ def test_a_ritz_end_beyond_the_reach_is_held_at_it_where_full_steps_are_damped(m
     code before it), ending lower (chi^2 142.75727 against 142.75737: the other stops once
     its steps fall below 0.01 std).  Asserted: at most half the full solves, no higher
     misfit (1e-9 relative: round-off), the same mass within 0.02 std."""
-    sensor = THICK.with_attachments([PointMass(0.002, 0.08, 0.06, "sensor")])
-    hz = sensor.solve("original").frequencies_hz * (1 + 2e-4 * np.sin(np.arange(10)))
+    hz = _sensor_ripple()
     held, held_solves = _with_effect("point_mass", hz)
     monkeypatch.setattr(updating, "_held_at_reach", lambda *args: False)
     dropped, dropped_solves = _with_effect("point_mass", hz)
@@ -176,13 +182,6 @@ def test_a_ritz_end_beyond_the_reach_is_held_at_it_where_full_steps_are_damped(m
     mass = len(PARAMETERS[:4])  # the point mass's first parameter, its mass
     assert abs(held.values[mass] - dropped.values[mass]) <= 0.02 * dropped.uncertainty.std[mass]
     assert held_solves <= 0.5 * dropped_solves, (held_solves, dropped_solves)
-
-
-def _sensor_ripple() -> np.ndarray:
-    """The sandwich's first-order-shear frequencies with a 2 g sensor at (80, 60) mm and
-    a 2e-4 ripple [Hz]: fitted with a point mass, its damped iterations reject trials."""
-    sensor = THICK.with_attachments([PointMass(0.002, 0.08, 0.06, "sensor")])
-    return sensor.solve("original").frequencies_hz * (1 + 2e-4 * np.sin(np.arange(10)))
 
 
 def test_a_first_damped_trial_skipped_on_the_ritz_models_is_one_the_full_solve_rejects(monkeypatch):
@@ -200,14 +199,15 @@ def test_a_first_damped_trial_skipped_on_the_ritz_models_is_one_the_full_solve_r
             skipped.append((objective, current, values.copy()))
         return out
 
+    hz = _sensor_ripple()
     monkeypatch.setattr(updating, "_rises", recorded)
-    screened, _ = _with_effect("point_mass", _sensor_ripple())
+    screened, _ = _with_effect("point_mass", hz)
     assert skipped, "the screen never fired: the case no longer tests it"
     for objective, current, values in skipped:
         trial = objective.evaluate(values, current.pairings, differentiate=False)
         assert objective.cost(trial) > objective.cost(current)
     monkeypatch.setattr(updating, "_rises", lambda *args: False)
-    unscreened, _ = _with_effect("point_mass", _sensor_ripple())
+    unscreened, _ = _with_effect("point_mass", hz)
     np.testing.assert_allclose(screened.values, unscreened.values, rtol=1e-12, atol=1e-15)
 
 
