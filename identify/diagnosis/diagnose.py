@@ -741,11 +741,13 @@ class Round:
 
     def pay_floor(self, prepared) -> PruneBelow:
         """The least reduction of chi^2 with which ``prepared`` pays for itself: its gain /
-        c above ``min_gain`` after its parameters' k ln n, with c at its least, 1."""
+        c above ``min_gain`` after its parameters' k ln n, with c at its least, 1 (a
+        lower bound in every round: c is never below 1)."""
         n, k = self.state.statistics.n, len(prepared.added)
+        where = " at the noise level" if self.must_pay else ""
         return PruneBelow(
             self.policy.min_gain + k * math.log(n),
-            f"it must explain to pay for itself at the noise level (gain / c above "
+            f"it must explain to pay for itself{where} (gain / c above "
             f"{self.policy.min_gain:g} after {k} ln {n} for its parameters)",
         )
 
@@ -753,13 +755,24 @@ class Round:
         """The keyword arguments of the refit of one ``prepared`` candidate (``_add``;
         without the pool: it may run in a worker process); ``below``: the most another
         candidate explained so far (None: none paid yet), which prunes as
-        ``RefitPolicy.prune_factor`` says, and at the noise level ``pay_floor`` too."""
+        ``RefitPolicy.prune_factor`` says, and at the noise level ``pay_floor`` too.  With a
+        stated scatter, in every round, the refit is abandoned once, from its first step on,
+        it could no longer explain ``pay_floor`` by that rule (``add_effect``'s
+        ``abandon_below``): a candidate that cannot pay is not refitted to the end (rounds
+        where nothing paid refitted every candidate to its end: 386 s of the held-out half's
+        1,758 s, run 14).  Without one the floor is no sum of squares (the criterion is
+        then n ln(RSS / n)), and nothing is abandoned."""
         prune = None if below is None else PruneBelow(below)
-        if self.must_pay:
-            floor = self.pay_floor(prepared)
-            prune = floor if prune is None or prune.chi2 < floor.chi2 else prune
+        floor = self.pay_floor(prepared)
+        if self.must_pay and (prune is None or prune.chi2 < floor.chi2):
+            prune = floor
         return dict(
-            refit=self.refit, kind=prepared.kind, hints=self.hints, prune_below=prune, prepared=prepared
+            refit=self.refit,
+            kind=prepared.kind,
+            hints=self.hints,
+            prune_below=prune,
+            abandon_below=floor if self.state.statistics.scatter_known else None,
+            prepared=prepared,
         )
 
 
@@ -805,7 +818,11 @@ def _prepare(job: dict):
 def _add(job: dict):
     """One candidate's refit, ``Refit.add`` (module level: runs in a worker process)."""
     return job["refit"].add(
-        job["kind"], job["hints"], prepared=job["prepared"], prune_below=job["prune_below"]
+        job["kind"],
+        job["hints"],
+        prepared=job["prepared"],
+        prune_below=job["prune_below"],
+        abandon_below=job["abandon_below"],
     )
 
 

@@ -108,6 +108,17 @@ TRUST_GROW = 2.0
 TRUST_EDGE = 0.99
 
 
+class Abandoned(Exception):
+    """A refit abandoned (``FitOptions.abandon_above``) at iteration ``iteration``, where
+    one full Gauss-Newton step would leave a weighted sum of squares of ``linearised``."""
+
+    def __init__(self, iteration: int, linearised: float):
+        super().__init__(
+            f"abandoned at iteration {iteration}: {linearised:.6g} left after one linearised step"
+        )
+        self.iteration, self.linearised = iteration, linearised
+
+
 @dataclass(frozen=True)
 class FitOptions:
     """Iteration control.  Steps and tolerances are in z: relative for log parameters."""
@@ -132,6 +143,12 @@ class FitOptions:
     # Measured mode shapes in the objective beside the frequencies (``ShapeObjective``);
     # off: they pin the pairing only.
     use_shapes: bool = False
+    # A weighted sum of squares: the refit is abandoned (``Abandoned``) at an iterate after
+    # its start from which one full Gauss-Newton step would still leave more than this,
+    # before the next step is paid for (None: never).  A diagnosis's candidate refit that
+    # can no longer explain what it must (``fitting.driver.PruneBelow``: the pre-check's
+    # rule for its start, at every iterate after it).
+    abandon_above: float | None = None
 
     def __post_init__(self):
         where = "FitOptions"
@@ -240,6 +257,10 @@ def iterate(
         step[~held] = gauss_newton
         if reducible <= STALLED * objective.cost(current) and _within_std(objective, current, step):
             return current, Stop.WITHIN_STD, warnings
+        # Judged from the first step on: the start is the pre-check's to judge.
+        linearised = 2 * (objective.cost(current) - reducible)
+        if options.abandon_above is not None and number > 1 and linearised > options.abandon_above:
+            raise Abandoned(number - 1, linearised)
         # on_edge: the accepted step was held at its region's edge (``RitzStep.trusted``)
         accepted, screen, on_edge = None, None, False
         # The first damped trial is screened on the Ritz models of this point (``reduced``;
@@ -546,8 +567,12 @@ def update(
 
         def refit(state, branch, max_iterations, on=None):
             """``on``: another objective (Ritz models)."""
+            # The pairing check of a converged refit is not abandoned: its end is a result.
             state, again, _ = iterate(
-                on or objective, state, branch, replace(options, max_iterations=max_iterations)
+                on or objective,
+                state,
+                branch,
+                replace(options, max_iterations=max_iterations, abandon_above=None),
             )
             return state, again
 
@@ -708,4 +733,4 @@ def _status(
     return FitStatus.CONVERGED, f"converged: {stop.value}; {statistics.describe()}"
 
 
-__all__ = ["FitOptions", "Stop", "iterate", "update"]
+__all__ = ["Abandoned", "FitOptions", "Stop", "iterate", "update"]

@@ -30,7 +30,7 @@ from ..engine.peak_lists import fit_peak_list, matching_cost, model_error, start
 from ..engine.result import FitResult, FitStatus, Iteration
 from ..engine.statistics import ASSUMED_SCATTER_REL
 from ..engine.ties import Tied, plain
-from ..engine.updating import FitOptions, Follow, Settle, update
+from ..engine.updating import Abandoned, FitOptions, Follow, Settle, update
 from ..measurements import Measurements
 from .budget import with_budget, with_theory_accuracy
 from .causes import with_causes
@@ -1068,6 +1068,7 @@ def add_effect(
     *,
     prepared: Prepared | None = None,
     prune_below: PruneBelow | None = None,
+    abandon_below: PruneBelow | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> AddedEffect:
     """``refit.state`` (a finished fit, its effects on) refitted with effect ``kind``
@@ -1076,19 +1077,23 @@ def add_effect(
     moduli to free and, when the augmented sensitivity matrix is singular, the refit is not
     run.  ``hints``: point-mass start positions from the residual scan; ``prune_below``: a
     refit whose bound does not come within ``refit.policy.prune_factor`` of it is not run
-    (``PruneBelow``).  The estimates'
+    (``PruneBelow``); ``abandon_below``: the same rule at every iterate of the refit, which
+    is abandoned once it fails it (``FitOptions.abandon_above``; not for a point mass or an
+    effect that frees shear moduli, ``_abandonable``) and reported as not refitted to the
+    end.  The estimates'
     plausibility is judged against ``refit.nominal``; a point mass's refits from its
     several starts run side by side in ``refit.pool``."""
     started = time.perf_counter()
     ready = prepared or prepare_effect(refit.state, kind, hints)
     if isinstance(ready, AddedEffect):
         return replace(ready, seconds=time.perf_counter() - started)
-    added = _refit(refit, ready, hints, progress, prune_below)
+    added = _refit(refit, ready, hints, progress, prune_below, abandon_below)
     return replace(added, seconds=time.perf_counter() - started + (ready.seconds if prepared else 0.0))
 
 
-def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> AddedEffect:
-    """``add_effect``'s refit of the prepared effect, unless it is singular or pruned."""
+def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below, abandon_below) -> AddedEffect:
+    """``add_effect``'s refit of the prepared effect, unless it is singular or pruned, or
+    abandoned on the way (``abandon_below``)."""
     state, kind, new, check, notes = (
         refit.state,
         ready.kind,
@@ -1117,6 +1122,11 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
     refit = replace(
         refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
     )
+    if abandon_below is not None and _abandonable(kind):
+        # The start's rule at every iterate: abandoned where what it has explained and one
+        # Gauss-Newton step more would explain stay short of abandon_below / factor.
+        ceiling = state.statistics.sum_squares - abandon_below.chi2 / factor
+        refit = replace(refit, options=replace(refit.options, abandon_above=ceiling))
     if progress:
         progress(f"fitting with {kind}")
     contained, rivals = None, ()
@@ -1127,7 +1137,7 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             )
             notes += rival_notes
         else:
-            result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
+            result = _fit_abandonable(refit, ready, base + new)
             if effect(kind).frees_shear and not ready.starts_above(state):
                 result, new, restarted, contained = _restarted(refit, ready, result, new, base)
                 notes += restarted
@@ -1135,6 +1145,18 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
             notes += restarted
         result, new, held, ran_out = _held_shear(refit, ready, result, new, base, contained)
         notes += held
+    except Abandoned as exc:
+        return AddedEffect(
+            kind,
+            None,
+            tuple(new),
+            check,
+            tuple(notes),
+            pruned=True,
+            error=f"not refitted to the end: from its iterate {exc.iteration} it could explain a chi^2 of "
+            f"about {state.statistics.sum_squares - exc.linearised:.4g} at most (linearised), less than 1/"
+            f"{factor:g} of the {abandon_below.chi2:.4g} {abandon_below.of}",
+        )
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
     first_hz = float(state.measurements.table["frequency_hz"].min())
@@ -1151,6 +1173,31 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below) -> Added
         contained=contained,
         rivals=rivals,
     )
+
+
+def _abandonable(kind: str) -> bool:
+    """Whether a refit of effect ``kind`` may be abandoned once it can no longer pay
+    (``FitOptions.abandon_above``): not a point mass, whose starts' refits must finish to
+    be told apart (rivals), nor an effect that frees shear moduli, whose refit that ends
+    above the fit it contains is restarted from the thin-plate limit (``_restarted``)."""
+    return not effect(kind).independent_starts and not effect(kind).frees_shear
+
+
+def _fit_abandonable(refit: Refit, ready: Prepared, parameters) -> FitResult:
+    """The refit from ``ready``'s start; where it is abandoned (``Abandoned``), from each of
+    its other starts in turn (``Prepared.others``, as a refit that ends worse than the state
+    is, ``_other_starts``): the first that is not abandoned.  Raises the first ``Abandoned``
+    when every start is."""
+    pairings = ready.pairings or refit.state.pairings
+    try:
+        return refit.fit(ready.model, parameters, pairings)
+    except Abandoned as first:
+        for model in ready.others:
+            try:
+                return refit.fit(model, parameters, pairings)
+            except Abandoned:
+                continue
+        raise first
 
 
 def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
@@ -1363,17 +1410,22 @@ def shear_continuation(
 def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, parameters, contained=None):
     """``result`` (a failed refit) refitted from each of ``starts`` ((model, description)
     pairs) in turn until one ends no worse than the fit it contains (``contained``,
-    default ``state``); returns (the lowest misfit, its start's description or "" for
-    ``result``, the number of refits)."""
+    default ``state``), a start whose refit is abandoned (``Abandoned``) passed over;
+    returns (the lowest misfit, its start's description or "" for ``result``, the number
+    of starts tried)."""
     state = refit.state
     contained = contained or state
-    tried = [(result, "")]
+    tried, count = [(result, "")], 0
     for model, where in starts:
-        tried.append((refit.fit(model, parameters, ready.pairings or state.pairings), where))
+        count += 1
+        try:
+            tried.append((refit.fit(model, parameters, ready.pairings or state.pairings), where))
+        except Abandoned:
+            continue  # that start cannot pay either: ``result`` stands
         if not ended_worse(tried[-1][0], contained):
             break
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
-    return best, where, len(tried) - 1
+    return best, where, count
 
 
 def _other_starts(refit: Refit, ready: Prepared, result: FitResult, parameters) -> tuple[FitResult, list]:

@@ -223,12 +223,14 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
     pays for itself (gain / c above ``SelectionPolicy.min_gain``); at a gain of 5 it is no answer, and the
     orientation is refitted (held-out blind02: its bound, second order in the angles,
     understated what it explained)."""
-    state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0))
+    state = SimpleNamespace(
+        statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0, n=30, scatter_known=True)
+    )
     bounds = {"thickness": 100.0, "orientation": 10.0}
     refitted = []
 
     def prepare(state, kind, hints=(), start=None, free_again=()):
-        return SimpleNamespace(kind=kind, bound=bounds[kind])
+        return SimpleNamespace(kind=kind, bound=bounds[kind], added=())
 
     def refit(job):
         kind, below = job["kind"], job["prune_below"]
@@ -249,6 +251,28 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
     assert [c.kind for c in out] == ["thickness", "orientation"]
 
 
+@pytest.mark.parametrize("scatter_known", [True, False], ids=["std_hz_stated", "no_std_hz"])
+def test_a_refit_is_abandoned_below_the_pay_floor_in_every_round(scatter_known):
+    """Away from the noise level the pay floor does not prune a candidate's start (the
+    pre-check's bound may understate it: blind02's orientation), but its refit is abandoned
+    once it can no longer explain half of the floor (``abandon_below``): min_gain + k ln n
+    is the least any candidate of k parameters must explain, c being at least 1.  Without
+    a stated scatter the criterion is n ln(RSS / n) and the floor no sum of squares:
+    nothing is abandoned."""
+    import math
+
+    statistics = SimpleNamespace(sum_squares=1000.0, n=30, scatter_known=scatter_known)
+    round_ = diagnose_module.Round(Refit(SimpleNamespace(statistics=statistics), None, None), ())
+    job = round_.job(SimpleNamespace(kind="orientation", bound=5.0, added=("a", "b", "c")), None)
+    assert job["prune_below"] is None
+    floor = job["abandon_below"]
+    if not scatter_known:
+        assert floor is None
+        return
+    assert floor.chi2 == pytest.approx(SELECTION_POLICY.min_gain + 3 * math.log(30))
+    assert floor.of.startswith("it must explain to pay for itself (gain / c above 10 after 3 ln 30")
+
+
 @pytest.mark.parametrize("slow", ["thickness", "orientation"])
 def test_refits_in_processes_are_pruned_by_earlier_batches_only(monkeypatch, slow):
     """Two processes: the refits go in batches of two by bound, [thickness, orientation],
@@ -257,13 +281,15 @@ def test_refits_in_processes_are_pruned_by_earlier_batches_only(monkeypatch, slo
     (bound 30, which one process would prune), whichever of the two ends first.  When the
     thickness refit is the slow one, the second batch starts before it ends and is given
     the pruned result afterwards: the answer is the same, only the waiting differs."""
-    state = SimpleNamespace(statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0))
+    state = SimpleNamespace(
+        statistics=SimpleNamespace(sum_squares=1000.0, bic=1000.0, n=30, scatter_known=True)
+    )
     bounds = {"thickness": 100.0, "orientation": 30.0, "suspension": 25.0, "rotary_inertia": 10.0}
     second_batch = threading.Event()
     ran = []
 
     def prepare(state, kind, hints=(), start=None, free_again=()):
-        return SimpleNamespace(kind=kind, bound=bounds[kind])
+        return SimpleNamespace(kind=kind, bound=bounds[kind], added=())
 
     def refit(job):
         kind, below = job["kind"], job["prune_below"]
@@ -532,7 +558,7 @@ def test_at_the_noise_level_only_a_candidate_that_could_pay_is_refitted():
     parameters; what another candidate explained prunes as before when it is larger."""
     from identify.fitting.driver import Prepared
 
-    state = SimpleNamespace(statistics=SimpleNamespace(n=30, sum_squares=42.0))
+    state = SimpleNamespace(statistics=SimpleNamespace(n=30, sum_squares=42.0, scatter_known=True))
     at_noise = diagnose_module.Round(Refit(state, None, None), (), must_pay=True)
     added = tuple(Parameter(k, "point_mass") for k in ("mass", "x", "y"))
     check = SimpleNamespace(singular=False)
