@@ -12,7 +12,8 @@ thicknesses, the chain rule for the plate's mass (its layers' densities scale wi
 and central differences of the plate's length and width (a new mesh each way).
 
 A layer's angle is different: where the laminate is symmetric about the plate's axes the
-frequencies are even in it, so the first-order column vanishes and a misalignment only
+frequencies are even in it (the plate turned by -u is its mirror image turned by +u, and
+is not solved again), so the first-order column vanishes and a misalignment only
 ever moves the properties one way (a fabric skin 5 deg off: G12 12 std off).  Its part is
 taken to second order over a normal angle error theta ~ N(0, u^2): with d1 = (f(+u) -
 f(-u)) / 2 and d2 = (f(+u) + f(-u) - 2 f(0)) / 2, df = f' theta + f'' theta^2 / 2 has the
@@ -114,6 +115,11 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
     model = objective.solved.with_specimen(e.model.specimen)
     out = np.zeros((len(objective.measured_hz), len(inputs)))
     specimen = model.specimen
+    # Where the plate's mirror image about y = W/2 with every angle negated is the plate
+    # itself (every ply at 0 or 90 deg, a sensor on the mid-line, springs in mirrored
+    # pairs), a ply turned by -u is the image of the plate with it turned by +u: the same
+    # frequencies, so -u is not solved (the first-order column is then exactly zero).
+    mirrored = specimen.maps_onto_itself(flip_x=False, flip_y=True, negate=True)
     for name in objective.configurations:
         rows = objective.rows[name]
         indices = e.pairings[name].indices
@@ -122,11 +128,11 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
         for j, u in enumerate(inputs):
             if u.kind in (ANGLE, ANGLE_SECOND_ORDER):
                 if u.target not in turned:
-                    p = Parameter(ANGLE, u.target)
-                    turned[u.target] = [
-                        model.with_values({p: model.value(p) + s * u.std}).solve(name).frequencies_hz[indices]
-                        for s in (1, -1)
-                    ]
+                    plus = _turned(model, u.target, u.std, name)[indices]
+                    turned[u.target] = (
+                        plus,
+                        plus if mirrored else _turned(model, u.target, -u.std, name)[indices],
+                    )
                 plus, minus = turned[u.target]
                 out[rows, j] = (
                     (plus - minus) / 2
@@ -155,6 +161,12 @@ def _input_columns(objective: Objective, e, inputs) -> np.ndarray:
             else:
                 out[rows, j] = solution.derivatives([Parameter(u.kind, u.target)])[indices, 0]
     return out
+
+
+def _turned(model, layer: str, turn: float, configuration: str) -> np.ndarray:
+    """The frequencies [Hz] of ``configuration`` with ``layer``'s angle turned by ``turn`` [rad]."""
+    p = Parameter(ANGLE, layer)
+    return model.with_values({p: model.value(p) + turn}).solve(configuration).frequencies_hz
 
 
 def _with_second_orders(inputs: tuple[InputStd, ...]) -> tuple[InputStd, ...]:
