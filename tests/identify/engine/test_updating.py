@@ -243,9 +243,10 @@ def test_the_ritz_screen_drops_only_alternatives_the_full_screen_drops(start, pa
 
     data = synthetic_measurements(paper_model, modes=8, noise_rel=5e-5, seed=3)
     monkeypatch.setattr(ambiguity, "same_two_modes", lambda *_: [])
+    screen = ambiguity.RITZ_SCREEN_CHI2
     monkeypatch.setattr(ambiguity, "RITZ_SCREEN_CHI2", np.inf)
     unscreened = fit(start, data)
-    monkeypatch.setattr(ambiguity, "RITZ_SCREEN_CHI2", 10 * ambiguity.SCREEN_CHI2)
+    monkeypatch.setattr(ambiguity, "RITZ_SCREEN_CHI2", screen)
     real, dropped = ambiguity._ritz_screened, []
 
     def checking(objective, best, candidates, refit, unit):
