@@ -1060,6 +1060,13 @@ class PruneBelow:
         ``RefitPolicy.prune_factor``)."""
         return factor * bound < self.chi2
 
+    def short_of(self, bound: float, how: str, factor: float) -> str:
+        """Why a candidate of ``bound`` (estimated ``how``) is pruned, for its report."""
+        return (
+            f"it could explain a chi^2 of about {bound:.4g} at most ({how}), less than 1/{factor:g} of the "
+            f"{self.chi2:.4g} {self.of}"
+        )
+
 
 def add_effect(
     refit: Refit,
@@ -1106,18 +1113,13 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below, abandon_
             kind, None, tuple(new), check, tuple(notes), error=f"not identifiable: {check.describe()}"
         )
     factor = refit.policy.prune_factor
+
+    def pruned(why: str) -> AddedEffect:
+        return AddedEffect(kind, None, tuple(new), check, tuple(notes), pruned=True, error=why)
+
     if prune_below is not None and prune_below.prunes(ready.bound, factor):
-        return AddedEffect(
-            kind,
-            None,
-            tuple(new),
-            check,
-            tuple(notes),
-            pruned=True,
-            error=f"not refitted: it could explain a chi^2 of about {ready.bound:.4g} at most "
-            f"(linearised{', residual scan' if effect(kind).hinted else ''}), less than 1/"
-            f"{factor:g} of the {prune_below.chi2:.4g} {prune_below.of}",
-        )
+        how = "linearised, residual scan" if effect(kind).hinted else "linearised"
+        return pruned("not refitted: " + prune_below.short_of(ready.bound, how, factor))
     base = list(ready.base)
     refit = replace(
         refit, effect_of={**state.effect_of, **{p: kind for p in new if p.kind not in MATERIAL_PARAMETERS}}
@@ -1146,16 +1148,10 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below, abandon_
         result, new, held, ran_out = _held_shear(refit, ready, result, new, base, contained)
         notes += held
     except Abandoned as exc:
-        return AddedEffect(
-            kind,
-            None,
-            tuple(new),
-            check,
-            tuple(notes),
-            pruned=True,
-            error=f"not refitted to the end: from its iterate {exc.iteration} it could explain a chi^2 of "
-            f"about {state.statistics.sum_squares - exc.linearised:.4g} at most (linearised), less than 1/"
-            f"{factor:g} of the {abandon_below.chi2:.4g} {abandon_below.of}",
+        bound = state.statistics.sum_squares - exc.linearised
+        return pruned(
+            f"not refitted to the end: from its iterate {exc.iteration} "
+            + abandon_below.short_of(bound, "linearised", factor)
         )
     except LayerIdError as exc:
         return AddedEffect(kind, None, tuple(new), check, tuple(notes), error=f"failed: {exc}")
