@@ -76,11 +76,17 @@ def test_a_point_mass_whose_starts_all_end_worse_is_refitted_from_a_vanishing_ma
 
 
 def test_a_refit_that_ends_above_its_state_is_reported(heavy_sensor_baseline, monkeypatch):
-    """Without its vanishing start the suspension refit ends above the baseline: the
-    diagnosis lists it in ``above_start`` (its report and ``--json``) instead of letting
-    it pass as a candidate that did not pay."""
+    """Without its vanishing start the suspension refit would end above the baseline.  It
+    is abandoned on the way, as a refit that cannot pay (``test_abandoned_refits.py``), and
+    reported so; where it is let run to its end, the diagnosis lists it in ``above_start``
+    (its report and ``--json``) instead of letting it pass as a candidate that did not
+    pay."""
     model, data, _ = heavy_sensor_baseline
     monkeypatch.setattr(SuspensionEffect, "other_starts", lambda self, switched, shapes=False: [])
+    abandoned = diagnose(model, data, ["suspension"])
+    assert abandoned.above_start == ()
+    assert abandoned.steps[0].candidates[0].error.startswith("not refitted to the end")
+    monkeypatch.setattr(driver, "_abandonable", lambda kind: False)
     result = diagnose(model, data, ["suspension"])
     assert result.above_start == ("round 1: suspension",)
     assert result.to_dict()["above_start"] == ["round 1: suspension"]

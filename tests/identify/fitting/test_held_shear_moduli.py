@@ -84,8 +84,8 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
 
     monkeypatch.setattr(driver, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
-    # the round's start: only its criterion is read
-    state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0))
+    # the round's start: its criterion and what its pay floor reads
+    state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0, n=30, scatter_known=True))
     round_ = diagnose_module.Round(Refit(state, None, None), ())
     out = diagnose_module._leader_freed_again(round_, [layerwise, leader, other], steel, lambda t: None)
     assert calls == [(("point_mass",), steel)]
