@@ -740,13 +740,21 @@ class Round:
         return self.refit.state
 
     def pay_floor(self, prepared) -> PruneBelow:
-        """The least reduction of chi^2 with which ``prepared`` pays for itself: its gain /
-        c above ``min_gain`` after its parameters' k ln n, with c at its least, 1 (a
-        lower bound in every round: c is never below 1)."""
-        n, k = self.state.statistics.n, len(prepared.added)
+        """The least reduction of the weighted sum of squares with which ``prepared`` pays
+        for itself: its gain / c above ``min_gain`` after its parameters' k ln n, with c at
+        its least, 1 (a lower bound in every round: c is never below 1).  Without a stated
+        scatter the criterion is n ln(RSS / n): paying takes RSS down by the factor
+        exp(-(min_gain + k ln n) / n), and the floor is that share of the state's RSS (it
+        was compared in chi^2 units with relative residuals, so at the noise level of the
+        assumed scatter every candidate was pruned)."""
+        statistics, k = self.state.statistics, len(prepared.added)
+        n = statistics.n
+        least = self.policy.min_gain + k * math.log(n)
+        if not statistics.scatter_known:
+            least = -statistics.sum_squares * math.expm1(-least / n)
         where = " at the noise level" if self.must_pay else ""
         return PruneBelow(
-            self.policy.min_gain + k * math.log(n),
+            least,
             f"it must explain to pay for itself{where} (gain / c above "
             f"{self.policy.min_gain:g} after {k} ln {n} for its parameters)",
         )
@@ -755,13 +763,11 @@ class Round:
         """The keyword arguments of the refit of one ``prepared`` candidate (``_add``;
         without the pool: it may run in a worker process); ``below``: the most another
         candidate explained so far (None: none paid yet), which prunes as
-        ``RefitPolicy.prune_factor`` says, and at the noise level ``pay_floor`` too.  With a
-        stated scatter, in every round, the refit is abandoned once, from its first step on,
-        it could no longer explain ``pay_floor`` by that rule (``add_effect``'s
-        ``abandon_below``): a candidate that cannot pay is not refitted to the end (rounds
-        where nothing paid refitted every candidate to its end: 386 s of the held-out half's
-        1,758 s, run 14).  Without one the floor is no sum of squares (the criterion is
-        then n ln(RSS / n)), and nothing is abandoned."""
+        ``RefitPolicy.prune_factor`` says, and at the noise level ``pay_floor`` too.  In
+        every round the refit is abandoned once, from its first step on, it could no longer
+        explain ``pay_floor`` by that rule (``add_effect``'s ``abandon_below``): a candidate
+        that cannot pay is not refitted to the end (rounds where nothing paid refitted
+        every candidate to its end: 386 s of the held-out half's 1,758 s, run 14)."""
         prune = None if below is None else PruneBelow(below)
         floor = self.pay_floor(prepared)
         if self.must_pay and (prune is None or prune.chi2 < floor.chi2):
@@ -771,7 +777,7 @@ class Round:
             kind=prepared.kind,
             hints=self.hints,
             prune_below=prune,
-            abandon_below=floor if self.state.statistics.scatter_known else None,
+            abandon_below=floor,
             prepared=prepared,
         )
 

@@ -255,22 +255,28 @@ def test_only_a_candidate_that_pays_may_prune(monkeypatch, thickness_bic, pruned
 def test_a_refit_is_abandoned_below_the_pay_floor_in_every_round(scatter_known):
     """Away from the noise level the pay floor does not prune a candidate's start (the
     pre-check's bound may understate it: blind02's orientation), but its refit is abandoned
-    once it can no longer explain half of the floor (``abandon_below``): min_gain + k ln n
-    is the least any candidate of k parameters must explain, c being at least 1.  Without
-    a stated scatter the criterion is n ln(RSS / n) and the floor no sum of squares:
-    nothing is abandoned."""
+    once it can no longer explain half of the floor (``abandon_below``): the least any
+    candidate of k parameters must explain, c being at least 1.  With a stated scatter it
+    is min_gain + k ln n units of chi^2.  Without one the criterion is n ln(RSS / n), and
+    the floor the share of RSS that takes: a refit that explains exactly it gains exactly
+    min_gain after k ln n (to round-off)."""
     import math
 
-    statistics = SimpleNamespace(sum_squares=1000.0, n=30, scatter_known=scatter_known)
+    from identify.engine.statistics import FitStatistics
+
+    statistics = FitStatistics(30, 4, 1000.0 if scatter_known else 2.5e-5, 1e-3, scatter_known)
     round_ = diagnose_module.Round(Refit(SimpleNamespace(statistics=statistics), None, None), ())
     job = round_.job(SimpleNamespace(kind="orientation", bound=5.0, added=("a", "b", "c")), None)
     assert job["prune_below"] is None
     floor = job["abandon_below"]
-    if not scatter_known:
-        assert floor is None
-        return
-    assert floor.chi2 == pytest.approx(SELECTION_POLICY.min_gain + 3 * math.log(30))
     assert floor.of.startswith("it must explain to pay for itself (gain / c above 10 after 3 ln 30")
+    least = SELECTION_POLICY.min_gain + 3 * math.log(30)
+    if scatter_known:
+        assert floor.chi2 == pytest.approx(least)
+        return
+    paying = replace(statistics, k=7, sum_squares=statistics.sum_squares - floor.chi2)
+    assert statistics.bic - paying.bic == pytest.approx(SELECTION_POLICY.min_gain, rel=1e-9)
+    assert 0 < floor.chi2 < statistics.sum_squares
 
 
 @pytest.mark.parametrize("slow", ["thickness", "orientation"])
