@@ -1086,8 +1086,8 @@ def add_effect(
     refit whose bound does not come within ``refit.policy.prune_factor`` of it is not run
     (``PruneBelow``); ``abandon_below``: the same rule at every iterate of the refit, which
     is abandoned once it fails it (``FitOptions.abandon_above``; not for a point mass or an
-    effect that frees shear moduli, ``_abandonable``) and reported as not refitted to the
-    end.  The estimates'
+    effect that frees shear moduli, ``_abandonable``), its other starts refitted
+    (``_after_abandoned``), and reported as not refitted to the end when they are too.  The estimates'
     plausibility is judged against ``refit.nominal``; a point mass's refits from its
     several starts run side by side in ``refit.pool``."""
     started = time.perf_counter()
@@ -1139,11 +1139,15 @@ def _refit(refit: Refit, ready: Prepared, hints, progress, prune_below, abandon_
             )
             notes += rival_notes
         else:
-            result = _fit_abandonable(refit, ready, base + new)
-            if effect(kind).frees_shear and not ready.starts_above(state):
-                result, new, restarted, contained = _restarted(refit, ready, result, new, base)
-                notes += restarted
-            result, restarted = _other_starts(refit, ready, result, base + new)
+            try:
+                result = refit.fit(ready.model, base + new, ready.pairings or state.pairings)
+            except Abandoned as first:
+                result, restarted = _after_abandoned(refit, ready, first, base + new)
+            else:
+                if effect(kind).frees_shear and not ready.starts_above(state):
+                    result, new, restarted, contained = _restarted(refit, ready, result, new, base)
+                    notes += restarted
+                result, restarted = _other_starts(refit, ready, result, base + new)
             notes += restarted
         result, new, held, ran_out = _held_shear(refit, ready, result, new, base, contained)
         notes += held
@@ -1177,23 +1181,6 @@ def _abandonable(kind: str) -> bool:
     be told apart (rivals), nor an effect that frees shear moduli, whose refit that ends
     above the fit it contains is restarted from the thin-plate limit (``_restarted``)."""
     return not effect(kind).independent_starts and not effect(kind).frees_shear
-
-
-def _fit_abandonable(refit: Refit, ready: Prepared, parameters) -> FitResult:
-    """The refit from ``ready``'s start; where it is abandoned (``Abandoned``), from each of
-    its other starts in turn (``Prepared.others``, as a refit that ends worse than the state
-    is, ``_other_starts``): the first that is not abandoned.  Raises the first ``Abandoned``
-    when every start is."""
-    pairings = ready.pairings or refit.state.pairings
-    try:
-        return refit.fit(ready.model, parameters, pairings)
-    except Abandoned as first:
-        for model in ready.others:
-            try:
-                return refit.fit(model, parameters, pairings)
-            except Abandoned:
-                continue
-        raise first
 
 
 def _shear_values(specimen: Specimen, shear, start) -> dict[Parameter, float]:
@@ -1403,15 +1390,17 @@ def shear_continuation(
     return current.model, factor
 
 
-def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, parameters, contained=None):
-    """``result`` (a failed refit) refitted from each of ``starts`` ((model, description)
-    pairs) in turn until one ends no worse than the fit it contains (``contained``,
-    default ``state``), a start whose refit is abandoned (``Abandoned``) passed over;
-    returns (the lowest misfit, its start's description or "" for ``result``, the number
-    of starts tried)."""
+def _first_not_worse(
+    refit: Refit, ready: Prepared, result: FitResult | None, starts, parameters, contained=None
+):
+    """``result`` (a failed refit; None: an abandoned one) refitted from each of ``starts``
+    ((model, description) pairs) in turn until one ends no worse than the fit it contains
+    (``contained``, default ``state``), a start whose refit is abandoned (``Abandoned``)
+    passed over; returns (the lowest misfit, its start's description or "" for ``result``,
+    the number of starts tried); (None, "", count) when nothing ended."""
     state = refit.state
     contained = contained or state
-    tried, count = [(result, "")], 0
+    tried, count = ([] if result is None else [(result, "")]), 0
     for model, where in starts:
         count += 1
         try:
@@ -1420,8 +1409,26 @@ def _first_not_worse(refit: Refit, ready: Prepared, result: FitResult, starts, p
             continue  # that start cannot pay either: ``result`` stands
         if not ended_worse(tried[-1][0], contained):
             break
+    if not tried:
+        return None, "", count
     best, where = min(tried, key=lambda t: t[0].statistics.sum_squares)
     return best, where, count
+
+
+def _after_abandoned(refit: Refit, ready: Prepared, first: Abandoned, parameters) -> tuple[FitResult, list]:
+    """The refit from ``ready``'s start abandoned (``first``: it could not pay): the effect's
+    other starts (``Prepared.others``) refitted in turn, as after a refit that ends worse
+    than the state (``_first_not_worse``), each once; raises ``first`` when every one is
+    abandoned too.  Returns (result, notes)."""
+    starts = ((m, _described(ready.added, m)) for m in ready.others)
+    best, where, _ = _first_not_worse(refit, ready, None, starts, parameters)
+    if best is None:
+        raise first
+    return best, [
+        f"the refit from the screened start was abandoned at its iterate {first.iteration} (it "
+        f"could not pay for {ready.kind}): refitted from {where}, RMS "
+        f"{100 * best.statistics.rms_rel_error:.3g} %"
+    ]
 
 
 def _other_starts(refit: Refit, ready: Prepared, result: FitResult, parameters) -> tuple[FitResult, list]:

@@ -94,3 +94,34 @@ def test_a_point_mass_refit_is_never_abandoned(turned_core):
     refit = Refit(state, data, bare.specimen, FitOptions(max_iterations=3))
     out = add_effect(refit, "point_mass", abandon_below=PruneBelow(10 * state.statistics.sum_squares))
     assert out.result is not None and not out.pruned
+
+
+def test_after_an_abandoned_start_each_other_start_is_refitted_once(turned_core, monkeypatch):
+    """The screened start's refit abandoned (forced at its first call), the other start (the
+    angles turned the other way) is refitted, once, even where it too ends worse than the
+    state (forced): the search over the other starts that follows a refit ending worse has
+    been made already.  The note says which start and why."""
+    from identify.fitting import driver
+
+    data, model, state = turned_core
+    prepared = prepare_effect(state, "orientation")
+    assert len(prepared.others) == 1
+    fitted, real = [], Refit.fit
+
+    def first_abandoned(self, start, parameters, pairings):
+        fitted.append(start)
+        if len(fitted) == 1:
+            raise Abandoned(1, 2 * state.statistics.sum_squares)
+        return real(self, start, parameters, pairings)
+
+    monkeypatch.setattr(Refit, "fit", first_abandoned)
+    monkeypatch.setattr(driver, "ended_worse", lambda result, state: True)
+    floor = PruneBelow(1.0, "test")
+    out = add_effect(
+        Refit(state, data, model.specimen), "orientation", prepared=prepared, abandon_below=floor
+    )
+    assert [m is prepared.model for m in fitted] == [True, False] and fitted[1] is prepared.others[0]
+    assert out.result is not None and not out.pruned
+    assert any(
+        n.startswith("the refit from the screened start was abandoned at its iterate 1") for n in out.notes
+    )
