@@ -71,6 +71,11 @@ class Effect:
     #: absent (a sensor's mass, the springs' stiffness): where the refit determines none of
     #: them (std at least the value), the data show a misfit it removes, not the effect.
     amount: tuple[str, ...] = ()
+    #: Its ``other_starts`` are the fit it is added to but for an amount of the effect that
+    #: moves no frequency by more than about 1e-8 (springs all but gone): the fit's own modes
+    #: span theirs, and its pre-check evaluates them on the fit's Rayleigh-Ritz models
+    #: (``Sensitivities.on_state_modes``), not by solving every configuration again.
+    other_starts_spanned = False
 
     @property
     def physics(self) -> frozenset[str]:
@@ -388,6 +393,7 @@ class SuspensionEffect(Effect):
     sign = "the lowest modes are off: the suspension, or a missing shear effect?"
     keys = ("stiffness_N_m", "points_mm")
     amount = ("stiffness",)
+    other_starts_spanned = True
     #: Default support points when none are given: near the four corners (10 % in).
     DEFAULT_INSET = 0.1
     #: The vanishing start's stiffness, a share of the default start's: the default moves

@@ -8,6 +8,7 @@ exact derivatives, so the global sensitivity matrix is one array.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -95,6 +96,15 @@ class Objective:
     @property
     def parameters(self) -> tuple[Parameter, ...]:
         return self.space.parameters
+
+    def for_model(self, model: SpecimenModel, parameters) -> Objective:
+        """This objective's data and solving options for ``model`` (solved as this one's,
+        e.g. with an attachment added) with ``parameters`` free; nothing is solved."""
+        out = copy.copy(self)
+        out.model = model
+        out.space = ParameterSpace.of(list(parameters), model.specimen)
+        out.solved = self.solved.with_specimen(model.specimen)
+        return out
 
     def evaluate(
         self,

@@ -750,8 +750,11 @@ def _best_start(on, state: FitResult, parameters) -> tuple[SpecimenModel, Sensit
     one whose linearised refit leaves the least misfit kept, with a note when it is not
     the first, and the other start models, most promising first (tried when the refit
     fails, ``_other_starts``)."""
-    others = effect(on.kind).other_starts(on, shapes=state.measurements.shapes is not None)
-    tried = [_shear_start(m, state, parameters) for m in [on.model] + others]
+    kind = effect(on.kind)
+    others = kind.other_starts(on, shapes=state.measurements.shapes is not None)
+    tried = [_shear_start(on.model, state, parameters)] + [
+        _shear_start(m, state, parameters, kind.other_starts_spanned) for m in others
+    ]
     order = np.argsort([s.predicted_sum_squares(parameters) for _, s, _ in tried], kind="stable")
     model, sensitivities, note = tried[order[0]]
     if order[0]:
@@ -775,12 +778,13 @@ def _described(parameters, model: SpecimenModel) -> str:
 
 
 def _shear_start(
-    model: SpecimenModel, state: FitResult, parameters
+    model: SpecimenModel, state: FitResult, parameters, spanned: bool = False
 ) -> tuple[SpecimenModel, Sensitivities, str]:
     """Where the refit of freed transverse shear moduli that only default to G12 starts:
     each of ``SHEAR_STARTS`` evaluated once (all such materials at once), the one whose
     linearised refit (one Gauss-Newton step, every parameter free) leaves the least misfit
-    kept.  Returns (the model there, its sensitivities, a note when it is not G12)."""
+    kept.  ``spanned``: evaluated on ``state``'s Ritz models (``Effect.other_starts_spanned``).
+    Returns (the model there, its sensitivities, a note when it is not G12)."""
     specimen = model.specimen
     defaulted = [
         p
@@ -794,7 +798,11 @@ def _shear_start(
             trial = (
                 model.with_values(_shear_values(specimen, defaulted, start)) if start != (1.0, 1.0) else model
             )
-            sensitivities = Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+            sensitivities = (
+                Sensitivities.on_state_modes(state, trial, state.measurements, parameters)
+                if spanned
+                else Sensitivities.at_start(trial, state.measurements, parameters, state.pairings)
+            )
         except LayerIdError:
             continue  # a start outside the materials' valid range (e.g. below 0.1 MPa): the others
         left = sensitivities.predicted_sum_squares(parameters)

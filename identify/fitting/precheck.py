@@ -18,10 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.model import SpecimenModel
+from fem.solver.reduced_basis import OutsideBasis
 from fem.solver.sensitivity import SINGULAR_ABOVE, Verdict, condition_verdict
 from fem.specimen import Parameter
 
-from ..engine.objective import Objective, relative_sensitivity
+from ..engine.objective import Objective, RitzObjective, relative_sensitivity
+from ..engine.result import FitResult
 from ..engine.statistics import ASSUMED_SCATTER_REL
 from ..engine.ties import Tied
 from ..engine.uncertainty import condition_number, describe_combination
@@ -52,9 +54,35 @@ class Sensitivities:
     ) -> Sensitivities:
         """At the model's values, the modes paired afresh or followed from ``pairings``."""
         objective = Objective(model, measurements, list(parameters))
+        return cls._at(objective, model, pairings)
+
+    @classmethod
+    def on_state_modes(
+        cls, state: FitResult, model: SpecimenModel, measurements: Measurements, parameters
+    ) -> Sensitivities:
+        """As ``at_start`` (the modes followed from ``state``'s pairing), on the
+        Rayleigh-Ritz models of ``state``'s full solves (its modes and the rigid-body
+        fields, ``RitzObjective``) instead of a solve of every configuration: for starts
+        that the state's modes span (``Effect.other_starts_spanned``), a fraction of a
+        second where a layerwise evaluation costs seconds.  In full where ``model`` is solved otherwise
+        than the state (another theory or mesh) or leaves the basis."""
+        if model.options != state.model.options or state.pairings is None:
+            return cls.at_start(model, measurements, parameters, state.pairings)
+        own = Objective(state.model, measurements, list(state.parameters))
+        at = own.evaluate(state.values, state.pairings, track=False, differentiate=False)
+        ritz = RitzObjective(own.for_model(model, parameters), at, {})
+        try:
+            return cls._at(ritz, model, state.pairings)
+        except OutsideBasis:
+            return cls.at_start(model, measurements, parameters, state.pairings)
+
+    @classmethod
+    def _at(cls, objective: Objective, model: SpecimenModel, pairings: dict | None) -> Sensitivities:
+        """``objective`` evaluated at ``model``'s values of its parameters."""
+        parameters = objective.space.parameters
         values = objective.space.clip(np.array([model.value(p) for p in parameters], dtype=float))
         evaluation = objective.evaluate(values, pairings)
-        scatter = 1.0 if measurements.has_std else ASSUMED_SCATTER_REL
+        scatter = 1.0 if objective.measurements.has_std else ASSUMED_SCATTER_REL
         return cls(
             tuple(parameters),
             relative_sensitivity(evaluation, objective.space),
