@@ -781,6 +781,15 @@ class Round:
             prepared=prepared,
         )
 
+    def refitted_here(self, job: dict) -> AddedEffect:
+        """``job``'s refit (``_add``) in this process; an effect with
+        ``independent_starts`` refits its starts side by side in the pool (a point mass
+        refitted again with the held shear moduli free ran its starts one after another
+        while both workers waited: blind27, 68 s)."""
+        if self.pool is not None and effect(job["kind"]).independent_starts:
+            job = {**job, "refit": replace(self.refit, pool=self.pool)}
+        return _add(job)
+
 
 def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -> list[Candidate]:
     """The round's leading candidate (the lowest criterion of those refitted, plausible
@@ -803,7 +812,7 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
         return candidates  # the data do not see them here (``choose_shear_moduli``): the refit would repeat
     else:
         say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
-        again = _candidate(state, _add(round_.job(prepared, None)))
+        again = _candidate(state, round_.refitted_here(round_.job(prepared, None)))
     if again.fit is None or not again.fit.statistics.sum_squares < leader.fit.statistics.sum_squares:
         note = f"{leader.kind} refitted with the held G13, G23 free again: " + (
             again.error
@@ -942,7 +951,7 @@ def _refitted(round_: Round, ready: list, before: list[Candidate]) -> list[Candi
                     break
                 waiting.remove(beside)
                 running[pool.submit(_add, job(beside))] = beside
-            ended[i] = _add({**this, "refit": replace(round_.refit, pool=pool)})
+            ended[i] = round_.refitted_here(this)
             return
 
     while len(done) < len(ready):
