@@ -64,8 +64,8 @@ class Sensitivities:
         Rayleigh-Ritz models of ``state``'s full solves (its modes and the rigid-body
         fields, ``RitzObjective``) instead of a solve of every configuration: for starts
         that the state's modes span (``Effect.other_starts_spanned``), a fraction of a
-        second where a layerwise evaluation costs seconds.  In full where ``model`` is solved otherwise
-        than the state (another theory or mesh) or leaves the basis."""
+        second where a layerwise evaluation costs seconds.  In full where ``model`` is
+        solved otherwise than the state (another theory or mesh) or leaves the basis."""
         if model.options != state.model.options or state.pairings is None:
             return cls.at_start(model, measurements, parameters, state.pairings)
         own = Objective(state.model, measurements, list(state.parameters))
