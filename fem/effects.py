@@ -96,6 +96,11 @@ class Effect:
         start values from the residual patterns."""
         raise NotImplementedError
 
+    def hint_at(self, values: dict[Parameter, float]) -> dict:
+        """The ``hint`` that makes ``free`` start at ``values`` of its parameters [SI] (a
+        finished refit's end), for an effect refitted from ``independent_starts``."""
+        raise NotImplementedError
+
     def free_all(self, model: SpecimenModel) -> SwitchedOn:
         """All variants at once (e.g. every candidate layer's angle), for ``--effect``."""
         variants = self.free(model)
@@ -368,6 +373,10 @@ class PointMassEffect(Effect):
             )
         return SwitchedOn(self.kind, model.with_attachments(model.specimen.attachments + (mass,)))
 
+    def hint_at(self, values):
+        by_kind = {p.kind: v for p, v in values.items()}
+        return {"xy": (by_kind["x"], by_kind["y"]), "mass_kg": by_kind["mass"], "ended": True}
+
     def free(self, model, hint=None):
         specimen = model.specimen
         hint = hint or {}
@@ -381,7 +390,13 @@ class PointMassEffect(Effect):
         )
         on = PointMass(max(mass, 1e-3 * plate_mass), x, y, self.kind)
         free = tuple(Parameter(k, self.kind) for k in ("mass", "x", "y"))
-        note = "start from the residual pattern" if "xy" in hint else "start at a guessed position"
+        note = (
+            "start where a refit ended"
+            if hint.get("ended")
+            else "start from the residual pattern"
+            if "xy" in hint
+            else "start at a guessed position"
+        )
         if all(abs(math.sin(2 * layer.angle)) < 1e-12 for layer in specimen.all_layers()):
             note += "; mirrored positions (L - x, W - y) give the same frequencies"
         return [SwitchedOn(self.kind, model.with_attachments(specimen.attachments + (on,)), free, note)]

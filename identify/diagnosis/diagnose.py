@@ -805,14 +805,15 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
     if not held or not fitted:
         return candidates
     leader = min(fitted, key=lambda c: c.bic)
-    prepared = round_.refit.prepare(leader.kind, round_.hints, free_again=held)
+    hints = _ends(leader) if effect(leader.kind).independent_starts else round_.hints
+    prepared = round_.refit.prepare(leader.kind, hints, free_again=held)
     if isinstance(prepared, AddedEffect):
         again = _candidate(state, prepared)
     elif not prepared.frees_any(held):
         return candidates  # the data do not see them here (``choose_shear_moduli``): the refit would repeat
     else:
         say(f"  {leader.kind} again with G13, G23 of {', '.join(sorted({p.target for p in held}))} free")
-        again = _candidate(state, round_.refitted_here(round_.job(prepared, None)))
+        again = _candidate(state, round_.refitted_here({**round_.job(prepared, None), "hints": hints}))
     if again.fit is None or not again.fit.statistics.sum_squares < leader.fit.statistics.sum_squares:
         note = f"{leader.kind} refitted with the held G13, G23 free again: " + (
             again.error
@@ -823,6 +824,21 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
             replace(c, note="; ".join(filter(None, [c.note, note]))) if c is leader else c for c in candidates
         ]
     return [again if c is leader else c for c in candidates]
+
+
+def _ends(leader: Candidate) -> tuple[dict]:
+    """Where the refits of ``leader`` (an effect with ``independent_starts``) ended: its
+    solution and the other finished ones it kept (``AddedEffect.rivals``), as starts of its
+    refit with the held shear moduli free.  That refit contains the leader at each of them
+    (the moduli at their held values), so from there it can only descend; the leader's
+    starts over the plate are not refitted from scratch again (blind27: 68 s alone)."""
+    kind = effect(leader.kind)
+    own = {
+        p: leader.fit.value(p)
+        for p in leader.added.added
+        if isinstance(p, Parameter) and p.target == leader.kind
+    }
+    return tuple(kind.hint_at(values) for values in (own, *leader.added.rivals))
 
 
 def _prepare(job: dict):

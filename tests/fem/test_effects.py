@@ -72,6 +72,17 @@ def test_free_effects_bring_parameters(example_spec):
     }
 
 
+def test_a_point_mass_starts_where_a_refit_ended(example_spec):
+    """``hint_at`` turns a finished refit's values [SI] into the start ``free`` takes: the
+    switched-on model holds exactly those values (a refit from a fit's end starts at it)."""
+    kind = effect("point_mass")
+    mass, x, y = (Parameter(k, "point_mass") for k in ("mass", "x", "y"))
+    ended = {mass: 4.2e-3, x: 0.031, y: 0.117}
+    on = kind.free(example_spec, kind.hint_at(ended))[0]
+    assert {p: on.model.value(p) for p in on.free} == ended
+    assert on.note.startswith("start where a refit ended")
+
+
 def test_user_registered_effect(example_spec):
     """The README's worked example: a layer of paint of unknown mass per area on top."""
 

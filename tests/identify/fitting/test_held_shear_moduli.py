@@ -52,13 +52,16 @@ def test_a_shear_modulus_at_a_hundred_times_g12_is_held_with_its_pair():
     assert result.statistics.reduced_chi2 < 2.0
 
 
-def _candidate(kind: str, sum_squares: float, added=()):
-    """A refitted candidate as the selection sees it: its misfit and criterion only."""
+def _candidate(kind: str, sum_squares: float, added=(), values=None, rivals=()):
+    """A refitted candidate as the selection sees it: its misfit and criterion, and the
+    ``values`` of what it ``added`` [SI]."""
     statistics = SimpleNamespace(
         sum_squares=sum_squares, bic=sum_squares, rms_rel_error=1e-3, scatter_known=False
     )
-    fit = SimpleNamespace(statistics=statistics, rms_rel_error=1e-3, finished=True)
-    return Candidate(kind, "", AddedEffect(kind, fit, tuple(added)), 0.0, 0.0)
+    fit = SimpleNamespace(
+        statistics=statistics, rms_rel_error=1e-3, finished=True, value=(values or {}).__getitem__
+    )
+    return Candidate(kind, "", AddedEffect(kind, fit, tuple(added), rivals=tuple(rivals)), 0.0, 0.0)
 
 
 @pytest.mark.parametrize("again_sum_squares, kept", [(10.0, "again"), (500.0, "leader")])
@@ -68,27 +71,37 @@ def test_only_the_leading_candidate_is_refitted_with_the_held_moduli_free(
     """Of a round's candidates, only the one with the lowest criterion that frees no shear
     moduli itself is refitted with the held ones free (the layerwise candidate, lower but
     freeing its own, is passed over); its refit replaces it only when the misfit falls,
-    and otherwise the leader stays with a note saying so.  When the data do not see the
-    held moduli at this state (none of them would be freed), nothing is refitted."""
+    and otherwise the leader stays with a note saying so.  A point mass's refit starts
+    where the leader's ended (its solution and its other finished one), not from the
+    round's starts over the plate.  When the data do not see the held moduli at this
+    state (none of them would be freed), nothing is refitted."""
     steel = (Parameter("G13", "steel"), Parameter("G23", "steel"))
     layerwise = _candidate("layerwise", 50.0, steel)
-    leader, other = _candidate("point_mass", 100.0), _candidate("orientation", 200.0)
+    mass, x, y = (Parameter(k, "point_mass") for k in ("mass", "x", "y"))
+    rival = {mass: 4e-3, x: 0.02, y: 0.03}
+    leader = _candidate("point_mass", 100.0, (mass, x, y), {mass: 5e-3, x: 0.2, y: 0.1}, [rival])
+    other = _candidate("orientation", 200.0)
+    ends = (
+        {"xy": (0.2, 0.1), "mass_kg": 5e-3, "ended": True},
+        {"xy": (0.02, 0.03), "mass_kg": 4e-3, "ended": True},
+    )
     calls = []
 
     def prepare(state, kind, hints=(), start=None, free_again=()):
-        calls.append(((kind,), tuple(free_again)))
+        calls.append(((kind,), tuple(free_again), tuple(hints)))
         return Prepared(kind, None, (), tuple(free_again), None, (), 0.0)
 
     def refit(job):
+        assert job["hints"] == ends
         return _candidate(job["kind"], again_sum_squares, job["prepared"].added).added
 
     monkeypatch.setattr(driver, "prepare_effect", prepare)
     monkeypatch.setattr(diagnose_module, "_add", refit)
     # the round's start: its criterion and what its pay floor reads
     state = SimpleNamespace(statistics=SimpleNamespace(bic=1000.0, n=30, scatter_known=True))
-    round_ = diagnose_module.Round(Refit(state, None, None), ())
+    round_ = diagnose_module.Round(Refit(state, None, None), ({"xy": (0.1, 0.1), "share": 0.5},))
     out = diagnose_module._leader_freed_again(round_, [layerwise, leader, other], steel, lambda t: None)
-    assert calls == [(("point_mass",), steel)]
+    assert calls == [(("point_mass",), steel, ends)]
     assert out[0] is layerwise and out[2] is other
     if kept == "again":
         assert out[1].fit.statistics.sum_squares == 10.0
