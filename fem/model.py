@@ -17,7 +17,7 @@ from .laminates.layerwise import GROUPINGS, LayerwiseLaminate, layout
 from .laminates.layerwise import unit_matrices as layerwise_units
 from .laminates.material import Material
 from .solver.assembly import UNIT_CACHE, UnitMatrices, unit_matrices
-from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, attachment_data, base_square
+from .solver.attachments import ATTACHMENT_PARAMETERS, PointMass, Suspension, add_attachment_data, base_square
 from .solver.attachments import eigenvalue_derivative as attachment_derivative
 from .solver.mesh import PlateMesh, edge_size
 from .solver.modal import Modes, _first_bending_estimate, solve_modes
@@ -323,10 +323,8 @@ def system_data(
     else:
         stiffness = units.combined_data(coefficients, units.element_stiffness)
         mass = units.combined_data(inertia, units.element_mass)
-    if not attachments:
-        return stiffness, mass
-    extra_stiffness, extra_mass = attachment_data(units, attachments)
-    return stiffness + extra_stiffness, mass + extra_mass
+    add_attachment_data(units, attachments, stiffness, mass)  # both arrays are new here
+    return stiffness, mass
 
 
 def _solution_bytes(solution: LaminateSolution) -> int:

@@ -173,17 +173,24 @@ def _point_terms(units: UnitMatrices, attachments):
                 yield False, dofs, n["w"][None, :], attachment.stiffness
 
 
-def attachment_data(units: UnitMatrices, attachments) -> tuple[np.ndarray, np.ndarray]:
-    """CSR data (on the shared pattern) of the stiffness and mass the attachments add."""
-    nnz = units._pattern[0].size
-    stiffness, mass = np.zeros(nnz), np.zeros(nnz)
+def add_attachment_data(units: UnitMatrices, attachments, stiffness: np.ndarray, mass: np.ndarray) -> None:
+    """Add the attachments' stiffness and mass to the CSR data ``stiffness`` and ``mass``
+    (on the shared pattern, arrays the caller owns) in place, on their few entries only:
+    two temporaries of the pattern's size and two sums over it were 60 ms of a 1.4 s
+    layerwise solve of a bonded cross-ply (19,380 DOFs, 9.7 M entries).  Each entry gets
+    the sum of its terms, in the order they come, added once: the same numbers as adding
+    whole arrays of those sums."""
+    terms = {True: ([], []), False: ([], [])}
     for is_mass, dofs, rows, weight in _point_terms(units, attachments):
-        np.add.at(
-            mass if is_mass else stiffness,
-            _data_positions(units, dofs),
-            weight * sum(np.outer(row, row) for row in rows),
-        )
-    return stiffness, mass
+        positions, values = terms[is_mass]
+        positions.append(_data_positions(units, dofs).ravel())
+        values.append((weight * sum(np.outer(row, row) for row in rows)).ravel())
+    for target, (positions, values) in ((mass, terms[True]), (stiffness, terms[False])):
+        if positions:
+            entries, where = np.unique(np.concatenate(positions), return_inverse=True)
+            sums = np.zeros(len(entries))
+            np.add.at(sums, where, np.concatenate(values))
+            target[entries] += sums
 
 
 def projected_attachments(
@@ -191,7 +198,7 @@ def projected_attachments(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The stiffness and mass the attachments add, projected on a basis V (n_dofs, r):
     (r, r) each, from the basis's values at their points (the terms of
-    ``attachment_data``, on the few DOFs of the elements that hold them)."""
+    ``add_attachment_data``, on the few DOFs of the elements that hold them)."""
     rank = basis.shape[1]
     stiffness, mass = np.zeros((rank, rank)), np.zeros((rank, rank))
     for is_mass, dofs, rows, weight in _point_terms(units, attachments):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fem.errors import SpecError
-from fem.model import ModelOptions, SpecimenModel
+from fem.model import ModelOptions, SpecimenModel, system_coefficients, system_data
 from fem.solver import mesh as mesh_module
 from fem.solver.attachments import PointMass, Suspension
 from fem.specimen import Parameter
@@ -159,3 +159,41 @@ def test_a_base_is_divided_into_equal_elements_without_slivers():
         assert np.all(np.isin(np.round(np.linspace(lo, hi, 5), 12), np.round(nodes, 12)))
     assert nodes[0] == 0.0 and nodes[-1] == 0.2
     assert np.diff(nodes).min() >= 0.5 * 0.003 - 1e-12
+
+
+def test_attached_masses_and_springs_are_the_rigid_plate_s_closed_forms(plate):
+    """What the attachments add to the system matrices (``add_attachment_data``: only their
+    entries, in place) holds the closed forms of a rigid plate: a translation carries the
+    attached mass (u and w alike), a rotation w = y the masses' second moment sum m y^2, a
+    w translation the springs' total stiffness.  Two masses share an element (their
+    entries overlap) and a third sits on a square base (several footprint points); to
+    1e-12, the round-off of summing a few hundred terms.  Added to the plate's own data,
+    they give bit for bit what adding their whole arrays gives."""
+    masses = [
+        PointMass(3e-3, 0.070, 0.081),
+        PointMass(2e-3, 0.072, 0.083),
+        PointMass(4e-3, 0.03, 0.1, base=0.012),
+    ]
+    springs = Suspension(150.0, CORNERS)
+    solution = SpecimenModel(plate, OPTIONS).solve("original")
+    units = solution.units
+    coefficients, inertia = system_coefficients(solution.laminate, False, solution.inertia_terms)
+    # the plate's own matrices weighted by zero: what remains is the attachments' alone
+    # (a difference of the two would cancel to the plate's round-off, 1e-9 of 600 N/m)
+    nothing = np.zeros_like(coefficients), np.zeros_like(inertia)
+    k, m = system_data(units, *nothing, (*masses, springs))
+    added_k, added_m = units.matrix(k), units.matrix(m)
+    rigid = units.rigid_body_modes
+    total = sum(a.mass for a in masses)
+    assert rigid[:, 2] @ added_m @ rigid[:, 2] == pytest.approx(total, rel=1e-12)
+    assert rigid[:, 0] @ added_m @ rigid[:, 0] == pytest.approx(total, rel=1e-12)
+    point_masses = masses[:2]  # the base's second moment is spread: the two points alone
+    alone = units.matrix(system_data(units, *nothing, tuple(point_masses))[1])
+    assert rigid[:, 3] @ alone @ rigid[:, 3] == pytest.approx(
+        sum(a.mass * a.y**2 for a in point_masses), rel=1e-12
+    )
+    assert rigid[:, 2] @ added_k @ rigid[:, 2] == pytest.approx(4 * 150.0, rel=1e-12)
+    # On the plate's own data: the same numbers as adding the attachments' whole arrays
+    plain = system_data(units, coefficients, inertia)
+    loaded = system_data(units, coefficients, inertia, (*masses, springs))
+    assert np.array_equal(loaded[0], plain[0] + k) and np.array_equal(loaded[1], plain[1] + m)
