@@ -826,12 +826,13 @@ def _leader_freed_again(round_: Round, candidates: list[Candidate], held, say) -
     return [again if c is leader else c for c in candidates]
 
 
-def _ends(leader: Candidate) -> tuple[dict]:
+def _ends(leader: Candidate) -> tuple[dict, ...]:
     """Where the refits of ``leader`` (an effect with ``independent_starts``) ended: its
     solution and the other finished ones it kept (``AddedEffect.rivals``), as starts of its
     refit with the held shear moduli free.  That refit contains the leader at each of them
-    (the moduli at their held values), so from there it can only descend; the leader's
-    starts over the plate are not refitted from scratch again (blind27: 68 s alone)."""
+    (the moduli at their held values; ``free`` keeps a start 2 % inside the edges), so from
+    there it can only descend; the leader's starts over the plate are not refitted from
+    scratch again (blind27: 68 s alone)."""
     kind = effect(leader.kind)
     own = {
         p: leader.fit.value(p)
