@@ -87,8 +87,8 @@ class ModelOptions:
     # the specimen (``edge_size_for``).  A SpecimenModel pins it when it is made, so the
     # mesh stays put while a fit or a derivative moves the layer thicknesses.
     edge_size: float | None = None
-    # The layerwise theory's shear groups and stretching layers of each stack, as
-    # (layout, groups, stretch) (``fem.laminates.layerwise``: "Pinned structure").  A
+    # The layerwise theory's shear groups, stretching layers and soft groups of each stack,
+    # as (layout, groups, stretch, soft) (``fem.laminates.layerwise``: "Pinned structure").  A
     # SpecimenModel pins them when it is made, by the rules above at its values then, so a
     # fit moving a modulus across a rule's threshold keeps one theory.
     layerwise_structure: tuple = ()
@@ -136,7 +136,7 @@ class ModelOptions:
         for configuration in specimen.configurations:
             laminate = specimen.laminate(configuration)
             stack = self.layerwise_stack(laminate)
-            entry = (layout(laminate), stack.groups, stack.stretch)
+            entry = (layout(laminate), *stack.structure)
             if entry not in entries:
                 entries.append(entry)
         structure = tuple(entries)
@@ -352,7 +352,7 @@ def solve_laminate(
     theory: str = "single_layer",
     layer_groups: str = "auto",
     core_stretch: bool = True,
-    structure: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
+    structure: tuple[tuple[int, ...], tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> LaminateSolution:
     """Solve (and cache by content, within ``SOLVE_CACHE_BYTES``) the free-free modes of a
     laminate on a mesh.
@@ -363,7 +363,7 @@ def solve_laminate(
     attachments: point masses and suspension springs (``fem.solver.attachments``);
     theory "layerwise": the layerwise element (``fem.laminates.layerwise``, shear groups by
     ``layer_groups``, soft cores stretching unless ``core_stretch`` is off, or the pinned
-    ``structure``: (groups, stretching layers)) with its full inertia; the two flags are
+    ``structure``: (groups, stretching layers, soft groups)) with its full inertia; the two flags are
     then implied.
     """
     stack = None
@@ -376,7 +376,7 @@ def solve_laminate(
     coefficients, inertia = system_coefficients(laminate, transverse_shear, terms)
     shift = _first_bending_estimate(laminate.stiffness, inertia[0], max(mesh.length, mesh.width))
     if stack is not None:
-        units = layerwise_units(mesh, stack.n_groups, 2 * len(stack.stretch))
+        units = layerwise_units(mesh, stack.n_groups, 2 * len(stack.stretch), stack.soft)
         coefficients, inertia = stack.stiffness, stack.inertia
     else:
         units = unit_matrices(mesh, ShearDifferencePlate if transverse_shear else HermitePlate)
@@ -464,7 +464,7 @@ class SpecimenModel:
         structure = None
         if self.options.theory == "layerwise":
             stack = self.options.layerwise_stack(laminate)
-            structure = (stack.groups, stack.stretch)
+            structure = stack.structure
         return solve_laminate(
             laminate,
             self.mesh,

@@ -32,6 +32,37 @@ def _hermite_1d(s: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nda
     return value, first, second
 
 
+#: The Adini-Clough-Melosh polynomial space on the unit square: the complete cubic and
+#: s^3 t, s t^3 (12 terms, one per DOF (f, f_x, f_y) of each corner).
+_ACM_POWERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3), (3, 1), (1, 3))
+
+
+def _acm(s: np.ndarray, t: np.ndarray, hx: float, hy: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The 12 C0 shape functions of a field with (f, f_x, f_y) at each corner of an hx x hy
+    rectangle, at local points (s, t) in [0, 1]^2: values, d/dx, d/dy, each (12, ns),
+    corner-major in ``HermitePlate.CORNERS`` order.
+
+    Along an edge the field is the cubic fixed by the two corners' values and tangential
+    slopes, so neighbouring elements share it (C0; the normal slope is not shared).  It
+    holds the complete cubic, as the bicubic does, so a field whose energy needs only first
+    derivatives (in-plane displacements, shear strains) converges at the same order on 3 DOFs
+    a node instead of 4."""
+    p, q = np.array(_ACM_POWERS).T
+    functionals = []
+    for i, j in HermitePlate.CORNERS:
+        value = np.where((p == 0) | (i == 1), 1.0, 0.0) * np.where((q == 0) | (j == 1), 1.0, 0.0)
+        # d/ds of s^p t^q at (i, j): p i^(p-1) j^q
+        ds = p * np.where((p <= 1) | (i == 1), 1.0, 0.0) * np.where((q == 0) | (j == 1), 1.0, 0.0)
+        dt = q * np.where((q <= 1) | (j == 1), 1.0, 0.0) * np.where((p == 0) | (i == 1), 1.0, 0.0)
+        functionals += [value, ds / hx, dt / hy]
+    coefficients = np.linalg.inv(np.array(functionals))  # (terms, DOFs)
+    s, t = np.asarray(s, dtype=float), np.asarray(t, dtype=float)
+    mono = s[None] ** p[:, None] * t[None] ** q[:, None]
+    mono_s = p[:, None] * s[None] ** np.maximum(p - 1, 0)[:, None] * t[None] ** q[:, None]
+    mono_t = q[:, None] * s[None] ** p[:, None] * t[None] ** np.maximum(q - 1, 0)[:, None]
+    return coefficients.T @ mono, coefficients.T @ mono_s / hx, coefficients.T @ mono_t / hy
+
+
 def _applied(op: np.ndarray, local: np.ndarray) -> np.ndarray:
     """``op @ local`` over the element DOFs the operator (nq, [3,] n) reads: a field's
     operator is zero on the other fields' DOFs (a Kirchhoff curvature reads 16 of the 48,
@@ -105,6 +136,8 @@ class HermitePlate:
 
     FIELDS = ("u", "v", "w")
     NODE_DOFS = ("u", "u_x", "u_y", "u_xy", "v", "v_x", "v_y", "v_xy", "w", "w_x", "w_y", "w_xy")
+    #: Fields on the C0 basis of ``_acm`` (DOFs f, f_x, f_y), the others bicubic (f, f_x, f_y, f_xy).
+    C0_FIELDS: tuple[str, ...] = ()
     #: Corner order (i along x, j along y) of the element's nodes.
     CORNERS = ((0, 0), (1, 0), (1, 1), (0, 1))
     QUADRATURE_POINTS = 4  # Gauss-Legendre per direction: exact for every product here
@@ -129,13 +162,17 @@ class HermitePlate:
                 table["Nyy"].append(np.outer(vx[a], ddy[b]))
                 table["Nxy"].append(np.outer(dx[a], dy[b]))
         self.shape = {k: np.array(v).reshape(16, -1) for k, v in table.items()}  # (16, nq)
+        if self.C0_FIELDS:
+            c0 = _acm(np.repeat(s, len(s)), np.tile(s, len(s)), hx, hy)  # x outer, y inner, as np.outer
+            self.shape_c0 = dict(zip(("N", "Nx", "Ny"), c0, strict=True))  # (12, nq)
         self.weights = np.outer(ws, ws).ravel() * hx * hy  # (nq,) [m^2]
 
     def _field(self, name: str, field: str) -> np.ndarray:
         """Shape-function derivative ``name`` spread onto the element DOFs: (nq, 4 x node DOFs)."""
-        f = self.FIELDS.index(field)
+        first = self.NODE_DOFS.index(field)
+        table, size = (self.shape_c0, 3) if field in self.C0_FIELDS else (self.shape, 4)
         out = np.zeros((self.weights.size, 4, len(self.NODE_DOFS)))
-        out[:, :, 4 * f : 4 * f + 4] = self.shape[name].T.reshape(-1, 4, 4)
+        out[:, :, first : first + size] = table[name].T.reshape(-1, 4, size)
         return out.reshape(self.weights.size, -1)
 
     def strain_operators(self) -> tuple[np.ndarray, np.ndarray]:

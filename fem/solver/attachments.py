@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..elements.hermite_plate import _hermite_1d
+from ..elements.hermite_plate import _acm, _hermite_1d
 from ..errors import SpecError
 from .assembly import UnitMatrices
 
@@ -102,12 +102,15 @@ def point_operators(units: UnitMatrices, x: float, y: float) -> tuple[np.ndarray
             scalar[""].append(vx[a] * vy[b])
             scalar["_x"].append(dx[a] * vy[b])
             scalar["_y"].append(vx[a] * dy[b])
-    per_node = len(units.element_type.NODE_DOFS)
+    c0 = dict(zip(scalar, (a[:, 0] for a in _acm(np.array([s]), np.array([t]), hx, hy)), strict=True))
+    names = units.element_type.NODE_DOFS
     rows = {}
-    for f, field in enumerate(("u", "v", "w")):
-        for suffix, values in scalar.items():
-            row = np.zeros((4, per_node))
-            row[:, 4 * f : 4 * f + 4] = np.reshape(values, (4, 4))
+    for field in ("u", "v", "w"):
+        first = names.index(field)
+        on_c0 = field in units.element_type.C0_FIELDS
+        for suffix, values in (c0 if on_c0 else scalar).items():
+            row = np.zeros((4, len(names)))
+            row[:, first : first + (3 if on_c0 else 4)] = np.reshape(values, (4, -1))
             rows[field + suffix] = row.ravel()
     return units.element_dofs[element], rows
 

@@ -158,7 +158,7 @@ class Reanalysis:
         stack = None
         if base.layerwise is not None:
             stack = options.layerwise_stack(laminate)
-            if (stack.groups, stack.stretch) != (base.layerwise.groups, base.layerwise.stretch):
+            if stack.structure != base.layerwise.structure:
                 raise OutsideBasis(f"configuration {self.configuration!r}: the layerwise groups changed")
         coefficients, inertia = _weights(base, laminate, stack)
         if self.stiffness is None:
