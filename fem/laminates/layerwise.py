@@ -27,9 +27,10 @@ and angle are one group, and that all layers which are not soft (``soft_layers``
 softer in shear than another layer in the same plane, like a foam core or a bond line) and
 carry less than ``RIGID_SHARE`` of the stack's shear compliance each (a sandwich's skins,
 a bonded metal plate) share one group: their shear strains are negligible, and every
-group costs 8 DOFs per node.  "blocks": soft layers alone, each run of adjacent stiff
-layers one group (cheapest).  A single layer is one group and never soft, and then the
-theory *is* the project's first-order shear deformation theory (``ShearDifferencePlate``).
+group costs 6 DOFs per node (a soft one 8, ``soft_groups``).  "blocks": soft layers
+alone, each run of adjacent stiff layers one group (cheapest).  A single layer is one
+group and never soft, and then the theory *is* the project's first-order shear
+deformation theory (``ShearDifferencePlate``).
 
 Stretching layers (``stretching_layers``).  A soft layer that carries most of the stack's
 through-thickness compliance (``STRETCH_SHARE`` of int dz / E3: a foam core, not a thin

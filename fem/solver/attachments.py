@@ -102,12 +102,17 @@ def point_operators(units: UnitMatrices, x: float, y: float) -> tuple[np.ndarray
             scalar[""].append(vx[a] * vy[b])
             scalar["_x"].append(dx[a] * vy[b])
             scalar["_y"].append(vx[a] * dy[b])
-    c0 = dict(zip(scalar, (a[:, 0] for a in _acm(np.array([s]), np.array([t]), hx, hy)), strict=True))
+    c0_fields = units.element_type.C0_FIELDS
+    c0 = (
+        dict(zip(scalar, (a[:, 0] for a in _acm(np.array([s]), np.array([t]), hx, hy)), strict=True))
+        if c0_fields
+        else {}
+    )
     names = units.element_type.NODE_DOFS
     rows = {}
     for field in ("u", "v", "w"):
         first = names.index(field)
-        on_c0 = field in units.element_type.C0_FIELDS
+        on_c0 = field in c0_fields
         for suffix, values in (c0 if on_c0 else scalar).items():
             row = np.zeros((4, len(names)))
             row[:, first : first + (3 if on_c0 else 4)] = np.reshape(values, (4, -1))
